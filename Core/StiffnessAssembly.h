@@ -1,0 +1,32 @@
+#pragma once
+// Sparse symmetric assembly: the pattern and a gather map are built once per mesh and DOF
+// numbering; assembling new element values into it is then a pure gather (no atomics, no search),
+// which both the CPU and the CUDA backend run.
+#include "TetMesh.h"
+
+#include <Eigen/SparseCore>
+#include <vector>
+
+namespace faceplan {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+struct AssemblyPattern {
+  // Upper triangle of the global stiffness in the numbering dofOfNode gave (3 DOFs per node),
+  // column-compressed, rows sorted; values are zero until Assemble fills them.
+  SparseMatrix upper;
+  // For nonzero k of `upper`, its contributions are packedIndex[gatherStart[k] .. gatherStart[k+1])
+  // where each packed index is cell * 78 + (position in the packed upper triangle of Ke).
+  std::vector<int> gatherStart;
+  std::vector<long long> packedIndex;
+};
+
+// dofNode[i] is the new index of node i (its DOFs are 3*dofNode[i] + c); -1 drops the node.
+// Pass an identity to keep the mesh's own numbering.
+AssemblyPattern BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode,
+                                     int numDofNodes);
+
+// upper.valuePtr()[k] = sum of packed[packedIndex[...]] over its gather range.
+void AssembleFromPacked(const std::vector<double>& packed, AssemblyPattern& pattern);
+
+} // namespace faceplan

@@ -1,0 +1,41 @@
+#pragma once
+// The tetrahedral mesh and its per-cell materials, as Core sees them (no VTK).
+#include <Eigen/Core>
+
+namespace faceplan {
+
+using Points = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using Tets = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
+using Displacements = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+struct TetMesh {
+  Points points; // n x 3
+  Tets tets;     // m x 4, positively oriented (det[x1-x0, x2-x0, x3-x0] > 0)
+
+  Eigen::Index numPoints() const { return points.rows(); }
+  Eigen::Index numTets() const { return tets.rows(); }
+};
+
+// Isotropic linear elasticity per cell. Each vector has one entry per tetrahedron, or a single
+// entry that applies to every tetrahedron (a one-tissue scene).
+struct Materials {
+  Eigen::VectorXd youngsModulus; // E > 0, in the caller's stress unit
+  Eigen::VectorXd poissonRatio;  // -1 < nu < 0.5
+  Eigen::VectorXd density;       // mass per volume; only used with a gravity load; may be empty
+
+  static Materials Uniform(double E, double nu, double rho = 0.0) {
+    Materials m;
+    m.youngsModulus = Eigen::VectorXd::Constant(1, E);
+    m.poissonRatio = Eigen::VectorXd::Constant(1, nu);
+    m.density = Eigen::VectorXd::Constant(1, rho);
+    return m;
+  }
+  double E(Eigen::Index cell) const { return youngsModulus.size() == 1 ? youngsModulus[0] : youngsModulus[cell]; }
+  double nu(Eigen::Index cell) const { return poissonRatio.size() == 1 ? poissonRatio[0] : poissonRatio[cell]; }
+  double rho(Eigen::Index cell) const {
+    if (density.size() == 0) return 0.0;
+    return density.size() == 1 ? density[0] : density[cell];
+  }
+};
+
+} // namespace faceplan
