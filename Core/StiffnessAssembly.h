@@ -18,7 +18,7 @@ struct AssemblyPattern {
   // For nonzero k of `upper`, its contributions are packedIndex[gatherStart[k] .. gatherStart[k+1])
   // where each packed index is cell * 78 + (position in the packed upper triangle of Ke).
   std::vector<int> gatherStart;
-  std::vector<long long> packedIndex;
+  std::vector<int> packedIndex; // int: up to 27M tetrahedra (checked when built)
 };
 
 // dofNode[i] is the new index of node i (its DOFs are 3*dofNode[i] + c); -1 drops the node.

@@ -1,0 +1,117 @@
+#include "CholmodFactor.h"
+
+#include <cholmod.h>
+#include <string>
+
+namespace faceplan {
+
+struct CholmodFactor::Impl {
+  mutable cholmod_common common;
+  cholmod_factor* factor = nullptr;
+  mutable std::mutex mutex;
+  // Solve workspaces reused across solves, so a per-edit solve allocates nothing.
+  mutable cholmod_dense* x = nullptr;
+  mutable cholmod_dense* y = nullptr;
+  mutable cholmod_dense* e = nullptr;
+
+  Impl() {
+    cholmod_start(&common);
+    common.supernodal = CHOLMOD_SUPERNODAL;
+    common.print = 0;
+    common.error_handler = nullptr;
+  }
+  ~Impl() {
+    cholmod_free_dense(&x, &common);
+    cholmod_free_dense(&y, &common);
+    cholmod_free_dense(&e, &common);
+    cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+};
+
+namespace {
+
+// A non-owning CHOLMOD view of an Eigen upper-triangular CSC matrix.
+cholmod_sparse ViewUpper(const SparseMatrix& upper) {
+  cholmod_sparse view{};
+  view.nrow = static_cast<size_t>(upper.rows());
+  view.ncol = static_cast<size_t>(upper.cols());
+  view.nzmax = static_cast<size_t>(upper.nonZeros());
+  view.p = const_cast<int*>(upper.outerIndexPtr());
+  view.i = const_cast<int*>(upper.innerIndexPtr());
+  view.x = const_cast<double*>(upper.valuePtr());
+  view.stype = 1;
+  view.itype = CHOLMOD_INT;
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  view.sorted = 1;
+  view.packed = 1;
+  return view;
+}
+
+} // namespace
+
+CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
+CholmodFactor::~CholmodFactor() = default;
+
+Status CholmodFactor::analyze(const SparseMatrix& upper) {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  if (!upper.isCompressed()) return Status::Error("internal: matrix not compressed");
+  cholmod_sparse view = ViewUpper(upper);
+  cholmod_free_factor(&impl_->factor, &impl_->common);
+  impl_->factor = cholmod_analyze(&view, &impl_->common);
+  if (!impl_->factor || impl_->common.status < CHOLMOD_OK)
+    return Status::Error("CHOLMOD ordering failed (status " + std::to_string(impl_->common.status) +
+                         "; out of memory?)");
+  return Status::Ok();
+}
+
+Status CholmodFactor::factorize(const SparseMatrix& upper) {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  if (!impl_->factor) return Status::Error("internal: factorize before analyze");
+  cholmod_sparse view = ViewUpper(upper);
+  const int ok = cholmod_factorize(&view, impl_->factor, &impl_->common);
+  if (!ok || impl_->common.status == CHOLMOD_OUT_OF_MEMORY)
+    return Status::Error("CHOLMOD factorization ran out of memory");
+  if (impl_->common.status == CHOLMOD_NOT_POSDEF || impl_->factor->minor < impl_->factor->n)
+    return Status::Error("stiffness matrix is not positive definite (CHOLMOD stopped at column " +
+                         std::to_string(impl_->factor->minor) +
+                         "): a part of the mesh is not held by any constrained node, or an "
+                         "element is degenerate");
+  return Status::Ok();
+}
+
+Status CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  if (!impl_->factor) return Status::Error("internal: solve before factorize");
+  if (static_cast<size_t>(b.rows()) != impl_->factor->n)
+    return Status::Error("internal: right-hand side has the wrong size");
+  cholmod_dense rhs{};
+  rhs.nrow = b.rows();
+  rhs.ncol = b.cols();
+  rhs.nzmax = b.size();
+  rhs.d = b.rows();
+  rhs.x = const_cast<double*>(b.data());
+  rhs.xtype = CHOLMOD_REAL;
+  rhs.dtype = CHOLMOD_DOUBLE;
+  const int ok = cholmod_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr,
+                                &impl_->y, &impl_->e, &impl_->common);
+  if (!ok || !impl_->x) return Status::Error("CHOLMOD solve failed (out of memory?)");
+  x.resize(b.rows(), b.cols());
+  const double* src = static_cast<const double*>(impl_->x->x);
+  for (Eigen::Index c = 0; c < b.cols(); ++c)
+    std::copy(src + c * impl_->x->d, src + c * impl_->x->d + b.rows(), x.col(c).data());
+  return Status::Ok();
+}
+
+double CholmodFactor::factorNonzeros() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->common.lnz;
+}
+
+double CholmodFactor::reciprocalConditionEstimate() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->factor ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
+}
+
+} // namespace faceplan

@@ -1,0 +1,36 @@
+#pragma once
+// RAII wrapper of a CHOLMOD supernodal Cholesky factor of a symmetric positive definite matrix
+// given by its upper triangle. Solves are serialized (a cholmod_common is not thread-safe).
+#include "Status.h"
+#include "StiffnessAssembly.h"
+
+#include <Eigen/Core>
+#include <memory>
+#include <mutex>
+
+namespace faceplan {
+
+class CholmodFactor {
+public:
+  CholmodFactor();
+  ~CholmodFactor();
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+
+  // Fill-reducing ordering and symbolic factorization (the "reordering" stage).
+  Status analyze(const SparseMatrix& upper);
+  // Numeric factorization; fails with a message if the matrix is not positive definite.
+  Status factorize(const SparseMatrix& upper);
+  // x = A^-1 b for one or many columns.
+  Status solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
+
+  double factorNonzeros() const;
+  // CHOLMOD's cheap reciprocal condition estimate, (min diag L / max diag L)^2.
+  double reciprocalConditionEstimate() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+} // namespace faceplan
