@@ -828,9 +828,7 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
     r.maxDistanceToSurface = std::max(
         r.maxDistanceToSurface, (P.row(i).transpose() - surf.Evaluate(uv[i].x(), uv[i].y())).norm());
   }
-  if (r.intermediarySteps > 0)
-    r.warnings.push_back("direct projection would fold the mesh (" + directWhy + "); mapped through " +
-                         std::to_string(r.intermediarySteps) + " intermediary surfaces");
+  if (r.intermediarySteps > 0) r.mappingNote = "direct projection would fold the mesh (" + directWhy + ")";
   result = std::move(r);
   return Status::Ok();
 }

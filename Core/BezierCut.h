@@ -118,7 +118,8 @@ struct BezierCutResult {
   int intermediarySteps = 0;        // 0: direct projection was valid
   double maxDistanceToSurface = 0;  // max over moved vertices of |x - S(u,v)| (should be ~1e-15)
   SurfaceMesh operativeSurface;     // triangles of S for display
-  std::vector<std::string> warnings;
+  std::string mappingNote;           // why intermediary surfaces were needed (informational)
+  std::vector<std::string> warnings; // e.g. nothing moved
 };
 
 // mesh: the bone surface; roiMask / roiBoundary: one entry per point (see ROIExtract.h).

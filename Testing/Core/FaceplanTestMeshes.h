@@ -3,6 +3,7 @@
 #include "SurfaceMesh.h"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <array>
 #include <cmath>
@@ -10,7 +11,7 @@
 #include <tuple>
 #include <vector>
 
-namespace faceplan::testing {
+namespace faceplan::testmesh {
 
 // Unit icosphere (outward triangles), `levels` subdivisions of an icosahedron.
 inline SurfaceMesh Icosphere(int levels, double radius = 1.0) {
@@ -105,4 +106,4 @@ inline SurfaceMesh Box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, dou
   return m;
 }
 
-} // namespace faceplan::testing
+} // namespace faceplan::testmesh

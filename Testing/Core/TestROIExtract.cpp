@@ -30,7 +30,7 @@ std::vector<std::uint8_t> ReferenceBoundary(const SurfaceMesh& m, const std::vec
 } // namespace
 
 TEST(ROIExtract, SphereCapMaskAndBoundary) {
-  SurfaceMesh m = testing::Icosphere(3);
+  SurfaceMesh m = testmesh::Icosphere(3);
   std::vector<std::uint8_t> sel(m.numPoints());
   for (Eigen::Index i = 0; i < m.numPoints(); ++i) sel[i] = m.points(i, 2) > 0.6;
   ROIResult r;
@@ -52,7 +52,7 @@ TEST(ROIExtract, SphereCapMaskAndBoundary) {
 }
 
 TEST(ROIExtract, FromIdsEqualsSelection) {
-  SurfaceMesh m = testing::PlaneGrid(8, 8);
+  SurfaceMesh m = testmesh::PlaneGrid(8, 8);
   std::vector<std::int64_t> ids;
   std::vector<std::uint8_t> sel(m.numPoints(), 0);
   for (Eigen::Index i = 0; i < m.numPoints(); ++i)
@@ -82,14 +82,14 @@ TEST(ROIExtract, PolygonsAndLines) {
 }
 
 TEST(ROIExtract, WholeMeshHasNoBoundary) {
-  SurfaceMesh m = testing::Icosphere(1);
+  SurfaceMesh m = testmesh::Icosphere(1);
   ROIResult r;
   ASSERT_TRUE(ComputeROI(m, std::vector<std::uint8_t>(m.numPoints(), 1), r).ok);
   for (auto b : r.boundary) EXPECT_EQ(b, 0);
 }
 
 TEST(ROIExtract, Errors) {
-  SurfaceMesh m = testing::PlaneGrid(2, 2);
+  SurfaceMesh m = testmesh::PlaneGrid(2, 2);
   ROIResult r;
   Status s = ComputeROI(m, std::vector<std::uint8_t>(3, 1), r);
   EXPECT_FALSE(s.ok);
