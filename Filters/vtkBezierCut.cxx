@@ -1,0 +1,237 @@
+#include "vtkBezierCut.h"
+
+#include "BezierCut.h"
+#include "FacePlanVTKConvert.h"
+
+#include <vtkCellArray.h>
+#include <vtkDataArray.h>
+#include <vtkDataObject.h>
+#include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkIntArray.h>
+#include <vtkObjectFactory.h>
+#include <vtkPointData.h>
+#include <vtkPointSet.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+
+vtkStandardNewMacro(vtkBezierCut);
+
+namespace {
+void Resize(std::vector<double>& c, vtkIdType n, vtkObject* self) {
+  if (n < 0) n = 0;
+  if (static_cast<vtkIdType>(c.size()) != 3 * n) {
+    c.resize(static_cast<std::size_t>(3 * n), 0.0);
+    self->Modified();
+  }
+}
+void SetPoint(std::vector<double>& c, vtkIdType i, double x, double y, double z, vtkObject* self) {
+  if (i < 0) return;
+  if (3 * i + 3 > static_cast<vtkIdType>(c.size())) c.resize(static_cast<std::size_t>(3 * i + 3), 0.0);
+  double* p = c.data() + 3 * i;
+  if (p[0] != x || p[1] != y || p[2] != z) {
+    p[0] = x;
+    p[1] = y;
+    p[2] = z;
+    self->Modified();
+  }
+}
+void GetPoint(const std::vector<double>& c, vtkIdType i, double p[3]) {
+  for (int k = 0; k < 3; ++k)
+    p[k] = (i >= 0 && 3 * i + 3 <= static_cast<vtkIdType>(c.size())) ? c[3 * i + k] : 0.0;
+}
+std::vector<Eigen::Vector3d> ToCurve(const std::vector<double>& c) {
+  std::vector<Eigen::Vector3d> out;
+  for (std::size_t i = 0; i + 2 < c.size(); i += 3) out.emplace_back(c[i], c[i + 1], c[i + 2]);
+  return out;
+}
+} // namespace
+
+vtkBezierCut::vtkBezierCut() {
+  this->SetNumberOfInputPorts(1);
+  this->SetNumberOfOutputPorts(2);
+  // A unit square in z = 0 until the caller (or the GUI's defaults) places the curves.
+  const double u[12] = {-0.5, -0.5, 0, -1.0 / 6, -0.5, 0, 1.0 / 6, -0.5, 0, 0.5, -0.5, 0};
+  const double v[12] = {-0.5, -0.5, 0, -0.5, -1.0 / 6, 0, -0.5, 1.0 / 6, 0, -0.5, 0.5, 0};
+  this->CurveU.assign(u, u + 12);
+  this->CurveV.assign(v, v + 12);
+}
+
+vtkBezierCut::~vtkBezierCut() = default;
+
+void vtkBezierCut::SetNumberOfCurveUPoints(vtkIdType n) { Resize(this->CurveU, n, this); }
+void vtkBezierCut::SetNumberOfCurveVPoints(vtkIdType n) { Resize(this->CurveV, n, this); }
+void vtkBezierCut::SetCurveUPoint(vtkIdType i, double x, double y, double z) { SetPoint(this->CurveU, i, x, y, z, this); }
+void vtkBezierCut::SetCurveVPoint(vtkIdType i, double x, double y, double z) { SetPoint(this->CurveV, i, x, y, z, this); }
+void vtkBezierCut::GetCurveUPoint(vtkIdType i, double p[3]) const { GetPoint(this->CurveU, i, p); }
+void vtkBezierCut::GetCurveVPoint(vtkIdType i, double p[3]) const { GetPoint(this->CurveV, i, p); }
+
+int vtkBezierCut::FillOutputPortInformation(int port, vtkInformation* info) {
+  info->Set(vtkDataObject::DATA_TYPE_NAME(), port == 0 ? "vtkPointSet" : "vtkPolyData");
+  return 1;
+}
+
+int vtkBezierCut::RequestDataObject(vtkInformation*, vtkInformationVector** inputVector,
+                                    vtkInformationVector* outputVector) {
+  vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
+  if (!input) return 0;
+  vtkInformation* info0 = outputVector->GetInformationObject(0);
+  vtkDataObject* out0 = info0->Get(vtkDataObject::DATA_OBJECT());
+  if (!out0 || !out0->IsA(input->GetClassName())) {
+    vtkDataObject* fresh = input->NewInstance();
+    info0->Set(vtkDataObject::DATA_OBJECT(), fresh);
+    fresh->Delete();
+  }
+  vtkInformation* info1 = outputVector->GetInformationObject(1);
+  if (!vtkPolyData::SafeDownCast(info1->Get(vtkDataObject::DATA_OBJECT()))) {
+    vtkPolyData* fresh = vtkPolyData::New();
+    info1->Set(vtkDataObject::DATA_OBJECT(), fresh);
+    fresh->Delete();
+  }
+  return 1;
+}
+
+void vtkBezierCut::Fail(const std::string& message, vtkInformationVector* outputVector) {
+  this->LastError = message;
+  for (int port = 0; port < 2; ++port)
+    if (vtkDataObject* o = outputVector->GetInformationObject(port)->Get(vtkDataObject::DATA_OBJECT()))
+      o->Initialize();
+  vtkErrorMacro(<< "Bezier Cut: " << message);
+}
+
+int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVector,
+                              vtkInformationVector* outputVector) {
+  this->LastError.clear();
+  vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
+  vtkPointSet* output = vtkPointSet::GetData(outputVector, 0);
+  vtkPolyData* surface = vtkPolyData::GetData(outputVector, 1);
+  if (!input || !output || !surface) {
+    this->Fail("needs a vtkPointSet input", outputVector);
+    return 1;
+  }
+  output->Initialize();
+  surface->Initialize();
+
+  // Validate.
+  const vtkIdType n = input->GetNumberOfPoints();
+  if (n == 0) {
+    this->Fail("the input has no points", outputVector);
+    return 1;
+  }
+  vtkDataArray* maskArray = input->GetPointData()->GetArray("ROIMask");
+  vtkDataArray* boundaryArray = input->GetPointData()->GetArray("ROIBoundary");
+  if (!maskArray || !boundaryArray || maskArray->GetNumberOfComponents() != 1 ||
+      boundaryArray->GetNumberOfComponents() != 1) {
+    this->Fail("the input needs one-component point arrays ROIMask and ROIBoundary; apply ROI Extract first",
+               outputVector);
+    return 1;
+  }
+
+  // Convert.
+  faceplan::SurfaceMesh mesh;
+  std::string why;
+  if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly, mesh, why)) {
+    this->Fail(why, outputVector);
+    return 1;
+  }
+  std::vector<std::uint8_t> mask(static_cast<std::size_t>(n)), boundary(static_cast<std::size_t>(n));
+  for (vtkIdType i = 0; i < n; ++i) {
+    mask[static_cast<std::size_t>(i)] = maskArray->GetComponent(i, 0) != 0.0;
+    boundary[static_cast<std::size_t>(i)] = boundaryArray->GetComponent(i, 0) != 0.0;
+  }
+  faceplan::BezierCutOptions options;
+  options.operation = this->Operation == FILL ? faceplan::CutOperation::Fill : faceplan::CutOperation::Cut;
+  options.flipNormal = this->FlipNormal != 0;
+  options.displayResolution = this->SurfaceResolution;
+
+  // Core.
+  faceplan::BezierCutResult result;
+  const faceplan::Status status =
+    faceplan::BezierCut(mesh, mask, boundary, ToCurve(this->CurveU), ToCurve(this->CurveV), options, result);
+  if (!status) {
+    this->Fail(status.message, outputVector);
+    return 1;
+  }
+  for (const std::string& w : result.warnings) vtkWarningMacro(<< "Bezier Cut: " << w);
+
+  // Output 0: same cells and arrays, new points (same precision as the input's).
+  output->ShallowCopy(input);
+  vtkNew<vtkPoints> points;
+  points->SetDataType(input->GetPoints()->GetDataType());
+  points->DeepCopy(input->GetPoints());
+  vtkNew<vtkDoubleArray> displacement;
+  displacement->SetName("Displacement");
+  displacement->SetNumberOfComponents(3);
+  displacement->SetNumberOfTuples(n);
+  displacement->FillValue(0.0);
+  for (vtkIdType i = 0; i < n; ++i) {
+    if (!result.moved[static_cast<std::size_t>(i)]) continue;
+    double before[3], after[3];
+    input->GetPoints()->GetPoint(i, before);
+    points->SetPoint(i, result.points(i, 0), result.points(i, 1), result.points(i, 2));
+    points->GetPoint(i, after); // as stored (float inputs round here)
+    displacement->SetTuple3(i, after[0] - before[0], after[1] - before[1], after[2] - before[2]);
+  }
+  output->SetPoints(points);
+  output->GetPointData()->RemoveArray("Displacement");
+  output->GetPointData()->AddArray(displacement);
+  vtkNew<vtkFieldData> fd;
+  fd->ShallowCopy(input->GetFieldData());
+  auto addInt = [&](const char* name, long long value) {
+    vtkNew<vtkIntArray> a;
+    a->SetName(name);
+    a->InsertNextValue(static_cast<int>(value));
+    fd->RemoveArray(name);
+    fd->AddArray(a);
+  };
+  addInt("NumberOfMovedPoints", result.numMoved);
+  addInt("IntermediarySteps", result.intermediarySteps);
+  output->SetFieldData(fd);
+
+  // Output 1: the operative surface.
+  const faceplan::SurfaceMesh& s = result.operativeSurface;
+  vtkNew<vtkPoints> spts;
+  spts->SetDataTypeToDouble();
+  spts->SetNumberOfPoints(s.numPoints());
+  for (vtkIdType i = 0; i < s.numPoints(); ++i) spts->SetPoint(i, s.points(i, 0), s.points(i, 1), s.points(i, 2));
+  vtkNew<vtkCellArray> tris;
+  for (std::int64_t c = 0; c < s.numCells(); ++c) {
+    const std::int64_t* ids = s.cell(c);
+    const vtkIdType tri[3] = {ids[0], ids[1], ids[2]};
+    tris->InsertNextCell(3, tri);
+  }
+  faceplan::BezierSurface bs;
+  vtkNew<vtkDoubleArray> normals, uv;
+  normals->SetName("Normals");
+  normals->SetNumberOfComponents(3);
+  uv->SetName("UV");
+  uv->SetNumberOfComponents(2);
+  if (faceplan::BezierSurface::Create(ToCurve(this->CurveU), ToCurve(this->CurveV), this->FlipNormal != 0, bs)) {
+    const int nu = this->SurfaceResolution * bs.SegmentsU(), nv = this->SurfaceResolution * bs.SegmentsV();
+    for (int j = 0; j <= nv; ++j)
+      for (int i = 0; i <= nu; ++i) {
+        const double u = double(i) / nu, v = double(j) / nv;
+        const Eigen::Vector3d nrm = bs.UnitNormal(u, v);
+        normals->InsertNextTuple3(nrm.x(), nrm.y(), nrm.z());
+        uv->InsertNextTuple2(u, v);
+      }
+  }
+  surface->SetPoints(spts);
+  surface->SetPolys(tris);
+  if (normals->GetNumberOfTuples() == s.numPoints()) {
+    surface->GetPointData()->SetNormals(normals);
+    surface->GetPointData()->SetTCoords(uv);
+  }
+  return 1;
+}
+
+void vtkBezierCut::PrintSelf(ostream& os, vtkIndent indent) {
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "CurveU points: " << this->GetNumberOfCurveUPoints() << "\n";
+  os << indent << "CurveV points: " << this->GetNumberOfCurveVPoints() << "\n";
+  os << indent << "Operation: " << (this->Operation == FILL ? "Fill" : "Cut") << "\n";
+  os << indent << "FlipNormal: " << this->FlipNormal << "\n";
+  os << indent << "SurfaceResolution: " << this->SurfaceResolution << "\n";
+}

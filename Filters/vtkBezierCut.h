@@ -1,0 +1,95 @@
+/**
+ * @class vtkBezierCut
+ * @brief Cuts (or fills) a bone surface with a translational Bezier surface.
+ *
+ * Input: the output of vtkROIExtract (a vtkPointSet of surface cells with uint8 point arrays
+ * `ROIMask` and `ROIBoundary`). `CurveU` and `CurveV` are composite cubic Bezier curves (3k+1 and
+ * 3m+1 control points, k, m >= 1) sharing their first point P0; the operative surface is
+ * S(u,v) = U(u) + V(v) - P0 with normal dS/du x dS/dv (negated by `FlipNormal`).
+ * `Operation` Cut (0): ROI points (not ROIBoundary) on the side the normal points to, whose closest
+ * surface point is an orthogonal foot inside the patch, move onto S. Fill (1): the same for the
+ * other side. See Core/BezierCut.h for the exact rules and guarantees (no flipped, degenerate or
+ * newly intersecting triangles; intermediary surfaces when direct projection would fold).
+ *
+ * Output port 0: the input's cells and point order with the new coordinates, a point vector array
+ * `Displacement` (exactly zero where unmoved), the input's arrays (ROIMask, ROIBoundary, ...)
+ * passed through, and field data `NumberOfMovedPoints`, `IntermediarySteps`.
+ * Output port 1: the operative surface as triangles (point arrays `Normals`, `UV`).
+ * Errors (ill-defined control points, missing ROI arrays, a cut that cannot be mapped without
+ * folding) are reported with vtkErrorMacro and give empty outputs. The input is never modified.
+ */
+#ifndef vtkBezierCut_h
+#define vtkBezierCut_h
+
+#include "FacePlanFiltersModule.h"
+#include "vtkPointSetAlgorithm.h"
+
+#include <string>
+#include <vector>
+
+class FACEPLANFILTERS_EXPORT vtkBezierCut : public vtkPointSetAlgorithm {
+public:
+  static vtkBezierCut* New();
+  vtkTypeMacro(vtkBezierCut, vtkPointSetAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  enum OperationType { CUT = 0, FILL = 1 };
+
+  ///@{
+  /// Control points of CurveU (3k+1 points).
+  void SetNumberOfCurveUPoints(vtkIdType n);
+  vtkIdType GetNumberOfCurveUPoints() const { return static_cast<vtkIdType>(this->CurveU.size() / 3); }
+  void SetCurveUPoint(vtkIdType i, double x, double y, double z);
+  void GetCurveUPoint(vtkIdType i, double p[3]) const;
+  ///@}
+
+  ///@{
+  /// Control points of CurveV (3m+1 points); point 0 must equal CurveU's point 0.
+  void SetNumberOfCurveVPoints(vtkIdType n);
+  vtkIdType GetNumberOfCurveVPoints() const { return static_cast<vtkIdType>(this->CurveV.size() / 3); }
+  void SetCurveVPoint(vtkIdType i, double x, double y, double z);
+  void GetCurveVPoint(vtkIdType i, double p[3]) const;
+  ///@}
+
+  ///@{
+  /// CUT (0) or FILL (1).
+  vtkSetClampMacro(Operation, int, CUT, FILL);
+  vtkGetMacro(Operation, int);
+  ///@}
+
+  ///@{
+  /// Negate the surface normal (choose which side is cut).
+  vtkSetMacro(FlipNormal, vtkTypeBool);
+  vtkGetMacro(FlipNormal, vtkTypeBool);
+  vtkBooleanMacro(FlipNormal, vtkTypeBool);
+  ///@}
+
+  ///@{
+  /// Tessellation intervals per Bezier segment of the displayed surface (output port 1).
+  vtkSetClampMacro(SurfaceResolution, int, 1, 256);
+  vtkGetMacro(SurfaceResolution, int);
+  ///@}
+
+  /// The message of the last error ("" after a successful run).
+  const char* GetLastErrorMessage() const { return this->LastError.c_str(); }
+
+protected:
+  vtkBezierCut();
+  ~vtkBezierCut() override;
+  int FillOutputPortInformation(int port, vtkInformation* info) override;
+  int RequestDataObject(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  std::vector<double> CurveU, CurveV;
+  int Operation = CUT;
+  vtkTypeBool FlipNormal = false;
+  int SurfaceResolution = 16;
+  std::string LastError;
+
+private:
+  vtkBezierCut(const vtkBezierCut&) = delete;
+  void operator=(const vtkBezierCut&) = delete;
+  void Fail(const std::string& message, vtkInformationVector* outputVector);
+};
+
+#endif
