@@ -1,0 +1,589 @@
+// GPU benchmark of issue 4: element stiffness + assembly, per-edit update and precompute, CUDA
+// backend against the CPU backend on face-like spherical-shell scenes (Core's MakeFaceLikeScene).
+//
+//   gpu_benchmark [--out results.json] [--cases kidney,heart,mandible,10k,100k,1M]
+//                 [--repeats 20] [--edit-repeats 200] [--cpu-precompute-max-tets 200000]
+//                 [--no-precompute]
+//
+// The organ-sized cases are generated shells with about the organ meshes' tetrahedron counts
+// (kidney ~1.9k, heart ~6.6k, mandible ~10.6k), not the Data/organs meshes (those need VTK to read).
+// Without a GPU it still runs the CPU columns (GPU columns empty), so it can be tried anywhere.
+#include "CondensedFEM.h"
+#include "CondensedSystem.h"
+#include "ComputeBackend.h"
+#include "ShellMeshGenerator.h"
+#include "StageTimings.h"
+#include "StiffnessAssembly.h"
+#if FACEPLAN_HAS_CUDA
+#include "CudaBackend.h"
+#endif
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+using namespace faceplan;
+
+namespace {
+
+struct Case {
+  std::string name;
+  int subdivisions, layers;
+};
+
+const std::vector<Case> kAllCases = {
+    {"kidney", 4, 2},   // 1,920 tets (kidney mesh ~1.9k)
+    {"heart", 6, 3},    // 6,480 tets (heart ~6.6k)
+    {"mandible", 6, 5}, // 10,800 tets (mandible 10,637)
+    {"10k", 5, 7},      // 10,500 tets
+    {"100k", 16, 7},    // 107,520 tets
+    {"1M", 50, 7},      // 1,050,000 tets
+};
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double NowMs() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double RelativeMaxDifference(const double* a, const double* b, size_t count) {
+  double diff = 0.0, scale = 0.0;
+  for (size_t i = 0; i < count; ++i) {
+    if (!std::isfinite(a[i])) return std::numeric_limits<double>::infinity();
+    diff = std::max(diff, std::abs(a[i] - b[i]));
+    scale = std::max(scale, std::abs(b[i]));
+  }
+  return scale > 0 ? diff / scale : diff;
+}
+
+// Three tissue bands through the thickness (skin-, fat- and muscle-like), one value per cell.
+Materials LayeredMaterials(const ShellMesh& shell) {
+  const Eigen::Index m = shell.mesh.numTets();
+  Materials materials;
+  materials.youngsModulus.resize(m);
+  materials.poissonRatio.resize(m);
+  const int layers = static_cast<int>(shell.mesh.numPoints() / std::max(shell.nodesPerLayer, 1)) - 1;
+  for (Eigen::Index e = 0; e < m; ++e) {
+    int layer = std::numeric_limits<int>::max();
+    for (int k = 0; k < 4; ++k) layer = std::min(layer, shell.mesh.tets(e, k) / shell.nodesPerLayer);
+    const double f = layers > 0 ? double(layer) / layers : 0.0;
+    const int band = f < 0.34 ? 0 : (f < 0.67 ? 1 : 2);
+    static const double E[3] = {10.0, 1.0, 3.0}, nu[3] = {0.45, 0.49, 0.47};
+    materials.youngsModulus[e] = E[band];
+    materials.poissonRatio[e] = nu[band];
+  }
+  return materials;
+}
+
+// Minimal JSON writer: an object of key -> number/string/bool, nested by hand.
+class Json {
+public:
+  void num(const std::string& key, double value) {
+    std::ostringstream v;
+    v.precision(10);
+    if (std::isfinite(value)) v << value;
+    else v << "null";
+    add(key, v.str());
+  }
+  void str(const std::string& key, const std::string& value) {
+    std::string escaped;
+    for (char c : value) {
+      if (c == '"' || c == '\\') escaped += '\\';
+      escaped += c;
+    }
+    add(key, "\"" + escaped + "\"");
+  }
+  void boolean(const std::string& key, bool value) { add(key, value ? "true" : "false"); }
+  void raw(const std::string& key, const std::string& json) { add(key, json); }
+  std::string text() const { return "{" + body_ + "}"; }
+
+private:
+  void add(const std::string& key, const std::string& value) {
+    if (!body_.empty()) body_ += ", ";
+    body_ += "\"" + key + "\": " + value;
+  }
+  std::string body_;
+};
+
+struct Options {
+  std::string out;
+  std::vector<std::string> cases;
+  int repeats = 20;
+  int editRepeats = 200;
+  long long cpuPrecomputeMaxTets = 200000;
+  bool precompute = true;
+  bool residual = true;
+};
+
+std::vector<std::string> Split(const std::string& s) {
+  std::vector<std::string> parts;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) if (!item.empty()) parts.push_back(item);
+  return parts;
+}
+
+struct Row { // one line of the human-readable tables
+  std::string name;
+  long long tets = 0, nodes = 0, nnz = 0;
+  double cpuKeMs = NAN, cpuAsmMs = NAN, gpuKeKernelMs = NAN, gpuGatherKernelMs = NAN, gpuKernelMs = NAN,
+         gpuWithTransfersMs = NAN, gpuFirstCallMs = NAN, floorMs = NAN, fraction = NAN, asmDiff = NAN;
+  long long keptDofs = 0, roiDofs = 0;
+  double cpuEditMs = NAN, gpuEditMs = NAN, gpuSolveMs = NAN, editDiff = NAN, editFloorMs = NAN;
+  int cpuEditRepeats = 0, gpuEditRepeats = 0;
+  double gpuPrecomputeS = NAN, cpuPrecomputeS = NAN, coreGpuPrecomputeS = NAN;
+  double responseResidual = NAN, responseDiff = NAN, solveDiff = NAN;
+  std::string method;
+};
+
+} // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--out") opt.out = next();
+    else if (a == "--cases") opt.cases = Split(next());
+    else if (a == "--repeats") opt.repeats = std::max(1, std::atoi(next().c_str()));
+    else if (a == "--edit-repeats") opt.editRepeats = std::max(1, std::atoi(next().c_str()));
+    else if (a == "--cpu-precompute-max-tets") opt.cpuPrecomputeMaxTets = std::atoll(next().c_str());
+    else if (a == "--no-precompute") opt.precompute = false;
+    else if (a == "--no-residual") opt.residual = false;
+    else {
+      std::fprintf(stderr,
+                   "usage: %s [--out results.json] [--cases kidney,heart,mandible,10k,100k,1M] "
+                   "[--repeats N] [--edit-repeats N] [--cpu-precompute-max-tets N] [--no-precompute]\n",
+                   argv[0]);
+      return 2;
+    }
+  }
+  std::vector<Case> cases;
+  for (const Case& c : kAllCases)
+    if (opt.cases.empty() || std::find(opt.cases.begin(), opt.cases.end(), c.name) != opt.cases.end())
+      cases.push_back(c);
+
+  Json top;
+  top.str("benchmark", "FacePlan gpu_benchmark (issue 4)");
+  top.num("hardware_threads", std::thread::hardware_concurrency());
+  std::shared_ptr<ComputeBackend> gpu;
+  std::string gpuWhy;
+  double deviceBandwidthGBs = NAN, d2hPinnedGBs = NAN, d2hPageableGBs = NAN;
+#if FACEPLAN_HAS_CUDA
+  gpu = cuda::MakeCudaBackend(gpuWhy);
+  if (gpu) {
+    cuda::Bandwidth bw;
+    std::string error;
+    if (cuda::MeasureBandwidth(bw, error)) {
+      deviceBandwidthGBs = bw.deviceToDeviceGBs;
+      d2hPinnedGBs = bw.deviceToHostPinnedGBs;
+      d2hPageableGBs = bw.deviceToHostPageableGBs;
+      Json b;
+      b.num("device_to_device_GBs_read_plus_write", bw.deviceToDeviceGBs);
+      b.num("host_to_device_pinned_GBs", bw.hostToDevicePinnedGBs);
+      b.num("device_to_host_pinned_GBs", bw.deviceToHostPinnedGBs);
+      b.num("host_to_device_pageable_GBs", bw.hostToDevicePageableGBs);
+      b.num("device_to_host_pageable_GBs", bw.deviceToHostPageableGBs);
+      top.raw("bandwidth", b.text());
+      std::printf("bandwidth: device-to-device %.0f GB/s (read+write), H2D pinned %.1f, D2H pinned %.1f, "
+                  "H2D pageable %.1f, D2H pageable %.1f GB/s\n",
+                  bw.deviceToDeviceGBs, bw.hostToDevicePinnedGBs, bw.deviceToHostPinnedGBs,
+                  bw.hostToDevicePageableGBs, bw.deviceToHostPageableGBs);
+    } else {
+      std::printf("bandwidth measurement failed: %s\n", error.c_str());
+    }
+    top.str("device", cuda::DeviceDescription());
+  }
+#else
+  gpuWhy = "built without CUDA";
+#endif
+  if (!gpu) std::printf("no GPU (%s): CPU columns only\n", gpuWhy.c_str());
+  else std::printf("device: %s\n", gpu->name().c_str());
+  top.str("gpu_backend", gpu ? gpu->name() : std::string("none: ") + gpuWhy);
+
+  std::vector<Row> rows;
+  std::string casesJson;
+  auto cpu = MakeCpuBackend();
+  for (const Case& c : cases) {
+    Row row;
+    row.name = c.name;
+    Json j;
+    j.str("case", c.name);
+    j.num("subdivisions", c.subdivisions);
+    j.num("layers", c.layers);
+    double t0 = NowMs();
+    const FaceLikeScene scene = MakeFaceLikeScene(c.subdivisions, c.layers, 0.1);
+    const TetMesh& mesh = scene.shell.mesh;
+    const Materials materials = LayeredMaterials(scene.shell);
+    row.tets = mesh.numTets();
+    row.nodes = mesh.numPoints();
+    j.num("tets", double(row.tets));
+    j.num("nodes", double(row.nodes));
+    j.num("scene_ms", NowMs() - t0);
+    std::printf("\n== %s: %lld tets, %lld nodes ==\n", c.name.c_str(), row.tets, row.nodes);
+    std::fflush(stdout);
+
+    // ---- element stiffness + assembly of the whole mesh's stiffness (identity numbering) ----
+    std::vector<int> identity(mesh.numPoints());
+    std::iota(identity.begin(), identity.end(), 0);
+    t0 = NowMs();
+    AssemblyPattern pattern = BuildAssemblyPattern(mesh, identity, static_cast<int>(mesh.numPoints()));
+    j.num("pattern_build_ms_cpu", NowMs() - t0);
+    row.nnz = pattern.upper.nonZeros();
+    j.num("upper_nonzeros", double(row.nnz));
+    j.num("gather_entries", double(pattern.packedIndex.size()));
+
+    std::vector<double> cpuKe, cpuAsm, cpuTotal;
+    AssemblyPattern cpuPattern = pattern;
+    const int repeats = row.tets > 500000 ? std::min(opt.repeats, 10) : opt.repeats;
+    for (int r = 0; r < repeats + 1; ++r) {
+      ComputeBackend::AssemblyTimings at;
+      std::string error;
+      const double w0 = NowMs();
+      cpu->assembleStiffness(mesh, materials, cpuPattern, at, error);
+      const double wall = NowMs() - w0;
+      if (r == 0) continue; // warm-up
+      cpuKe.push_back(at.elementStiffnessMs);
+      cpuAsm.push_back(at.assemblyMs);
+      cpuTotal.push_back(wall);
+    }
+    row.cpuKeMs = Median(cpuKe);
+    row.cpuAsmMs = Median(cpuAsm);
+    Json cj;
+    cj.num("repeats", repeats);
+    cj.num("element_stiffness_ms_median", row.cpuKeMs);
+    cj.num("assembly_ms_median", row.cpuAsmMs);
+    cj.num("total_ms_median", Median(cpuTotal));
+    j.raw("cpu_assembly", cj.text());
+
+#if FACEPLAN_HAS_CUDA
+    if (gpu) {
+      AssemblyPattern gpuPattern = pattern;
+      cuda::ReleasePatternCache(*gpu);
+      std::vector<double> keK, gaK, up, down, wall, withTransfers;
+      cuda::AssemblyDetail first;
+      bool ok = true;
+      std::string error;
+      for (int r = 0; r < repeats + 2 && ok; ++r) {
+        std::fill(gpuPattern.upper.valuePtr(), gpuPattern.upper.valuePtr() + gpuPattern.upper.nonZeros(),
+                  std::numeric_limits<double>::quiet_NaN());
+        ComputeBackend::AssemblyTimings at;
+        ok = gpu->assembleStiffness(mesh, materials, gpuPattern, at, error);
+        cuda::AssemblyDetail d;
+        cuda::LastAssemblyDetail(*gpu, d);
+        if (r == 0) {
+          first = d;
+          row.asmDiff = RelativeMaxDifference(gpuPattern.upper.valuePtr(), cpuPattern.upper.valuePtr(),
+                                              static_cast<size_t>(row.nnz));
+          continue;
+        }
+        if (r == 1) continue; // second warm-up (pattern now cached)
+        keK.push_back(d.stiffnessKernelMs);
+        gaK.push_back(d.gatherKernelMs);
+        up.push_back(d.uploadMs);
+        down.push_back(d.downloadMs);
+        wall.push_back(d.wallMs);
+        withTransfers.push_back(d.uploadMs + d.stiffnessKernelMs + d.gatherKernelMs + d.downloadMs);
+        row.asmDiff = std::max(row.asmDiff, RelativeMaxDifference(gpuPattern.upper.valuePtr(),
+                                                                  cpuPattern.upper.valuePtr(),
+                                                                  static_cast<size_t>(row.nnz)));
+      }
+      if (!ok) std::printf("GPU assembly failed: %s\n", error.c_str());
+      cuda::AssemblyDetail last;
+      cuda::LastAssemblyDetail(*gpu, last);
+      row.gpuKeKernelMs = Median(keK);
+      row.gpuGatherKernelMs = Median(gaK);
+      std::vector<double> kernelSum(keK.size());
+      for (size_t i = 0; i < keK.size(); ++i) kernelSum[i] = keK[i] + gaK[i];
+      row.gpuKernelMs = Median(kernelSum);
+      row.gpuWithTransfersMs = Median(wall);
+      row.gpuFirstCallMs = first.wallMs;
+      row.floorMs = last.kernelBytes / (deviceBandwidthGBs * 1e9) * 1e3;
+      row.fraction = row.floorMs / row.gpuKernelMs;
+      Json gj;
+      gj.num("repeats", double(keK.size()));
+      gj.num("stiffness_kernel_ms_median", row.gpuKeKernelMs);
+      gj.num("gather_kernel_ms_median", row.gpuGatherKernelMs);
+      gj.num("kernels_ms_median", row.gpuKernelMs);
+      gj.num("upload_ms_median", Median(up));
+      gj.num("download_ms_median", Median(down));
+      gj.num("device_timeline_with_transfers_ms_median", Median(withTransfers));
+      gj.num("wall_with_transfers_ms_median", row.gpuWithTransfersMs);
+      gj.num("first_call_wall_ms_pattern_upload", first.wallMs);
+      gj.num("first_call_bytes_uploaded", first.bytesUploaded);
+      gj.num("cached_call_bytes_uploaded", last.bytesUploaded);
+      gj.num("bytes_downloaded", last.bytesDownloaded);
+      gj.num("kernel_bytes_floor", last.kernelBytes);
+      gj.num("kernel_floor_ms", row.floorMs);
+      gj.num("achieved_fraction_of_bandwidth", row.fraction);
+      gj.num("download_floor_ms_pinned", last.bytesDownloaded / (d2hPinnedGBs * 1e9) * 1e3);
+      gj.num("download_floor_ms_pageable", last.bytesDownloaded / (d2hPageableGBs * 1e9) * 1e3);
+      gj.num("max_relative_difference_vs_cpu", row.asmDiff);
+      j.raw("gpu_assembly", gj.text());
+    }
+#endif
+    { AssemblyPattern().upper.swap(pattern.upper); }
+    pattern = AssemblyPattern();
+    cpuPattern = AssemblyPattern();
+
+    // ---- precompute (dense response) and per-edit update ----
+    if (opt.precompute) {
+      PrecomputeRequest request;
+      request.mesh = mesh;
+      request.materials = materials;
+      request.sets.constrained = scene.constrained;
+      request.sets.movable = scene.movable;
+      request.sets.kept = scene.kept;
+      request.options.method = SolveMethod::DenseResponse;
+      request.options.denseResponseBudgetBytes = 1e12;
+
+      // Core's Precompute (CPU response); with each backend for the smaller cases.
+      std::shared_ptr<const CondensedSystem> coreGpuSystem, coreCpuSystem;
+      auto runPrecompute = [&](std::shared_ptr<ComputeBackend> backend, std::shared_ptr<const CondensedSystem>& sys,
+                               const char* label) -> double {
+        request.options.backend = std::move(backend);
+        const double w0 = NowMs();
+        const Status s = Precompute(request, sys);
+        const double seconds = (NowMs() - w0) / 1e3;
+        if (!s.ok) {
+          std::printf("%s precompute failed: %s\n", label, s.message.c_str());
+          sys.reset();
+          return NAN;
+        }
+        for (const auto& w : s.warnings) std::printf("%s precompute warning: %s\n", label, w.c_str());
+        const SystemInfo info = Describe(*sys);
+        Json pj;
+        pj.num("wall_s", seconds);
+        pj.str("backend", info.backend);
+        pj.str("method", MethodName(info.method));
+        pj.num("free_dofs", double(info.freeDofs));
+        pj.num("kept_dofs", double(info.keptDofs));
+        pj.num("roi_dofs", double(info.roiDofs));
+        pj.num("factor_nonzeros", info.factorNonzeros);
+        pj.num("response_bytes", info.responseBytes);
+        std::printf("%s: %.2f s (%s, %s): ", label, seconds, info.backend.c_str(), MethodName(info.method));
+        for (int st = 0; st < kNumStages; ++st) {
+          const double ms = info.precomputeTimings.stages[st].ms;
+          pj.num(std::string("stage_ms_") + StageName(static_cast<Stage>(st)), ms);
+          if (ms > 0) std::printf("%s %.0f ms; ", StageName(static_cast<Stage>(st)), ms);
+        }
+        std::printf("factor nnz %.3g\n", info.factorNonzeros);
+        std::fflush(stdout);
+        j.raw(label, pj.text());
+        return seconds;
+      };
+      const bool smallEnough = row.tets <= opt.cpuPrecomputeMaxTets;
+      if (smallEnough || !gpu) row.cpuPrecomputeS = runPrecompute(cpu, coreCpuSystem, "core_precompute_cpu_backend");
+      if (smallEnough && gpu) row.coreGpuPrecomputeS = runPrecompute(gpu, coreGpuSystem, "core_precompute_cuda_backend");
+
+      // GPU pipeline: Core's stages with the response's triangular solves on the GPU.
+      Eigen::MatrixXd pipelineResponse;
+      std::unique_ptr<ResponseOperator> pipelineOp;
+#if FACEPLAN_HAS_CUDA
+      if (gpu) {
+        PipelineTimes pt;
+        std::string error;
+        if (RunGpuPipeline(request, gpu, opt.residual, pipelineResponse, pipelineOp, pt, error)) {
+          row.gpuPrecomputeS = pt.totalMs / 1e3;
+          row.responseResidual = pt.response.worstRelativeResidual;
+          Json pj;
+          pj.num("wall_s", row.gpuPrecomputeS);
+          pj.num("layout_ms", pt.layoutMs);
+          pj.num("pattern_ms", pt.patternMs);
+          pj.num("assembly_wall_ms", pt.assemblyMs);
+          pj.num("split_ms", pt.splitMs);
+          pj.num("analyze_ms", pt.analyzeMs);
+          pj.num("factorize_ms", pt.factorizeMs);
+          pj.num("response_wall_ms", pt.response.wallMs);
+          pj.num("response_upload_ms", pt.response.uploadMs);
+          pj.num("response_forward_ms", pt.response.forwardMs);
+          pj.num("response_backward_ms", pt.response.backwardMs);
+          pj.num("response_residual_ms", pt.response.residualMs);
+          pj.num("response_extract_ms", pt.response.extractMs);
+          pj.num("response_download_ms", pt.response.downloadMs);
+          pj.num("response_sweep_gflops", pt.response.flops / 1e9);
+          pj.num("response_sweep_tflop_per_s",
+                 pt.response.flops / ((pt.response.forwardMs + pt.response.backwardMs) * 1e-3) / 1e12);
+          pj.num("supernodes", pt.response.supernodes);
+          pj.num("passes", pt.response.blocks);
+          pj.num("columns_per_pass", pt.response.columnsPerBlock);
+          pj.num("factor_nonzeros", pt.factorNonzeros);
+          pj.num("free_dofs", pt.freeDofs);
+          pj.num("worst_relative_residual", pt.response.worstRelativeResidual);
+          j.raw("gpu_pipeline_precompute", pj.text());
+          std::printf("gpu pipeline precompute: %.2f s = layout %.0f + pattern %.0f + assembly %.0f + split %.0f + analyze %.0f + "
+                      "factorize %.0f + response %.0f ms (upload %.0f, forward %.0f, backward %.0f, residual %.0f, "
+                      "extract %.0f, download %.0f; %d supernodes, %.0f GFLOP at %.2f TFLOP/s, residual %.2e)\n",
+                      row.gpuPrecomputeS, pt.layoutMs, pt.patternMs, pt.assemblyMs, pt.splitMs, pt.analyzeMs,
+                      pt.factorizeMs, pt.response.wallMs, pt.response.uploadMs, pt.response.forwardMs,
+                      pt.response.backwardMs, pt.response.residualMs, pt.response.extractMs, pt.response.downloadMs,
+                      pt.response.supernodes, pt.response.flops / 1e9,
+                      pt.response.flops / ((pt.response.forwardMs + pt.response.backwardMs) * 1e-3) / 1e12,
+                      pt.response.worstRelativeResidual);
+          if (coreCpuSystem && coreCpuSystem->response.size() == pipelineResponse.size()) {
+            row.responseDiff = RelativeMaxDifference(pipelineResponse.data(), coreCpuSystem->response.data(),
+                                                     static_cast<size_t>(pipelineResponse.size()));
+            j.num("gpu_response_vs_core_cpu_response_max_relative_difference", row.responseDiff);
+          }
+        } else {
+          std::printf("GPU pipeline failed: %s\n", error.c_str());
+        }
+        std::fflush(stdout);
+      }
+#endif
+      // Per-edit: GPU operator vs CPU GEMV on the same response.
+      const Eigen::MatrixXd* response = pipelineOp ? &pipelineResponse
+                                        : coreCpuSystem ? &coreCpuSystem->response : nullptr;
+      if (response && response->size() > 0) {
+        row.keptDofs = response->rows();
+        row.roiDofs = response->cols();
+        std::mt19937 rng(7);
+        std::normal_distribution<double> normal(0.0, 0.5);
+        std::vector<Eigen::VectorXd> edits(8);
+        for (auto& v : edits) {
+          v.resize(response->cols());
+          for (Eigen::Index i = 0; i < v.size(); ++i) v[i] = normal(rng);
+        }
+        std::string error;
+        auto cpuOp = cpu->makeResponseOperator(*response, error);
+        std::vector<Eigen::VectorXd> cpuOut(edits.size());
+        std::vector<double> cpuMs;
+        double spent = 0.0;
+        for (int r = 0; r < opt.editRepeats + 1; ++r) {
+          const auto& roi = edits[r % edits.size()];
+          Eigen::VectorXd kept;
+          const double w0 = NowMs();
+          cpuOp->apply(roi, kept, error);
+          const double ms = NowMs() - w0;
+          if (r < static_cast<int>(edits.size())) cpuOut[r] = kept;
+          if (r == 0) continue;
+          cpuMs.push_back(ms);
+          spent += ms;
+          if (spent > 5000.0 && r >= static_cast<int>(edits.size()) && cpuMs.size() >= 5) break;
+        }
+        row.cpuEditMs = Median(cpuMs);
+        row.cpuEditRepeats = static_cast<int>(cpuMs.size());
+        Json ej;
+        ej.num("kept_dofs", double(row.keptDofs));
+        ej.num("roi_dofs", double(row.roiDofs));
+        ej.num("response_bytes", 8.0 * double(response->size()));
+        ej.num("cpu_apply_ms_median", row.cpuEditMs);
+        ej.num("cpu_repeats", row.cpuEditRepeats);
+        if (pipelineOp) {
+          std::vector<double> gpuMs;
+          double worst = 0.0;
+          bool ok = true;
+          for (int r = 0; r < opt.editRepeats + 3 && ok; ++r) {
+            const auto& roi = edits[r % edits.size()];
+            Eigen::VectorXd kept;
+            const double w0 = NowMs();
+            ok = pipelineOp->apply(roi, kept, error);
+            const double ms = NowMs() - w0;
+            if (!ok) break;
+            if (r < static_cast<int>(edits.size()))
+              worst = std::max(worst, RelativeMaxDifference(kept.data(), cpuOut[r].data(), kept.size()));
+            if (r >= 3) gpuMs.push_back(ms);
+          }
+          if (!ok) std::printf("GPU apply failed: %s\n", error.c_str());
+          row.gpuEditMs = Median(gpuMs);
+          row.gpuEditRepeats = static_cast<int>(gpuMs.size());
+          row.editDiff = worst;
+          row.editFloorMs = 8.0 * double(response->size()) / (deviceBandwidthGBs * 1e9) * 1e3;
+          ej.num("gpu_apply_ms_median", row.gpuEditMs);
+          ej.num("gpu_apply_ms_min", gpuMs.empty() ? NAN : *std::min_element(gpuMs.begin(), gpuMs.end()));
+          ej.num("gpu_repeats", row.gpuEditRepeats);
+          ej.num("gpu_apply_floor_ms_response_read_once", row.editFloorMs);
+          ej.num("max_relative_difference_vs_cpu", row.editDiff);
+        }
+        // End to end: Core's Solve with the CUDA backend's operator (smaller cases).
+        if (coreGpuSystem) {
+          SolveInput input;
+          input.movableDisplacement.resize(static_cast<Eigen::Index>(scene.movable.size()), 3);
+          for (Eigen::Index i = 0; i < input.movableDisplacement.size(); ++i)
+            input.movableDisplacement.data()[i] = normal(rng);
+          std::vector<double> solveMs;
+          SolveResult cpuResult;
+          if (coreCpuSystem) Solve(*coreCpuSystem, input, cpuResult);
+          for (int r = 0; r < opt.editRepeats + 3; ++r) {
+            SolveResult result;
+            const double w0 = NowMs();
+            const Status s = Solve(*coreGpuSystem, input, result);
+            const double ms = NowMs() - w0;
+            if (!s.ok) {
+              std::printf("Solve failed: %s\n", s.message.c_str());
+              break;
+            }
+            if (r == 0 && coreCpuSystem)
+              row.solveDiff = RelativeMaxDifference(result.keptDisplacement.data(), cpuResult.keptDisplacement.data(),
+                                                    static_cast<size_t>(cpuResult.keptDisplacement.size()));
+            if (r >= 3) solveMs.push_back(ms);
+          }
+          row.gpuSolveMs = Median(solveMs);
+          ej.num("core_solve_cuda_backend_ms_median", row.gpuSolveMs);
+          ej.num("core_solve_cuda_vs_cpu_backend_max_relative_difference", row.solveDiff);
+        }
+        j.raw("per_edit", ej.text());
+      }
+      j.num("gpu_pipeline_precompute_s", row.gpuPrecomputeS);
+      j.num("core_precompute_cuda_backend_s", row.coreGpuPrecomputeS);
+      j.num("core_precompute_cpu_backend_s", row.cpuPrecomputeS);
+    }
+    rows.push_back(row);
+    if (!casesJson.empty()) casesJson += ",\n  ";
+    casesJson += j.text();
+    std::printf("assembly: CPU Ke %.3f + asm %.3f ms | GPU kernels %.3f ms (Ke %.3f, gather %.3f), with transfers %.3f ms, "
+                "floor %.3f ms (%.0f%%), diff %.2e\n",
+                row.cpuKeMs, row.cpuAsmMs, row.gpuKernelMs, row.gpuKeKernelMs, row.gpuGatherKernelMs,
+                row.gpuWithTransfersMs, row.floorMs, 100 * row.fraction, row.asmDiff);
+    if (row.keptDofs)
+      std::printf("per edit (%lld x %lld): CPU %.4f ms, GPU apply %.4f ms, GPU Solve %.4f ms, diff %.2e\n",
+                  row.keptDofs, row.roiDofs, row.cpuEditMs, row.gpuEditMs, row.gpuSolveMs, row.editDiff);
+    std::fflush(stdout);
+  }
+
+  if (!opt.out.empty()) {
+    std::ofstream out(opt.out);
+    out << "{\"meta\": " << top.text() << ",\n \"cases\": [\n  " << casesJson << "\n]}\n";
+    std::printf("\nwrote %s\n", opt.out.c_str());
+  }
+
+  std::printf("\nElement stiffness + assembly (ms, medians; GPU with transfers = upload of points/materials + kernels + "
+              "download of values, pattern cached)\n");
+  std::printf("%-9s %9s %10s | %8s %8s %8s | %8s %8s %8s %8s %9s %6s %9s\n", "case", "tets", "nnz(U)", "CPU Ke",
+              "CPU asm", "CPU sum", "GPU Ke", "GPU gath", "GPU kern", "GPU+xfer", "floor", "frac", "rel diff");
+  for (const Row& r : rows)
+    std::printf("%-9s %9lld %10lld | %8.3f %8.3f %8.3f | %8.4f %8.4f %8.4f %8.3f %9.4f %5.0f%% %9.2e\n", r.name.c_str(),
+                r.tets, r.nnz, r.cpuKeMs, r.cpuAsmMs, r.cpuKeMs + r.cpuAsmMs, r.gpuKeKernelMs, r.gpuGatherKernelMs,
+                r.gpuKernelMs, r.gpuWithTransfersMs, r.floorMs, 100 * r.fraction, r.asmDiff);
+  std::printf("\nPer-edit update (ms, medians) and precompute (s)\n");
+  std::printf("%-9s %9s %8s %7s | %9s(%4s) %9s(%4s) %9s %9s %9s | %9s %9s\n", "case", "tets", "kept", "roi", "CPU edit",
+              "n", "GPU edit", "n", "GPU Solve", "floor", "rel diff", "pre GPU", "pre CPU");
+  for (const Row& r : rows)
+    std::printf("%-9s %9lld %8lld %7lld | %9.4f(%4d) %9.4f(%4d) %9.4f %9.4f %9.2e | %9.2f %9.2f\n", r.name.c_str(), r.tets,
+                r.keptDofs, r.roiDofs, r.cpuEditMs, r.cpuEditRepeats, r.gpuEditMs, r.gpuEditRepeats, r.gpuSolveMs,
+                r.editFloorMs, r.editDiff, r.gpuPrecomputeS, r.cpuPrecomputeS);
+  return 0;
+}

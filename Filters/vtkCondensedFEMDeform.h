@@ -1,0 +1,126 @@
+/**
+ * @class vtkCondensedFEMDeform
+ * @brief Soft-tissue deformation by linear static FEM with interior condensation (FacePlanCore).
+ *
+ * Input port 0 ("Input"): the soft tissue, a vtkUnstructuredGrid of tetrahedra (any other cell
+ * type is an error that suggests ParaView's Tetrahedralize filter).
+ * Input port 1 ("Bone"): a surface with a point vector array `Displacement` (the output of
+ * vtkBezierCut) and optionally `ROIMask`.
+ * Contact: tissue boundary nodes within ContactDistance of the undeformed bone (bone points minus
+ * Displacement) are tied to it and take the bone's Displacement interpolated at the closest point;
+ * tied nodes where the bone's ROIMask is 0 stay fixed (every tied node may move without ROIMask).
+ *
+ * Output port 0: the deformed tissue (Volume mode: every tetrahedron; Surface mode: the tissue's
+ * boundary triangles only, and interior displacements are never computed) with point array
+ * `Displacement` and field data `RelativeResidual`, `SolveTimeMs`, `PrecomputeTimeMs`, `Method`,
+ * `Backend` (and `VerifyMaxRelativeError` with Verify on).
+ * Output port 1: a vtkTable of stage timings (columns `Stage`, `TimeMs`, `Reused`, `Backend`).
+ *
+ * The precompute (assembly, ordering, factorization, condensation) runs on a worker thread and is
+ * cached: when only the bone's Displacement values change (a new cut on the same bone, ROI and
+ * tissue) the filter re-solves without any new factorization and the table marks those stages as
+ * reused. The inputs are never modified.
+ */
+#ifndef vtkCondensedFEMDeform_h
+#define vtkCondensedFEMDeform_h
+
+#include "FacePlanFiltersModule.h"
+#include "vtkUnstructuredGridAlgorithm.h"
+
+#include <memory>
+
+class FACEPLANFILTERS_EXPORT vtkCondensedFEMDeform : public vtkUnstructuredGridAlgorithm {
+public:
+  static vtkCondensedFEMDeform* New();
+  vtkTypeMacro(vtkCondensedFEMDeform, vtkUnstructuredGridAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  enum OutputModes { VOLUME = 0, SURFACE = 1 };
+  enum Backends { BACKEND_AUTO = 0, BACKEND_CPU = 1, BACKEND_CUDA = 2 };
+  enum Methods { METHOD_AUTO = 0, METHOD_CONDENSED = 1, METHOD_FULL_REFERENCE = 2 };
+
+  /// Connects the bone surface (port 1).
+  void SetBoneConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
+
+  ///@{
+  /// Young's modulus in Pa (default 15 kPa, facial soft tissue) and Poisson ratio (default 0.45).
+  vtkSetMacro(YoungsModulus, double);
+  vtkGetMacro(YoungsModulus, double);
+  vtkSetMacro(PoissonRatio, double);
+  vtkGetMacro(PoissonRatio, double);
+  ///@}
+
+  ///@{
+  /// Use the input's cell arrays `YoungsModulus` / `PoissonRatio` (several tissues) where present.
+  vtkSetMacro(UseCellMaterials, bool);
+  vtkGetMacro(UseCellMaterials, bool);
+  ///@}
+
+  ///@{
+  /// Metres per mesh length unit (0.001 for millimetres): converts E, density and gravity.
+  vtkSetMacro(LengthUnit, double);
+  vtkGetMacro(LengthUnit, double);
+  ///@}
+
+  ///@{
+  /// Largest distance (mesh units) between a tissue boundary node and the bone for a tie.
+  vtkSetMacro(ContactDistance, double);
+  vtkGetMacro(ContactDistance, double);
+  ///@}
+
+  ///@{
+  /// Optional gravity load: density in kg/m^3, gravity in m/s^2. Off by default.
+  vtkSetMacro(UseGravity, bool);
+  vtkGetMacro(UseGravity, bool);
+  vtkSetMacro(Density, double);
+  vtkGetMacro(Density, double);
+  vtkSetVector3Macro(Gravity, double);
+  vtkGetVector3Macro(Gravity, double);
+  ///@}
+
+  vtkSetClampMacro(OutputMode, int, VOLUME, SURFACE);
+  vtkGetMacro(OutputMode, int);
+  vtkSetClampMacro(Backend, int, BACKEND_AUTO, BACKEND_CUDA);
+  vtkGetMacro(Backend, int);
+  vtkSetClampMacro(Method, int, METHOD_AUTO, METHOD_FULL_REFERENCE);
+  vtkGetMacro(Method, int);
+
+  ///@{
+  /// Also run the reference full solve and report the largest relative difference to it.
+  vtkSetMacro(Verify, bool);
+  vtkGetMacro(Verify, bool);
+  ///@}
+
+  /// Number of precomputes (factorizations) this filter has started; for tests and the GUI.
+  vtkGetMacro(PrecomputeCount, int);
+
+protected:
+  vtkCondensedFEMDeform();
+  ~vtkCondensedFEMDeform() override;
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  int FillOutputPortInformation(int port, vtkInformation* info) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  double YoungsModulus = 15000.0;
+  double PoissonRatio = 0.45;
+  bool UseCellMaterials = true;
+  double LengthUnit = 0.001;
+  double ContactDistance = 1.0;
+  bool UseGravity = false;
+  double Density = 1100.0;
+  double Gravity[3] = {0.0, 0.0, -9.81};
+  int OutputMode = VOLUME;
+  int Backend = BACKEND_AUTO;
+  int Method = METHOD_AUTO;
+  bool Verify = false;
+  int PrecomputeCount = 0;
+
+private:
+  vtkCondensedFEMDeform(const vtkCondensedFEMDeform&) = delete;
+  void operator=(const vtkCondensedFEMDeform&) = delete;
+
+  struct Cache;
+  std::unique_ptr<Cache> State;
+};
+
+#endif
