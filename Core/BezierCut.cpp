@@ -3,10 +3,13 @@
 #include "ROIExtract.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <unordered_map>
@@ -597,6 +600,9 @@ public:
   bool Intermediary(int T, int maxRelax, SurfacePoints& P, std::string& why) {
     uv_ = foot_;
     P = X0_;
+    region_.clear();
+    inRegion_.assign(moved_.size(), 0);
+    solvedOnce_ = false;
     std::vector<Vector3d> prev = a0_;
     std::vector<std::int64_t> bad;
     for (int s = 1; s <= T; ++s) {
@@ -604,17 +610,16 @@ public:
       for (std::int64_t i : movedIds_) Place(P, i, t);
       if (s < T) {
         for (int iter = 0; iter < maxRelax; ++iter) {
-          CollectBad(P, prev, iter < maxRelax / 4, false, bad);
-          if (bad.empty()) break;
-          Relax(P, bad, t, 1 + iter / 3);
+          CollectBad(P, prev, true, false, bad);
+          if (bad.empty() || !Relax(P, bad, t, 1 << std::min(iter, 20))) break;
         }
         for (std::size_t k = 0; k < touched_.size(); ++k) prev[k] = AreaVector(tris_[touched_[k]], P);
       }
     }
     // Last surface (t = 1): the final criteria, intersections included.
-    for (int iter = 0; iter < 2 * maxRelax; ++iter) {
+    for (int iter = 0; iter < maxRelax; ++iter) {
       if (FinalCheck(P, &bad, why)) return true;
-      Relax(P, bad, 1.0, 1 + iter / 3);
+      if (!Relax(P, bad, 1.0, 1 << std::min(iter, 20))) break;
     }
     return FinalCheck(P, nullptr, why);
   }
@@ -663,6 +668,15 @@ private:
       if (s == TriState::Ok) continue;
       bad.push_back(touched_[k]);
       (s == TriState::Degenerate ? degenerate : flipped)++;
+      if (std::getenv("FACEPLAN_DEBUG")) {
+        const Tri& tr = tris_[touched_[k]];
+        std::fprintf(stderr, "bad tri %lld full=%d a0=(%g %g %g) a1=(%g %g %g)\n", (long long)touched_[k], int(full_[k]),
+                     a0_[k].x(), a0_[k].y(), a0_[k].z(), AreaVector(tr, P).x(), AreaVector(tr, P).y(), AreaVector(tr, P).z());
+        for (int j = 0; j < 3; ++j)
+          std::fprintf(stderr, "   v%lld moved=%d x0=(%g %g %g) x=(%g %g %g) uv=(%g %g)\n", (long long)tr.v[j], int(moved_[tr.v[j]]),
+                       X0_(tr.v[j], 0), X0_(tr.v[j], 1), X0_(tr.v[j], 2), P(tr.v[j], 0), P(tr.v[j], 1), P(tr.v[j], 2),
+                       uv_[tr.v[j]].x(), uv_[tr.v[j]].y());
+      }
     }
     if (bad.empty()) {
       bad = NewIntersections(tris_, X0_, P, activeTri_);
@@ -677,37 +691,67 @@ private:
     return bad.empty();
   }
 
-  // Tangential relaxation of the moved vertices of `bad` triangles and `rings` rings of moved
-  // neighbours around them, within the intermediary surface at t.
-  void Relax(SurfacePoints& P, const std::vector<std::int64_t>& bad, double t, int rings) {
-    std::vector<std::int64_t> region;
-    std::unordered_set<std::int64_t> in;
+  // Tangential relaxation within the intermediary surface at t: the moved vertices of `bad`
+  // triangles join the relaxed region, which then grows by `rings` rings of moved neighbours; the
+  // region's (u,v) are replaced by the solution of the uniform graph Laplace equation (a Tutte /
+  // harmonic map: every vertex at the average of its neighbours), with Dirichlet values from the
+  // vertices around the region (the (u,v) of other moved vertices, the foot points of unmoved
+  // ones). Returns false when the region did not change (nothing more to gain).
+  bool Relax(SurfacePoints& P, const std::vector<std::int64_t>& bad, double t, int rings) {
+    const std::size_t before = region_.size();
     for (std::int64_t tr : bad)
       for (int k = 0; k < 3; ++k) {
         const std::int64_t v = tris_[tr].v[k];
-        if (moved_[v] && in.insert(v).second) region.push_back(v);
+        if (moved_[v] && !inRegion_[v]) {
+          inRegion_[v] = 1;
+          region_.push_back(v);
+        }
       }
     std::size_t begin = 0;
     for (int r = 0; r < rings; ++r) {
-      const std::size_t end = region.size();
+      const std::size_t end = region_.size();
       for (std::size_t k = begin; k < end; ++k)
-        for (std::int64_t w : nbrs_[region[k]])
-          if (moved_[w] && in.insert(w).second) region.push_back(w);
-      if (region.size() == end) break;
-      begin = end;
+        for (std::int64_t w : nbrs_[region_[k]])
+          if (moved_[w] && !inRegion_[w]) {
+            inRegion_[w] = 1;
+            region_.push_back(w);
+          }
+      if (region_.size() == end) break;
+      begin = 0; // grow from the whole region each ring
     }
-    for (int sweep = 0; sweep < 3; ++sweep)
-      for (std::int64_t i : region) {
-        const auto& nb = nbrs_[i];
-        if (nb.empty()) continue;
-        Vector3d c = Vector3d::Zero();
-        for (std::int64_t j : nb) c += P.row(j).transpose();
-        c /= double(nb.size());
-        const Vector3d target = t >= 1.0 ? c : Vector3d((c - (1.0 - t) * X0_.row(i).transpose()) / t);
-        const SurfaceProjection pr = S_.ProjectFrom(target, uv_[i].x(), uv_[i].y());
-        uv_[i] = Vector2d(pr.u, pr.v);
-        Place(P, i, t);
+    const bool grew = region_.size() != before || !solvedOnce_;
+    if (!grew) return false;
+    solvedOnce_ = true;
+
+    const std::size_t m = region_.size();
+    std::vector<std::int64_t> index(moved_.size(), -1);
+    for (std::size_t k = 0; k < m; ++k) index[region_[k]] = std::int64_t(k);
+    std::vector<Eigen::Triplet<double>> trip;
+    Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(Eigen::Index(m), 2);
+    const double eps = 1e-9;
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::int64_t i = region_[k];
+      trip.emplace_back(Eigen::Index(k), Eigen::Index(k), double(nbrs_[i].size()) + eps);
+      rhs.row(Eigen::Index(k)) += eps * uv_[i].transpose();
+      for (std::int64_t j : nbrs_[i]) {
+        if (index[j] >= 0)
+          trip.emplace_back(Eigen::Index(k), Eigen::Index(index[j]), -1.0);
+        else
+          rhs.row(Eigen::Index(k)) += (moved_[j] ? uv_[j] : foot_[j]).transpose();
       }
+    }
+    Eigen::SparseMatrix<double> A{Eigen::Index(m), Eigen::Index(m)};
+    A.setFromTriplets(trip.begin(), trip.end());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
+    if (solver.info() != Eigen::Success) return false;
+    const Eigen::MatrixX2d sol = solver.solve(rhs);
+    if (solver.info() != Eigen::Success || !sol.allFinite()) return false;
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::int64_t i = region_[k];
+      uv_[i] = Vector2d(Clamp01(sol(Eigen::Index(k), 0)), Clamp01(sol(Eigen::Index(k), 1)));
+      Place(P, i, t);
+    }
+    return true;
   }
 
   const BezierSurface& S_;
@@ -722,6 +766,9 @@ private:
   std::vector<double> q0_;
   std::vector<bool> full_;
   std::vector<std::uint8_t> activeTri_;
+  std::vector<std::int64_t> region_; // vertices relaxed so far (this schedule)
+  std::vector<std::uint8_t> inRegion_;
+  bool solvedOnce_ = false;
   double sigma_ = 1.0;
 };
 
@@ -753,9 +800,9 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
   for (std::int64_t i = 0; i < n; ++i) {
     if (!roiMask[i]) continue;
     const SurfaceProjection pr = surf.Project(mesh.points.row(i).transpose());
+    foot[i] = Vector2d(pr.u, pr.v); // also for unmoved ROI vertices: relaxation boundary values
     if (!pr.inside) continue;
     ++inside;
-    foot[i] = Vector2d(pr.u, pr.v);
     if (roiBoundary[i]) continue;
     const bool side = options.operation == CutOperation::Cut ? pr.signedDistance > 0 : pr.signedDistance < 0;
     if (side) moved[i] = 1;

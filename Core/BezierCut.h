@@ -104,8 +104,8 @@ struct BezierCutOptions {
   CutOperation operation = CutOperation::Cut;
   bool flipNormal = false;
   int displayResolution = 16;     // tessellation intervals per Bezier segment (output port 1)
-  std::vector<int> stepSchedules = {8, 32, 96}; // numbers of intermediary surfaces tried in turn
-  int maxRelaxIterations = 60;    // relaxation rounds per intermediary step
+  std::vector<int> stepSchedules = {8, 32}; // numbers of intermediary surfaces tried in turn
+  int maxRelaxIterations = 24;    // relaxation rounds per step (the region doubles its rings each round)
 };
 
 struct BezierCutResult {

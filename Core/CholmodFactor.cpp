@@ -49,6 +49,26 @@ cholmod_sparse ViewUpper(const SparseMatrix& upper) {
   return view;
 }
 
+// A non-owning CHOLMOD view of a column-major Eigen matrix.
+cholmod_dense ViewDense(const Eigen::MatrixXd& b) {
+  cholmod_dense view{};
+  view.nrow = b.rows();
+  view.ncol = b.cols();
+  view.nzmax = b.size();
+  view.d = b.rows();
+  view.x = const_cast<double*>(b.data());
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  return view;
+}
+
+void CopyOut(const cholmod_dense* solution, Eigen::Index rows, Eigen::Index cols, Eigen::MatrixXd& x) {
+  x.resize(rows, cols);
+  const double* src = static_cast<const double*>(solution->x);
+  for (Eigen::Index c = 0; c < cols; ++c)
+    std::copy(src + c * solution->d, src + c * solution->d + rows, x.col(c).data());
+}
+
 } // namespace
 
 CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
@@ -86,22 +106,30 @@ Status CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const 
   if (!impl_->factor) return Status::Error("internal: solve before factorize");
   if (static_cast<size_t>(b.rows()) != impl_->factor->n)
     return Status::Error("internal: right-hand side has the wrong size");
-  cholmod_dense rhs{};
-  rhs.nrow = b.rows();
-  rhs.ncol = b.cols();
-  rhs.nzmax = b.size();
-  rhs.d = b.rows();
-  rhs.x = const_cast<double*>(b.data());
-  rhs.xtype = CHOLMOD_REAL;
-  rhs.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense rhs = ViewDense(b);
   const int ok = cholmod_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr,
                                 &impl_->y, &impl_->e, &impl_->common);
   if (!ok || !impl_->x) return Status::Error("CHOLMOD solve failed (out of memory?)");
-  x.resize(b.rows(), b.cols());
-  const double* src = static_cast<const double*>(impl_->x->x);
-  for (Eigen::Index c = 0; c < b.cols(); ++c)
-    std::copy(src + c * impl_->x->d, src + c * impl_->x->d + b.rows(), x.col(c).data());
+  CopyOut(impl_->x, b.rows(), b.cols(), x);
   return Status::Ok();
+}
+
+Status CholmodFactor::solveConcurrently(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
+  if (!impl_->factor) return Status::Error("internal: solve before factorize");
+  if (static_cast<size_t>(b.rows()) != impl_->factor->n)
+    return Status::Error("internal: right-hand side has the wrong size");
+  cholmod_common common;
+  cholmod_start(&common);
+  common.print = 0;
+  common.error_handler = nullptr;
+  cholmod_dense rhs = ViewDense(b);
+  cholmod_dense* solution = cholmod_solve(CHOLMOD_A, impl_->factor, &rhs, &common);
+  Status status = Status::Ok();
+  if (!solution) status = Status::Error("CHOLMOD solve failed (out of memory?)");
+  else CopyOut(solution, b.rows(), b.cols(), x);
+  cholmod_free_dense(&solution, &common);
+  cholmod_finish(&common);
+  return status;
 }
 
 double CholmodFactor::factorNonzeros() const {

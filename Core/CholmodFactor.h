@@ -23,6 +23,9 @@ public:
   Status factorize(const SparseMatrix& upper);
   // x = A^-1 b for one or many columns.
   Status solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
+  // The same with a private CHOLMOD workspace, so several threads may solve at once (the factor
+  // is only read). Used for the many right-hand sides of the dense response.
+  Status solveConcurrently(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
 
   double factorNonzeros() const;
   // CHOLMOD's cheap reciprocal condition estimate, (min diag L / max diag L)^2.

@@ -1,5 +1,6 @@
 #include "CondensedFEM.h"
 
+#include "BlasThreads.h"
 #include "CondensedSystem.h"
 #include "ElementStiffness.h"
 #include "MeshValidation.h"
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <thread>
 
 namespace faceplan {
 
@@ -108,27 +110,57 @@ SolveMethod ChooseMethod(const PrecomputeOptions& options, double keptDofs, doub
   return SolveMethod::CachedFactor;
 }
 
+// Columns of the response, solved in blocks: one single-threaded solve per core at a time, each
+// with its own CHOLMOD workspace, blocks sized so the transient memory stays near 1 GB.
 Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
                      const std::atomic<bool>* cancel, const ProgressCallback& progress) {
   const Eigen::Index keptDofs = 3 * sys.layout.keptFree, roiDofs = sys.kfr.cols();
+  const Eigen::Index freeDofs = sys.kff.rows();
   sys.response.resize(keptDofs, roiDofs);
-  const Eigen::Index block = std::max(1, options.responseBlockColumns);
+  const int threads = static_cast<int>(std::max(1u, std::min(std::thread::hardware_concurrency(), 16u)));
+  const double bytesPerColumn = 8.0 * 5.0 * double(std::max<Eigen::Index>(freeDofs, 1));
+  const Eigen::Index memoryBlock = static_cast<Eigen::Index>(1.0e9 / (bytesPerColumn * threads));
+  const Eigen::Index block = std::clamp<Eigen::Index>(std::min<Eigen::Index>(memoryBlock, options.responseBlockColumns), 8,
+                                                      std::max(8, options.responseBlockColumns));
+  const Eigen::Index blocks = (roiDofs + block - 1) / block;
+
+  ScopedBlasThreads singleThreadedBlas(1);
+  std::atomic<Eigen::Index> nextBlock{0}, doneBlocks{0};
+  std::mutex resultMutex;
+  Status failure = Status::Ok();
   double worst = 0.0;
-  for (Eigen::Index c0 = 0; c0 < roiDofs; c0 += block) {
-    if (cancel && cancel->load()) return Status::Error("cancelled");
-    const Eigen::Index cols = std::min(block, roiDofs - c0);
-    const Eigen::MatrixXd rhs = Eigen::MatrixXd(sys.kfr.middleCols(c0, cols));
-    Eigen::MatrixXd x;
-    Status s = sys.factor.solve(rhs, x);
-    if (!s) return s;
-    const Eigen::MatrixXd residual = sys.kff.selfadjointView<Eigen::Upper>() * x - rhs;
-    for (Eigen::Index c = 0; c < cols; ++c) {
-      const double norm = rhs.col(c).norm();
-      if (norm > 0.0) worst = std::max(worst, residual.col(c).norm() / norm);
+  auto worker = [&] {
+    for (Eigen::Index b = nextBlock++; b < blocks; b = nextBlock++) {
+      if (cancel && cancel->load()) return;
+      const Eigen::Index c0 = b * block, cols = std::min(block, roiDofs - c0);
+      const Eigen::MatrixXd rhs = Eigen::MatrixXd(sys.kfr.middleCols(c0, cols));
+      Eigen::MatrixXd x;
+      Status s = sys.factor.solveConcurrently(rhs, x);
+      if (!s) {
+        std::lock_guard<std::mutex> lock(resultMutex);
+        failure = s;
+        return;
+      }
+      const Eigen::MatrixXd residual = sys.kff.selfadjointView<Eigen::Upper>() * x - rhs;
+      double blockWorst = 0.0;
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        const double norm = rhs.col(c).norm();
+        if (norm > 0.0) blockWorst = std::max(blockWorst, residual.col(c).norm() / norm);
+      }
+      sys.response.middleCols(c0, cols) = -x.topRows(keptDofs); // disjoint columns per block
+      std::lock_guard<std::mutex> lock(resultMutex);
+      worst = std::max(worst, blockWorst);
+      ++doneBlocks;
+      if (progress) progress(0.6 + 0.4 * double(doneBlocks.load()) / double(blocks), "dense response");
     }
-    sys.response.middleCols(c0, cols) = -x.topRows(keptDofs);
-    if (progress) progress(0.6 + 0.4 * double(c0 + cols) / double(roiDofs), "dense response");
-  }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::min<Eigen::Index>(threads, blocks); ++t) pool.emplace_back(worker);
+  worker(); // the calling thread works too
+  for (auto& th : pool) th.join();
+  if (progress) progress(1.0, "dense response");
+  if (cancel && cancel->load()) return Status::Error("cancelled");
+  if (!failure) return failure;
   sys.responseResidual = worst;
   return Status::Ok();
 }

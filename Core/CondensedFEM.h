@@ -62,6 +62,7 @@ struct SolveResult {
   StageTimings timings; // precompute stages marked reused, plus this solve's own stages
 };
 
+// May be called from several worker threads at once (make it thread-safe, e.g. an atomic store).
 using ProgressCallback = std::function<void(double fraction, const char* what)>;
 
 // Everything the precompute produced. Immutable once built, so solves may share it across threads.
