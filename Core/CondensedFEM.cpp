@@ -120,8 +120,10 @@ Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
   const int threads = static_cast<int>(std::max(1u, std::min(std::thread::hardware_concurrency(), 16u)));
   const double bytesPerColumn = 8.0 * 5.0 * double(std::max<Eigen::Index>(freeDofs, 1));
   const Eigen::Index memoryBlock = static_cast<Eigen::Index>(1.0e9 / (bytesPerColumn * threads));
-  const Eigen::Index block = std::clamp<Eigen::Index>(std::min<Eigen::Index>(memoryBlock, options.responseBlockColumns), 8,
+  const Eigen::Index largestBlock = std::clamp<Eigen::Index>(std::min<Eigen::Index>(memoryBlock, options.responseBlockColumns), 8,
                                                       std::max(8, options.responseBlockColumns));
+  const Eigen::Index evenShare = (roiDofs + threads - 1) / threads; // keep every core busy
+  const Eigen::Index block = std::max<Eigen::Index>(1, std::min(largestBlock, evenShare));
   const Eigen::Index blocks = (roiDofs + block - 1) / block;
 
   ScopedBlasThreads singleThreadedBlas(1);
