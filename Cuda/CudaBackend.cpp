@@ -1,0 +1,446 @@
+#include "CudaBackend.h"
+
+#include "CudaCheck.h"
+#include "CudaInternal.h"
+#include "CudaKernels.h"
+#include "ElementStiffness.h"
+#include "ParallelFor.h"
+#include "StageTimings.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <mutex>
+#include <sstream>
+#include <vector>
+
+#ifndef FACEPLAN_CUDA_ARCHITECTURES
+#define FACEPLAN_CUDA_ARCHITECTURES "90"
+#endif
+
+namespace faceplan::cuda {
+
+using detail::CudaResponse;
+using detail::InitDevice;
+using detail::DeviceArray;
+using detail::PinnedArray;
+
+namespace {
+
+// memcpy split over the hardware threads (large host copies are bandwidth-bound per thread).
+void ParallelCopy(void* dst, const void* src, size_t bytes) {
+  constexpr size_t chunk = size_t(2) << 20;
+  const std::int64_t chunks = static_cast<std::int64_t>((bytes + chunk - 1) / chunk);
+  ParallelFor(chunks, 4, [&](std::int64_t begin, std::int64_t end) {
+    const size_t from = static_cast<size_t>(begin) * chunk, to = std::min(bytes, static_cast<size_t>(end) * chunk);
+    if (to > from) std::memcpy(static_cast<char*>(dst) + from, static_cast<const char*>(src) + from, to - from);
+  });
+}
+
+// Cheap identity check of a large index array: its size and up to 16384 evenly spread entries.
+// Together with the addresses and sizes it decides whether a cached pattern is the same one.
+std::uint64_t Fingerprint(const int* data, size_t count, std::uint64_t seed) {
+  std::uint64_t h = 1469598103934665603ull ^ seed ^ (static_cast<std::uint64_t>(count) << 17);
+  auto mix = [&h](std::uint32_t v) { h = (h ^ v) * 1099511628211ull; };
+  if (count == 0) return h;
+  const size_t samples = std::min<size_t>(count, 16384);
+  for (size_t s = 0; s < samples; ++s) {
+    const size_t i = samples == count ? s : s * (count - 1) / (samples - 1);
+    mix(static_cast<std::uint32_t>(data[i]));
+  }
+  return h;
+}
+
+struct PatternKey {
+  const void* pattern = nullptr;
+  const int* gatherStart = nullptr;
+  const int* packedIndex = nullptr;
+  const int* tets = nullptr;
+  size_t gatherCount = 0, packedCount = 0;
+  long long numTets = 0;
+  std::uint64_t fingerprint = 0;
+  bool operator==(const PatternKey& o) const {
+    return pattern == o.pattern && gatherStart == o.gatherStart && packedIndex == o.packedIndex &&
+           tets == o.tets && gatherCount == o.gatherCount && packedCount == o.packedCount &&
+           numTets == o.numTets && fingerprint == o.fingerprint;
+  }
+};
+
+class CudaBackendImpl final : public ComputeBackend {
+public:
+  ~CudaBackendImpl() override {
+    for (cudaEvent_t& e : events_)
+      if (e) cudaEventDestroy(e);
+    if (stream_) cudaStreamDestroy(stream_);
+  }
+
+  bool init(std::string& error) {
+    if (!InitDevice(error)) return false;
+    cudaDeviceProp prop{};
+    FP_CUDA_TRY(cudaGetDeviceProperties(&prop, 0));
+    name_ = std::string("CUDA (") + prop.name + ")";
+    FP_CUDA_TRY(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
+    for (cudaEvent_t& e : events_) FP_CUDA_TRY(cudaEventCreate(&e));
+    return true;
+  }
+
+  std::string name() const override { return name_; }
+
+  bool assembleStiffness(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
+                         AssemblyTimings& timings, std::string& error) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    StageClock clock;
+    AssemblyDetail detail;
+    const bool ok = assemble(mesh, materials, pattern, timings, detail, error);
+    detail.wallMs = clock.elapsedMs();
+    if (ok) last_ = detail;
+    if (!ok) releasePattern(); // a failed call leaves nothing half-cached
+    return ok;
+  }
+
+  std::unique_ptr<ResponseOperator> makeResponseOperator(const Eigen::MatrixXd& response,
+                                                         std::string& error) override {
+    auto op = std::make_unique<CudaResponse>();
+    if (!op->init(response, error)) return nullptr;
+    return op;
+  }
+
+  AssemblyDetail lastDetail() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return last_;
+  }
+
+
+private:
+  void releasePattern() {
+    key_ = PatternKey{};
+    cachedValid_ = false;
+    tets_.release();
+    gatherStart_.release();
+    packedIndex_.release();
+  }
+
+public:
+  void releaseAll() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    releasePattern();
+    points_.release();
+    youngs_.release();
+    poisson_.release();
+    packed_.release();
+    values_.release();
+  }
+  void setPinnedTransfers(bool on) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pinnedTransfers_ = on;
+  }
+
+private:
+
+  bool assemble(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
+                AssemblyTimings& timings, AssemblyDetail& detail, std::string& error) {
+    const long long m = mesh.numTets();
+    const long long n = mesh.numPoints();
+    const long long nnz = pattern.upper.nonZeros();
+    if (static_cast<long long>(pattern.gatherStart.size()) != nnz + 1) {
+      error = "assembly pattern: gatherStart does not match the number of nonzeros";
+      return false;
+    }
+    if (m > std::numeric_limits<int>::max() / kPackedElementSize) {
+      error = "mesh too large for 32-bit packed indices";
+      return false;
+    }
+    const auto nE = materials.youngsModulus.size(), nNu = materials.poissonRatio.size();
+    if ((nE != 1 && nE != m) || (nNu != 1 && nNu != m)) {
+      error = "materials: Young's modulus and Poisson ratio need one value or one per cell";
+      return false;
+    }
+    if (static_cast<long long>(pattern.packedIndex.size()) != pattern.gatherStart.back()) {
+      error = "assembly pattern: packedIndex does not match gatherStart";
+      return false;
+    }
+    if (m == 0 || nnz == 0) {
+      std::fill(pattern.upper.valuePtr(), pattern.upper.valuePtr() + nnz, 0.0);
+      timings = AssemblyTimings{};
+      return true;
+    }
+    FP_CUDA_TRY(cudaSetDevice(0));
+
+    PatternKey key;
+    key.pattern = &pattern;
+    key.gatherStart = pattern.gatherStart.data();
+    key.packedIndex = pattern.packedIndex.data();
+    key.tets = mesh.tets.data();
+    key.gatherCount = pattern.gatherStart.size();
+    key.packedCount = pattern.packedIndex.size();
+    key.numTets = m;
+    key.fingerprint = Fingerprint(pattern.gatherStart.data(), pattern.gatherStart.size(), 1) ^
+                      Fingerprint(pattern.packedIndex.data(), pattern.packedIndex.size(), 2) ^
+                      Fingerprint(mesh.tets.data(), static_cast<size_t>(4 * m), 3);
+    const bool reuse = cachedValid_ && key == key_;
+
+    const size_t packedCount = pattern.packedIndex.size();
+    const size_t tetBytes = sizeof(int) * 4 * static_cast<size_t>(m);
+    const size_t gatherBytes = sizeof(int) * pattern.gatherStart.size();
+    const size_t indexBytes = sizeof(int) * std::max<size_t>(packedCount, 1);
+    const size_t pointBytes = sizeof(double) * 3 * static_cast<size_t>(n);
+    const size_t elementBytes = sizeof(double) * kPackedElementSize * static_cast<size_t>(m);
+    const size_t valueBytes = sizeof(double) * static_cast<size_t>(nnz);
+
+    if (!reuse) {
+      releasePattern();
+      // Cell indices are checked once per pattern: a bad index would fault the kernel.
+      const int* t = mesh.tets.data();
+      int maxNode = -1;
+      for (size_t i = 0; i < 4 * static_cast<size_t>(m); ++i) {
+        if (t[i] < 0) {
+          error = "mesh: negative node index in a cell";
+          return false;
+        }
+        maxNode = std::max(maxNode, t[i]);
+      }
+      maxNode_ = maxNode;
+    }
+    if (maxNode_ >= n) {
+      error = "mesh: a cell refers to a node beyond the point array";
+      return false;
+    }
+    if (!tets_.ensure(tetBytes, error) || !gatherStart_.ensure(gatherBytes, error) ||
+        !packedIndex_.ensure(indexBytes, error) || !points_.ensure(pointBytes, error) ||
+        !youngs_.ensure(sizeof(double) * nE, error) || !poisson_.ensure(sizeof(double) * nNu, error) ||
+        !packed_.ensure(elementBytes, error) || !values_.ensure(valueBytes, error))
+      return false;
+
+    // Points and materials go through page-locked staging (a parallel host copy, then a copy at
+    // full link speed) unless pinned transfers are off; likewise the values on the way back.
+    const double* srcPoints = mesh.points.data();
+    const double* srcYoungs = materials.youngsModulus.data();
+    const double* srcPoisson = materials.poissonRatio.data();
+    if (pinnedTransfers_) {
+      const size_t inBytes = pointBytes + sizeof(double) * (nE + nNu);
+      if (!stageIn_.ensure(inBytes, error) || !stageOut_.ensure(valueBytes, error)) return false;
+      double* stage = stageIn_.as<double>();
+      ParallelCopy(stage, srcPoints, pointBytes);
+      ParallelCopy(stage + 3 * n, srcYoungs, sizeof(double) * nE);
+      ParallelCopy(stage + 3 * n + nE, srcPoisson, sizeof(double) * nNu);
+      srcPoints = stage;
+      srcYoungs = stage + 3 * n;
+      srcPoisson = stage + 3 * n + nE;
+    }
+    double* dstValues = pinnedTransfers_ ? stageOut_.as<double>() : pattern.upper.valuePtr();
+
+    double uploaded = 0.0;
+    FP_CUDA_TRY(cudaEventRecord(events_[0], stream_));
+    if (!reuse) {
+      FP_CUDA_TRY(cudaMemcpyAsync(tets_.as<int>(), mesh.tets.data(), tetBytes, cudaMemcpyHostToDevice, stream_));
+      FP_CUDA_TRY(cudaMemcpyAsync(gatherStart_.as<int>(), pattern.gatherStart.data(), gatherBytes,
+                                  cudaMemcpyHostToDevice, stream_));
+      if (packedCount > 0)
+        FP_CUDA_TRY(cudaMemcpyAsync(packedIndex_.as<int>(), pattern.packedIndex.data(),
+                                    sizeof(int) * packedCount, cudaMemcpyHostToDevice, stream_));
+      uploaded += static_cast<double>(tetBytes + gatherBytes + sizeof(int) * packedCount);
+    }
+    FP_CUDA_TRY(cudaMemcpyAsync(points_.as<double>(), srcPoints, pointBytes, cudaMemcpyHostToDevice, stream_));
+    FP_CUDA_TRY(cudaMemcpyAsync(youngs_.as<double>(), srcYoungs, sizeof(double) * nE, cudaMemcpyHostToDevice, stream_));
+    FP_CUDA_TRY(cudaMemcpyAsync(poisson_.as<double>(), srcPoisson, sizeof(double) * nNu, cudaMemcpyHostToDevice,
+                                stream_));
+    uploaded += static_cast<double>(pointBytes + sizeof(double) * (nE + nNu));
+    FP_CUDA_TRY(cudaEventRecord(events_[1], stream_));
+
+    FP_CUDA_TRY(detail::LaunchElementStiffness(points_.as<double>(), tets_.as<int>(), m,
+                                               youngs_.as<double>(), nE == 1 ? 0 : 1,
+                                               poisson_.as<double>(), nNu == 1 ? 0 : 1,
+                                               packed_.as<double>(), stream_));
+    FP_CUDA_TRY(cudaEventRecord(events_[2], stream_));
+    FP_CUDA_TRY(detail::LaunchGather(gatherStart_.as<int>(), packedIndex_.as<int>(), packed_.as<double>(),
+                                     static_cast<int>(nnz), values_.as<double>(), stream_));
+    FP_CUDA_TRY(cudaEventRecord(events_[3], stream_));
+    FP_CUDA_TRY(cudaMemcpyAsync(dstValues, values_.as<double>(), valueBytes, cudaMemcpyDeviceToHost, stream_));
+    FP_CUDA_TRY(cudaEventRecord(events_[4], stream_));
+    FP_CUDA_TRY(cudaStreamSynchronize(stream_));
+    if (pinnedTransfers_) ParallelCopy(pattern.upper.valuePtr(), dstValues, valueBytes);
+
+    float ms[4] = {0, 0, 0, 0};
+    for (int i = 0; i < 4; ++i) FP_CUDA_TRY(cudaEventElapsedTime(&ms[i], events_[i], events_[i + 1]));
+    detail.uploadMs = ms[0];
+    detail.stiffnessKernelMs = ms[1];
+    detail.gatherKernelMs = ms[2];
+    detail.downloadMs = ms[3];
+    detail.patternReused = reuse;
+    detail.bytesUploaded = uploaded;
+    detail.bytesDownloaded = static_cast<double>(valueBytes);
+    detail.kernelBytes = static_cast<double>(tetBytes) + static_cast<double>(pointBytes) +
+                         sizeof(double) * static_cast<double>(nE + nNu) +
+                         2.0 * static_cast<double>(elementBytes) + // packed: written, read back
+                         sizeof(int) * static_cast<double>(packedCount) + static_cast<double>(gatherBytes) +
+                         static_cast<double>(valueBytes);
+    timings.elementStiffnessMs = ms[0] + ms[1];
+    timings.assemblyMs = ms[2] + ms[3];
+
+    key_ = key;
+    cachedValid_ = true;
+    return true;
+  }
+
+  mutable std::mutex mutex_;
+  std::string name_ = "CUDA";
+  cudaStream_t stream_ = nullptr;
+  cudaEvent_t events_[5] = {nullptr, nullptr, nullptr, nullptr, nullptr};
+  // Cached per pattern: cells, gather map.
+  PatternKey key_;
+  bool cachedValid_ = false;
+  int maxNode_ = -1;
+  DeviceArray tets_, gatherStart_, packedIndex_;
+  // Per call: points, materials, packed element matrices, assembled values.
+  DeviceArray points_, youngs_, poisson_, packed_, values_;
+  PinnedArray stageIn_, stageOut_;
+  bool pinnedTransfers_ = true;
+  AssemblyDetail last_;
+};
+
+} // namespace
+
+namespace detail {
+
+bool InitDevice(std::string& error) {
+  int count = 0;
+  const cudaError_t status = cudaGetDeviceCount(&count);
+  if (status != cudaSuccess) {
+    cudaGetLastError(); // not sticky; clear it
+    error = std::string("no usable CUDA device: ") + cudaGetErrorString(status);
+    return false;
+  }
+  if (count == 0) {
+    error = "no CUDA device is present";
+    return false;
+  }
+  FP_CUDA_TRY(cudaSetDevice(0));
+  const cudaError_t image = detail::CheckKernelImage();
+  if (image != cudaSuccess) {
+    cudaGetLastError();
+    cudaDeviceProp prop{};
+    cudaGetDeviceProperties(&prop, 0);
+    std::ostringstream why;
+    why << "the CUDA kernels were built for CUDA architecture " << FACEPLAN_CUDA_ARCHITECTURES
+        << " and cannot run on " << prop.name << " (sm_" << prop.major << prop.minor
+        << "): " << cudaGetErrorString(image)
+        << "; reconfigure with -DCMAKE_CUDA_ARCHITECTURES=" << prop.major << prop.minor;
+    error = why.str();
+    return false;
+  }
+  return true;
+}
+
+} // namespace detail
+
+bool DeviceAvailable(std::string* why) {
+  if (const char* off = std::getenv("FACEPLAN_DISABLE_CUDA"); off && *off && std::strcmp(off, "0") != 0) {
+    if (why) *why = "the CUDA backend is disabled by FACEPLAN_DISABLE_CUDA";
+    return false;
+  }
+  std::string error;
+  if (!InitDevice(error)) {
+    if (why) *why = error;
+    return false;
+  }
+  return true;
+}
+
+std::string DeviceDescription() {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess || count == 0) {
+    cudaGetLastError();
+    return {};
+  }
+  cudaDeviceProp prop{};
+  if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess) return {};
+  std::ostringstream out;
+  out.precision(4);
+  out << prop.name << " (sm_" << prop.major << prop.minor << ", " << prop.multiProcessorCount
+      << " SMs, " << prop.totalGlobalMem / (1024.0 * 1024.0 * 1024.0) << " GiB)";
+  return out.str();
+}
+
+std::shared_ptr<ComputeBackend> MakeCudaBackend(std::string& error) {
+  if (!DeviceAvailable(&error)) return nullptr;
+  auto backend = std::make_shared<CudaBackendImpl>();
+  if (!backend->init(error)) return nullptr;
+  return backend;
+}
+
+namespace {
+
+// Median of `repeats` timed copies (after one warm-up), in GB/s; `factor` 2 counts read + write.
+bool TimeCopies(void* dst, const void* src, size_t bytes, cudaMemcpyKind kind, int repeats,
+                double factor, cudaStream_t stream, cudaEvent_t start, cudaEvent_t stop,
+                double& gbs, std::string& error) {
+  std::vector<float> ms;
+  for (int r = -1; r < repeats; ++r) {
+    FP_CUDA_TRY(cudaEventRecord(start, stream));
+    FP_CUDA_TRY(cudaMemcpyAsync(dst, src, bytes, kind, stream));
+    FP_CUDA_TRY(cudaEventRecord(stop, stream));
+    FP_CUDA_TRY(cudaEventSynchronize(stop));
+    float t = 0.f;
+    FP_CUDA_TRY(cudaEventElapsedTime(&t, start, stop));
+    if (r >= 0) ms.push_back(t);
+  }
+  std::sort(ms.begin(), ms.end());
+  const double median = ms[ms.size() / 2];
+  gbs = factor * static_cast<double>(bytes) / (median * 1e-3) / 1e9;
+  return true;
+}
+
+} // namespace
+
+bool MeasureBandwidth(Bandwidth& bw, std::string& error, size_t bytes, int repeats) {
+  if (!DeviceAvailable(&error)) return false;
+  repeats = std::max(repeats, 1);
+  DeviceArray a, b;
+  PinnedArray pinned;
+  std::vector<unsigned char> pageable(bytes / 4);
+  cudaStream_t stream = nullptr;
+  cudaEvent_t start = nullptr, stop = nullptr;
+  auto run = [&]() -> bool {
+    FP_CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
+    FP_CUDA_TRY(cudaEventCreate(&start));
+    FP_CUDA_TRY(cudaEventCreate(&stop));
+    if (!a.ensure(bytes, error) || !b.ensure(bytes, error) || !pinned.ensure(bytes / 4, error)) return false;
+    FP_CUDA_TRY(cudaMemset(a.as<void>(), 1, bytes));
+    std::fill(pageable.begin(), pageable.end(), static_cast<unsigned char>(3));
+    std::memset(pinned.as<void>(), 5, bytes / 4);
+    return TimeCopies(b.as<void>(), a.as<void>(), bytes, cudaMemcpyDeviceToDevice, repeats, 2.0, stream,
+                      start, stop, bw.deviceToDeviceGBs, error) &&
+           TimeCopies(a.as<void>(), pinned.as<void>(), bytes / 4, cudaMemcpyHostToDevice, repeats, 1.0,
+                      stream, start, stop, bw.hostToDevicePinnedGBs, error) &&
+           TimeCopies(pinned.as<void>(), a.as<void>(), bytes / 4, cudaMemcpyDeviceToHost, repeats, 1.0,
+                      stream, start, stop, bw.deviceToHostPinnedGBs, error) &&
+           TimeCopies(a.as<void>(), pageable.data(), bytes / 4, cudaMemcpyHostToDevice, repeats, 1.0,
+                      stream, start, stop, bw.hostToDevicePageableGBs, error) &&
+           TimeCopies(pageable.data(), a.as<void>(), bytes / 4, cudaMemcpyDeviceToHost, repeats, 1.0,
+                      stream, start, stop, bw.deviceToHostPageableGBs, error);
+  };
+  const bool ok = run();
+  if (start) cudaEventDestroy(start);
+  if (stop) cudaEventDestroy(stop);
+  if (stream) cudaStreamDestroy(stream);
+  return ok;
+}
+
+bool LastAssemblyDetail(const ComputeBackend& backend, AssemblyDetail& detail) {
+  const auto* impl = dynamic_cast<const CudaBackendImpl*>(&backend);
+  if (!impl) return false;
+  detail = impl->lastDetail();
+  return true;
+}
+
+void ReleasePatternCache(ComputeBackend& backend) {
+  if (auto* impl = dynamic_cast<CudaBackendImpl*>(&backend)) impl->releaseAll();
+}
+
+void SetPinnedTransfers(ComputeBackend& backend, bool on) {
+  if (auto* impl = dynamic_cast<CudaBackendImpl*>(&backend)) impl->setPinnedTransfers(on);
+}
+
+} // namespace faceplan::cuda

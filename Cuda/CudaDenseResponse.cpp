@@ -1,0 +1,421 @@
+#include "CudaDenseResponse.h"
+
+#include "CudaCheck.h"
+#include "CudaInternal.h"
+#include "CudaKernels.h"
+#include "ParallelFor.h"
+#include "StageTimings.h"
+
+#include <cholmod.h>
+#include <cusparse.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <vector>
+
+#define FP_CUSPARSE_TRY(expr)                                                                      \
+  do {                                                                                             \
+    const cusparseStatus_t fpSparseStatus_ = (expr);                                               \
+    if (fpSparseStatus_ != CUSPARSE_STATUS_SUCCESS) {                                              \
+      error = std::string("cuSPARSE error ") + cusparseGetErrorName(fpSparseStatus_) + " (" +       \
+              cusparseGetErrorString(fpSparseStatus_) + ") in " #expr;                             \
+      return false;                                                                                \
+    }                                                                                              \
+  } while (0)
+
+namespace faceplan::cuda {
+
+using detail::CudaResponse;
+using detail::DeviceArray;
+
+// ---------------------------------------------------------------------------------------------
+// SupernodalCholesky: CHOLMOD on the CPU with the settings of Core's CholmodFactor.
+
+struct SupernodalCholesky::Impl {
+  cholmod_common common;
+  cholmod_factor* factor = nullptr;
+  double analyzeMs = 0.0, factorizeMs = 0.0;
+  Impl() {
+    cholmod_start(&common);
+    common.supernodal = CHOLMOD_SUPERNODAL;
+    common.print = 0;
+    common.error_handler = nullptr;
+  }
+  ~Impl() {
+    cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+};
+
+SupernodalCholesky::SupernodalCholesky() : impl_(std::make_unique<Impl>()) {}
+SupernodalCholesky::~SupernodalCholesky() = default;
+
+bool SupernodalCholesky::factor(const SparseMatrix& upper, std::string& error) {
+  if (!upper.isCompressed() || upper.rows() != upper.cols()) {
+    error = "SupernodalCholesky: the matrix must be square and compressed";
+    return false;
+  }
+  cholmod_sparse view{};
+  view.nrow = static_cast<size_t>(upper.rows());
+  view.ncol = static_cast<size_t>(upper.cols());
+  view.nzmax = static_cast<size_t>(upper.nonZeros());
+  view.p = const_cast<int*>(upper.outerIndexPtr());
+  view.i = const_cast<int*>(upper.innerIndexPtr());
+  view.x = const_cast<double*>(upper.valuePtr());
+  view.stype = 1;
+  view.itype = CHOLMOD_INT;
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  view.sorted = 1;
+  view.packed = 1;
+  cholmod_free_factor(&impl_->factor, &impl_->common);
+  StageClock clock;
+  impl_->factor = cholmod_analyze(&view, &impl_->common);
+  impl_->analyzeMs = clock.lapMs();
+  if (!impl_->factor || impl_->common.status < CHOLMOD_OK) {
+    error = "CHOLMOD ordering failed (status " + std::to_string(impl_->common.status) + ")";
+    return false;
+  }
+  const int ok = cholmod_factorize(&view, impl_->factor, &impl_->common);
+  impl_->factorizeMs = clock.lapMs();
+  if (!ok || impl_->common.status == CHOLMOD_OUT_OF_MEMORY) {
+    error = "CHOLMOD factorization ran out of memory";
+    return false;
+  }
+  if (impl_->common.status == CHOLMOD_NOT_POSDEF || impl_->factor->minor < impl_->factor->n) {
+    error = "matrix is not positive definite (CHOLMOD stopped at column " +
+            std::to_string(impl_->factor->minor) + ")";
+    return false;
+  }
+  if (!impl_->factor->is_super || !impl_->factor->is_ll || impl_->factor->itype != CHOLMOD_INT) {
+    error = "CHOLMOD did not return a supernodal LL^T factor with 32-bit indices";
+    return false;
+  }
+  return true;
+}
+
+SupernodalFactorView SupernodalCholesky::view() const {
+  SupernodalFactorView v;
+  const cholmod_factor* L = impl_->factor;
+  if (!L || !L->is_super) return v;
+  v.n = static_cast<int>(L->n);
+  v.nsuper = static_cast<int>(L->nsuper);
+  v.super = static_cast<const int*>(L->super);
+  v.pi = static_cast<const int*>(L->pi);
+  v.px = static_cast<const int*>(L->px);
+  v.s = static_cast<const int*>(L->s);
+  v.x = static_cast<const double*>(L->x);
+  v.perm = static_cast<const int*>(L->Perm);
+  return v;
+}
+
+double SupernodalCholesky::analyzeMs() const { return impl_->analyzeMs; }
+double SupernodalCholesky::factorizeMs() const { return impl_->factorizeMs; }
+double SupernodalCholesky::factorNonzeros() const { return impl_->common.lnz; }
+
+// ---------------------------------------------------------------------------------------------
+// BuildDenseResponse
+
+namespace {
+
+struct Resources {
+  cudaStream_t stream = nullptr;
+  cublasHandle_t blas = nullptr;
+  cusparseHandle_t sparse = nullptr;
+  cusparseSpMatDescr_t K = nullptr;
+  cudaEvent_t ev[8] = {};
+  ~Resources() {
+    if (K) cusparseDestroySpMat(K);
+    if (sparse) cusparseDestroy(sparse);
+    if (blas) cublasDestroy(blas);
+    for (cudaEvent_t& e : ev)
+      if (e) cudaEventDestroy(e);
+    if (stream) cudaStreamDestroy(stream);
+  }
+};
+
+// Full symmetric K_perm = P K P^T in CSR (sorted columns) from the upper triangle of K.
+void PermutedFullCsr(const SparseMatrix& upper, const std::vector<int>& pinv, std::vector<int>& rowStart,
+                     std::vector<int>& col, std::vector<double>& val) {
+  const int n = static_cast<int>(upper.cols());
+  rowStart.assign(n + 1, 0);
+  const int* outer = upper.outerIndexPtr();
+  const int* inner = upper.innerIndexPtr();
+  const double* v = upper.valuePtr();
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p) {
+      const int i = inner[p];
+      ++rowStart[pinv[i] + 1];
+      if (i != j) ++rowStart[pinv[j] + 1];
+    }
+  for (int r = 0; r < n; ++r) rowStart[r + 1] += rowStart[r];
+  col.resize(rowStart[n]);
+  val.resize(rowStart[n]);
+  std::vector<int> fill(rowStart.begin(), rowStart.end() - 1);
+  for (int j = 0; j < n; ++j)
+    for (int p = outer[j]; p < outer[j + 1]; ++p) {
+      const int i = inner[p], a = pinv[i], b = pinv[j];
+      col[fill[a]] = b;
+      val[fill[a]++] = v[p];
+      if (i != j) {
+        col[fill[b]] = a;
+        val[fill[b]++] = v[p];
+      }
+    }
+  ParallelFor(n, 20000, [&](std::int64_t begin, std::int64_t end) {
+    std::vector<std::pair<int, double>> row;
+    for (std::int64_t r = begin; r < end; ++r) {
+      const int s = rowStart[r], e = rowStart[r + 1];
+      row.clear();
+      for (int k = s; k < e; ++k) row.emplace_back(col[k], val[k]);
+      std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (int k = s; k < e; ++k) {
+        col[k] = row[k - s].first;
+        val[k] = row[k - s].second;
+      }
+    }
+  });
+}
+
+template <class T> bool Upload(DeviceArray& dst, const T* src, size_t count, cudaStream_t stream, std::string& error) {
+  if (!dst.ensure(sizeof(T) * std::max<size_t>(count, 1), error)) return false;
+  if (count > 0) FP_CUDA_TRY(cudaMemcpyAsync(dst.as<T>(), src, sizeof(T) * count, cudaMemcpyHostToDevice, stream));
+  return true;
+}
+
+bool Elapsed(cudaEvent_t a, cudaEvent_t b, double& accumulate, std::string& error) {
+  float ms = 0.f;
+  FP_CUDA_TRY(cudaEventElapsedTime(&ms, a, b));
+  accumulate += ms;
+  return true;
+}
+
+bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseMatrix& kfr, Eigen::Index keptRowsIn,
+           Eigen::MatrixXd* responseHost, std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail,
+           std::string& error, int maxColumnsPerPass) {
+  const int n = L.n;
+  if (n <= 0 || !L.super || !L.pi || !L.px || !L.s || !L.x || !L.perm) {
+    error = "BuildDenseResponse: no supernodal factor";
+    return false;
+  }
+  if (kfr.rows() != n || keptRowsIn < 0 || keptRowsIn > n || !kfr.isCompressed() ||
+      (kff && (kff->rows() != n || kff->cols() != n || !kff->isCompressed()))) {
+    error = "BuildDenseResponse: the matrices do not match the factor";
+    return false;
+  }
+  const int keptRows = static_cast<int>(keptRowsIn);
+  const int roi = static_cast<int>(kfr.cols());
+  if (!detail::InitDevice(error)) return false;
+
+  if (responseHost) responseHost->resize(keptRows, roi);
+  auto finishEmpty = [&]() -> bool {
+    if (responseHost) responseHost->setZero();
+    if (op) {
+      auto cudaOp = std::make_unique<CudaResponse>();
+      if (!cudaOp->init(Eigen::MatrixXd::Zero(keptRows, roi), error)) return false;
+      *op = std::move(cudaOp);
+    }
+    return true;
+  };
+  if (keptRows == 0 || roi == 0) return finishEmpty();
+
+  // Host-side structure: inverse permutation, largest off-diagonal block, flops.
+  std::vector<int> pinv(n);
+  for (int k = 0; k < n; ++k) pinv[L.perm[k]] = k;
+  int maxOff = 0;
+  double flopsPerColumn = 0.0;
+  for (int s = 0; s < L.nsuper; ++s) {
+    const double nscol = L.super[s + 1] - L.super[s], nsrow = L.pi[s + 1] - L.pi[s];
+    maxOff = std::max(maxOff, static_cast<int>(nsrow - nscol));
+    flopsPerColumn += 2.0 * (nscol * nscol + 2.0 * (nsrow - nscol) * nscol); // both sweeps
+  }
+  detail.supernodes = L.nsuper;
+
+  Resources r;
+  FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.stream, cudaStreamNonBlocking));
+  for (cudaEvent_t& e : r.ev) FP_CUDA_TRY(cudaEventCreate(&e));
+  FP_CUBLAS_TRY(cublasCreate(&r.blas));
+  FP_CUBLAS_TRY(cublasSetStream(r.blas, r.stream));
+  FP_CUBLAS_TRY(cublasSetPointerMode(r.blas, CUBLAS_POINTER_MODE_HOST));
+
+  // Fixed device data: factor, permutation, K_FR, K_perm (for the residual), the response.
+  DeviceArray dLx, dLs, dPinv, dFrStart, dFrRow, dFrVal, dKStart, dKCol, dKVal, dResponse, dY, dT, dR, dSums, dSpmmBuffer;
+  const size_t lxCount = static_cast<size_t>(L.px[L.nsuper]);
+  const size_t lsCount = static_cast<size_t>(L.pi[L.nsuper]);
+  std::vector<int> kStart, kCol;
+  std::vector<double> kVal;
+  if (kff) PermutedFullCsr(*kff, pinv, kStart, kCol, kVal);
+
+  FP_CUDA_TRY(cudaEventRecord(r.ev[0], r.stream));
+  if (!Upload(dLx, L.x, lxCount, r.stream, error) || !Upload(dLs, L.s, lsCount, r.stream, error) ||
+      !Upload(dPinv, pinv.data(), pinv.size(), r.stream, error) ||
+      !Upload(dFrStart, kfr.outerIndexPtr(), static_cast<size_t>(roi) + 1, r.stream, error) ||
+      !Upload(dFrRow, kfr.innerIndexPtr(), static_cast<size_t>(kfr.nonZeros()), r.stream, error) ||
+      !Upload(dFrVal, kfr.valuePtr(), static_cast<size_t>(kfr.nonZeros()), r.stream, error))
+    return false;
+  if (kff && (!Upload(dKStart, kStart.data(), kStart.size(), r.stream, error) ||
+              !Upload(dKCol, kCol.data(), kCol.size(), r.stream, error) ||
+              !Upload(dKVal, kVal.data(), kVal.size(), r.stream, error)))
+    return false;
+  FP_CUDA_TRY(cudaEventRecord(r.ev[1], r.stream));
+  if (!dResponse.ensure(sizeof(double) * static_cast<size_t>(keptRows) * roi, error)) return false;
+
+  // Columns per pass: Y (n x nb), T (maxOff x nb) and, for the residual, R (n x nb).
+  size_t freeBytes = 0, totalBytes = 0;
+  FP_CUDA_TRY(cudaMemGetInfo(&freeBytes, &totalBytes));
+  const double perColumn = 8.0 * (double(n) + double(maxOff) + (kff ? double(n) : 0.0)) + 8.0;
+  const double usable = double(freeBytes) * 0.9 - 512.0 * 1024 * 1024;
+  const long long fit = usable > 0 ? static_cast<long long>(usable / perColumn) : 0;
+  if (fit < 1) {
+    error = "not enough GPU memory for the dense response's right-hand sides";
+    return false;
+  }
+  int nbMax = static_cast<int>(std::min<long long>(roi, fit));
+  if (maxColumnsPerPass > 0) nbMax = std::min(nbMax, maxColumnsPerPass);
+  detail.columnsPerBlock = nbMax;
+  const size_t yCount = static_cast<size_t>(n) * nbMax;
+  if (!dY.ensure(sizeof(double) * yCount, error) ||
+      !dT.ensure(sizeof(double) * std::max<size_t>(static_cast<size_t>(maxOff) * nbMax, 1), error) ||
+      !dSums.ensure(sizeof(double) * nbMax, error))
+    return false;
+  if (kff) {
+    if (!dR.ensure(sizeof(double) * yCount, error)) return false;
+    FP_CUSPARSE_TRY(cusparseCreate(&r.sparse));
+    FP_CUSPARSE_TRY(cusparseSetStream(r.sparse, r.stream));
+    FP_CUSPARSE_TRY(cusparseCreateCsr(&r.K, n, n, static_cast<int64_t>(kCol.size()), dKStart.as<int>(),
+                                      dKCol.as<int>(), dKVal.as<double>(), CUSPARSE_INDEX_32I, CUSPARSE_INDEX_32I,
+                                      CUSPARSE_INDEX_BASE_ZERO, CUDA_R_64F));
+  }
+
+  // Norms of the right-hand sides (columns of K_FR) for the relative residual.
+  std::vector<double> rhsNorm(roi, 0.0);
+  for (int c = 0; c < roi; ++c)
+    for (int p = kfr.outerIndexPtr()[c]; p < kfr.outerIndexPtr()[c + 1]; ++p)
+      rhsNorm[c] += kfr.valuePtr()[p] * kfr.valuePtr()[p];
+
+  double* Y = dY.as<double>();
+  double* T = dT.as<double>();
+  const double* Lx = dLx.as<double>();
+  const int* Ls = dLs.as<int>();
+  const double one = 1.0, minusOne = -1.0, zero = 0.0;
+  std::vector<double> sums(nbMax);
+  for (int c0 = 0; c0 < roi; c0 += nbMax) {
+    const int nb = std::min(nbMax, roi - c0);
+    ++detail.blocks;
+    // Y = P K_FR(:, c0 : c0 + nb), row-major.
+    FP_CUDA_TRY(cudaMemsetAsync(Y, 0, sizeof(double) * static_cast<size_t>(n) * nb, r.stream));
+    FP_CUDA_TRY(detail::LaunchScatterCsc(dFrStart.as<int>(), dFrRow.as<int>(), dFrVal.as<double>(),
+                                         dPinv.as<int>(), c0, nb, 1.0, Y, r.stream));
+    FP_CUDA_TRY(cudaEventRecord(r.ev[2], r.stream));
+    // Forward: L Z = Y. Rows of a supernode are columns of the cuBLAS view (nb x n, ld nb).
+    for (int s = 0; s < L.nsuper; ++s) {
+      const int k1 = L.super[s], nscol = L.super[s + 1] - k1, nsrow = L.pi[s + 1] - L.pi[s];
+      const int off = nsrow - nscol;
+      const double* block = Lx + L.px[s];
+      double* Y1 = Y + static_cast<size_t>(k1) * nb;
+      FP_CUBLAS_TRY(cublasDtrsm(r.blas, CUBLAS_SIDE_RIGHT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_T,
+                                CUBLAS_DIAG_NON_UNIT, nb, nscol, &one, block, nsrow, Y1, nb));
+      if (off > 0) {
+        FP_CUBLAS_TRY(cublasDgemm(r.blas, CUBLAS_OP_N, CUBLAS_OP_T, nb, off, nscol, &one, Y1, nb,
+                                  block + nscol, nsrow, &zero, T, nb));
+        FP_CUDA_TRY(detail::LaunchScatterSubtractRows(Y, T, Ls + L.pi[s] + nscol, off, nb, r.stream));
+      }
+    }
+    FP_CUDA_TRY(cudaEventRecord(r.ev[3], r.stream));
+    // Backward: L^T X = Z.
+    for (int s = L.nsuper - 1; s >= 0; --s) {
+      const int k1 = L.super[s], nscol = L.super[s + 1] - k1, nsrow = L.pi[s + 1] - L.pi[s];
+      const int off = nsrow - nscol;
+      const double* block = Lx + L.px[s];
+      double* X1 = Y + static_cast<size_t>(k1) * nb;
+      if (off > 0) {
+        FP_CUDA_TRY(detail::LaunchGatherRows(Y, T, Ls + L.pi[s] + nscol, off, nb, r.stream));
+        FP_CUBLAS_TRY(cublasDgemm(r.blas, CUBLAS_OP_N, CUBLAS_OP_N, nb, nscol, off, &minusOne, T, nb,
+                                  block + nscol, nsrow, &one, X1, nb));
+      }
+      FP_CUBLAS_TRY(cublasDtrsm(r.blas, CUBLAS_SIDE_RIGHT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N,
+                                CUBLAS_DIAG_NON_UNIT, nb, nscol, &one, block, nsrow, X1, nb));
+    }
+    FP_CUDA_TRY(cudaEventRecord(r.ev[4], r.stream));
+    // Residual in the permuted numbering: R = K_perm Y - P b (norms are permutation-invariant).
+    if (kff) {
+      cusparseDnMatDescr_t dnY = nullptr, dnR = nullptr;
+      FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnY, n, nb, nb, Y, CUDA_R_64F, CUSPARSE_ORDER_ROW));
+      FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnR, n, nb, nb, dR.as<double>(), CUDA_R_64F, CUSPARSE_ORDER_ROW));
+      size_t bufferBytes = 0;
+      bool ok = cusparseSpMM_bufferSize(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE, CUSPARSE_OPERATION_NON_TRANSPOSE,
+                                        &one, r.K, dnY, &zero, dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT,
+                                        &bufferBytes) == CUSPARSE_STATUS_SUCCESS;
+      ok = ok && dSpmmBuffer.ensure(std::max<size_t>(bufferBytes, 8), error);
+      const cusparseStatus_t st =
+          ok ? cusparseSpMM(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE, CUSPARSE_OPERATION_NON_TRANSPOSE, &one, r.K,
+                            dnY, &zero, dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT, dSpmmBuffer.as<void>())
+             : CUSPARSE_STATUS_INTERNAL_ERROR;
+      cusparseDestroyDnMat(dnY);
+      cusparseDestroyDnMat(dnR);
+      if (st != CUSPARSE_STATUS_SUCCESS) {
+        if (error.empty()) error = std::string("cuSPARSE SpMM failed: ") + cusparseGetErrorString(st);
+        return false;
+      }
+      FP_CUDA_TRY(detail::LaunchScatterCsc(dFrStart.as<int>(), dFrRow.as<int>(), dFrVal.as<double>(),
+                                           dPinv.as<int>(), c0, nb, -1.0, dR.as<double>(), r.stream));
+      FP_CUDA_TRY(cudaMemsetAsync(dSums.as<double>(), 0, sizeof(double) * nb, r.stream));
+      FP_CUDA_TRY(detail::LaunchColumnSquaredNorms(dR.as<double>(), n, nb, dSums.as<double>(), r.stream));
+      FP_CUDA_TRY(cudaMemcpyAsync(sums.data(), dSums.as<double>(), sizeof(double) * nb, cudaMemcpyDeviceToHost,
+                                  r.stream));
+    }
+    FP_CUDA_TRY(cudaEventRecord(r.ev[5], r.stream));
+    FP_CUDA_TRY(detail::LaunchExtractResponse(Y, dPinv.as<int>(), keptRows, nb, c0, dResponse.as<double>(),
+                                              keptRows, r.stream));
+    FP_CUDA_TRY(cudaEventRecord(r.ev[6], r.stream));
+    FP_CUDA_TRY(cudaStreamSynchronize(r.stream));
+    if (c0 == 0 && !Elapsed(r.ev[0], r.ev[1], detail.uploadMs, error)) return false;
+    if (!Elapsed(r.ev[2], r.ev[3], detail.forwardMs, error) || !Elapsed(r.ev[3], r.ev[4], detail.backwardMs, error) ||
+        !Elapsed(r.ev[4], r.ev[5], detail.residualMs, error) || !Elapsed(r.ev[5], r.ev[6], detail.extractMs, error))
+      return false;
+    if (kff)
+      for (int c = 0; c < nb; ++c) {
+        const double b = std::sqrt(rhsNorm[c0 + c]);
+        if (b > 0.0) detail.worstRelativeResidual = std::max(detail.worstRelativeResidual, std::sqrt(sums[c]) / b);
+        if (!std::isfinite(sums[c])) detail.worstRelativeResidual = INFINITY;
+      }
+  }
+  detail.flops = flopsPerColumn * roi;
+  if (!std::isfinite(detail.worstRelativeResidual)) {
+    error = "the GPU response has non-finite values";
+    return false;
+  }
+  // Free the work buffers before the operator keeps the response.
+  dY.release();
+  dT.release();
+  dR.release();
+  dLx.release();
+  if (responseHost) {
+    StageClock clock;
+    FP_CUDA_TRY(cudaMemcpyAsync(responseHost->data(), dResponse.as<double>(),
+                                sizeof(double) * static_cast<size_t>(keptRows) * roi, cudaMemcpyDeviceToHost, r.stream));
+    FP_CUDA_TRY(cudaStreamSynchronize(r.stream));
+    detail.downloadMs = clock.lapMs();
+  }
+  if (op) {
+    auto cudaOp = std::make_unique<CudaResponse>();
+    if (!cudaOp->adopt(keptRows, roi, std::move(dResponse), error)) return false;
+    *op = std::move(cudaOp);
+  }
+  return true;
+}
+
+} // namespace
+
+bool BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix* kffUpper, const SparseMatrix& kfr,
+                        Eigen::Index keptRows, Eigen::MatrixXd* responseHost, std::unique_ptr<ResponseOperator>* op,
+                        DenseResponseDetail& detail, std::string& error, int maxColumnsPerPass) {
+  detail = DenseResponseDetail{};
+  StageClock clock;
+  const bool ok = Build(factor, kffUpper, kfr, keptRows, responseHost, op, detail, error, maxColumnsPerPass);
+  detail.wallMs = clock.elapsedMs();
+  return ok;
+}
+
+} // namespace faceplan::cuda

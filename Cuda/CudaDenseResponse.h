@@ -1,0 +1,82 @@
+#pragma once
+// The dense response of a condensed system, built on the GPU (issue 4, precompute):
+//
+//   response = -(rows [0, keptRows) of K_FF^-1 K_FR)        (kept DOFs x ROI DOFs)
+//
+// from a CHOLMOD supernodal Cholesky factor L L^T = P K_FF P^T. All ROI columns (or as many as
+// fit) go through one forward and one backward supernodal sweep at once: per supernode a cuBLAS
+// DTRSM on its diagonal block and a DGEMM with its off-diagonal block plus a row scatter/gather,
+// so the work is matrix-matrix (BLAS3) with thousands of right-hand sides. The residual
+// ||K_FF x - b|| / ||b|| of every column is checked on the GPU with cuSPARSE SpMM, and the
+// response can stay on the GPU as the per-edit operator (no second upload).
+//
+// The factorization itself is CHOLMOD's on the CPU (SupernodalCholesky below, same settings as
+// Core's CholmodFactor), until Core exposes its own factor's supernodal arrays.
+#include "ComputeBackend.h"
+#include "StiffnessAssembly.h"
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+
+namespace faceplan::cuda {
+
+// A read-only view of a CHOLMOD supernodal LL^T factor with 32-bit indices (cholmod_factor's
+// super, pi, px, s, x and Perm arrays): L L^T = A(perm, perm).
+struct SupernodalFactorView {
+  int n = 0;
+  int nsuper = 0;
+  const int* super = nullptr; // nsuper + 1: first column of each supernode
+  const int* pi = nullptr;    // nsuper + 1: start of each supernode's row indices in s
+  const int* px = nullptr;    // nsuper + 1: start of each supernode's dense block in x
+  const int* s = nullptr;     // row indices
+  const double* x = nullptr;  // column-major nsrow x nscol blocks
+  const int* perm = nullptr;  // n
+};
+
+// CHOLMOD analyze + supernodal factorize of a symmetric positive definite matrix given by its
+// upper triangle (CPU; BLAS threads as configured). Owns the factor.
+class SupernodalCholesky {
+public:
+  SupernodalCholesky();
+  ~SupernodalCholesky();
+  SupernodalCholesky(const SupernodalCholesky&) = delete;
+  SupernodalCholesky& operator=(const SupernodalCholesky&) = delete;
+
+  bool factor(const SparseMatrix& upper, std::string& error);
+  SupernodalFactorView view() const;
+  double analyzeMs() const;
+  double factorizeMs() const;
+  double factorNonzeros() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct DenseResponseDetail {
+  int supernodes = 0;
+  int blocks = 0;            // passes over the ROI columns (1 when all fit in GPU memory)
+  int columnsPerBlock = 0;
+  double flops = 0.0;        // of the two triangular sweeps
+  double uploadMs = 0.0;     // factor, K_FF and K_FR to the device
+  double forwardMs = 0.0;    // device time of the forward sweeps
+  double backwardMs = 0.0;   // device time of the backward sweeps
+  double residualMs = 0.0;   // device time of the residual check
+  double extractMs = 0.0;    // device time of the kept-row extraction
+  double downloadMs = 0.0;   // response to the host (when asked for)
+  double wallMs = 0.0;       // the whole call on the host clock
+  double worstRelativeResidual = 0.0; // max over columns of ||K_FF x - b|| / ||b||
+};
+
+// Builds the response on the GPU. `kffUpper` (the matrix `factor` factors, upper triangle) is
+// used for the residual check; pass null to skip it. With `responseHost`, the response is also
+// copied to the host; with `op`, a ResponseOperator that keeps the device copy is returned.
+// False with `error` set on any device failure (the caller then uses the CPU path).
+// maxColumnsPerPass > 0 caps the right-hand sides per pass (otherwise: as many as fit).
+bool BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix* kffUpper,
+                        const SparseMatrix& kfr, Eigen::Index keptRows, Eigen::MatrixXd* responseHost,
+                        std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail,
+                        std::string& error, int maxColumnsPerPass = 0);
+
+} // namespace faceplan::cuda

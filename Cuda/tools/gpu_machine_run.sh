@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# Builds Core + Cuda + the GPU tests + gpu_benchmark on the lent GPU machine and runs them there.
+# That machine has nvcc, CMake and ninja but no Eigen, SuiteSparse, OpenBLAS or GoogleTest: they
+# travel in .devcarry/ (git-ignored), prepared on the development machine with
+#   (cd .devcarry/debs && apt-get download libcholmod3 libsuitesparse-dev libsuitesparseconfig5 \
+#      libamd2 libcamd2 libcolamd2 libccolamd2 libmetis5 libopenblas0-pthread libgfortran5 \
+#      libquadmath0 libgomp1 libgtest-dev)
+#   tar -czf .devcarry/eigen3.tar.gz -C / usr/include/eigen3 usr/share/eigen3/cmake
+# and, only when the working tree's Core/ has uncommitted edits, a snapshot of the committed Core:
+#   git archive HEAD Core cmake | gzip > .devcarry/core-head.tar.gz
+# Usage there: OUT=<results dir> Cuda/tools/gpu_machine_run.sh [gpu_benchmark arguments...]
+set -uo pipefail
+cd "$(dirname "$0")/../.."
+ROOT=$PWD
+OUT=${OUT:-/tmp/faceplan-gpu-out}
+mkdir -p "$OUT"
+DC=/tmp/devroot
+rm -rf "$DC" && mkdir -p "$DC"
+for f in .devcarry/debs/*.deb; do dpkg -x "$f" "$DC"; done
+tar -xzf .devcarry/eigen3.tar.gz -C "$DC"
+LIB=$DC/usr/lib/x86_64-linux-gnu
+RUNLIBS=$LIB:$LIB/openblas-pthread
+{ nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.sm,clocks.mem --format=csv; nproc; uname -r;
+  cat /etc/os-release | head -2; g++ --version | head -1; nvcc --version | tail -2; cmake --version | head -1; } \
+  > "$OUT/machine.txt" 2>&1
+cat "$OUT/machine.txt"
+
+configure() { # $1 source dir, $2 build dir
+  cmake -S "$1" -B "$2" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFACEPLAN_BUILD_PLUGIN=OFF -DFACEPLAN_ENABLE_CUDA=ON \
+    -DCMAKE_CUDA_ARCHITECTURES=90 \
+    -DEigen3_DIR="$DC/usr/share/eigen3/cmake" -DGTest_DIR="$LIB/cmake/GTest" \
+    -DCHOLMOD_INCLUDE_DIR="$DC/usr/include/suitesparse" -DCHOLMOD_LIBRARY="$LIB/libcholmod.so" \
+    -DSUITESPARSECONFIG_LIBRARY="$LIB/libsuitesparseconfig.so" \
+    -DCMAKE_EXE_LINKER_FLAGS="-Wl,-rpath-link,$RUNLIBS -Wl,-rpath,$RUNLIBS"
+}
+BUILD=/tmp/build
+TARGETS="TestCudaBackend TestCudaFallback gpu_benchmark"
+ok=0
+if configure "$ROOT" "$BUILD" > "$OUT/configure.log" 2>&1 && \
+   cmake --build "$BUILD" -j "$(nproc)" --target $TARGETS > "$OUT/build.log" 2>&1; then
+  ok=1
+  TESTDIR=$BUILD/Testing/Cuda
+elif [ -f .devcarry/core-head.tar.gz ]; then
+  # The working tree's Core does not build (edits in progress): use the committed Core.
+  echo "top-level build failed (see build.log); building against the committed Core snapshot"
+  tail -20 "$OUT/build.log"
+  SRC=/tmp/snapsrc
+  rm -rf "$SRC" && mkdir -p "$SRC" && tar -xzf .devcarry/core-head.tar.gz -C "$SRC"
+  cat > "$SRC/CMakeLists.txt" <<CMAKE
+cmake_minimum_required(VERSION 3.16)
+project(FacePlanGpu LANGUAGES C CXX)
+set(CMAKE_CXX_STANDARD 17)
+set(CMAKE_POSITION_INDEPENDENT_CODE ON)
+set(CMAKE_RUNTIME_OUTPUT_DIRECTORY "\${CMAKE_BINARY_DIR}/bin")
+list(APPEND CMAKE_MODULE_PATH "$SRC/cmake")
+include(CTest)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(CHOLMOD REQUIRED)
+find_package(Threads REQUIRED)
+add_subdirectory(Core)
+add_subdirectory($ROOT/Cuda Cuda)
+add_subdirectory($ROOT/Testing/Cuda Testing/Cuda)
+add_executable(gpu_benchmark $ROOT/Benchmarks/gpu_benchmark.cpp)
+target_link_libraries(gpu_benchmark PRIVATE FacePlanCuda FacePlanCore Threads::Threads)
+CMAKE
+  BUILD=/tmp/build-snap
+  if configure "$SRC" "$BUILD" > "$OUT/configure-snap.log" 2>&1 && \
+     cmake --build "$BUILD" -j "$(nproc)" --target $TARGETS > "$OUT/build-snap.log" 2>&1; then
+    ok=1
+    TESTDIR=$BUILD/Testing/Cuda
+  fi
+fi
+if [ $ok != 1 ]; then
+  echo "BUILD FAILED"
+  tail -40 "$OUT"/configure*.log "$OUT"/build*.log
+  exit 1
+fi
+echo "build ok in $BUILD"
+export LD_LIBRARY_PATH=$RUNLIBS:${LD_LIBRARY_PATH:-}
+export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-$(nproc)}
+(cd "$TESTDIR" && ctest --output-on-failure -L gpu) > "$OUT/ctest-gpu.log" 2>&1
+(cd "$TESTDIR" && ctest --output-on-failure -L cuda) >> "$OUT/ctest-gpu.log" 2>&1
+grep -E "tests passed|Passed|Failed|Skipped|relative|residual" "$OUT/ctest-gpu.log" | tail -30
+(cd "$TESTDIR" && ctest -L gpu -V 2>&1 | grep -E "relative|residual|passes" ) | head -20
+"$BUILD/bin/gpu_benchmark" --out "$OUT/gpu_benchmark.json" "$@" 2>&1 | tee "$OUT/gpu_benchmark.txt"
