@@ -1,0 +1,323 @@
+// GPU-against-CPU agreement of the CUDA backend (issue 4). CTest label `gpu`.
+// Without a usable GPU every case is skipped (GTEST_SKIP), never passed.
+#include "CudaBackend.h"
+#include "CudaTestMesh.h"
+
+#include "CondensedFEM.h"
+#include "CondensedSystem.h"
+#include "CudaDenseResponse.h"
+#include "ComputeBackend.h"
+#include "ElementStiffness.h"
+#include "ShellMeshGenerator.h"
+#include "StiffnessAssembly.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <thread>
+
+namespace faceplan {
+namespace {
+
+#define REQUIRE_GPU_OR_SKIP()                                                 \
+  do {                                                                        \
+    std::string why_;                                                         \
+    if (!cuda::DeviceAvailable(&why_)) GTEST_SKIP() << "no usable GPU: " << why_; \
+  } while (0)
+
+std::shared_ptr<ComputeBackend> Gpu() {
+  std::string error;
+  auto backend = cuda::MakeCudaBackend(error);
+  EXPECT_TRUE(backend) << error;
+  return backend;
+}
+
+// max |a - b| / max |b| over all entries.
+double RelativeMaxDifference(const double* a, const double* b, size_t count) {
+  double diff = 0.0, scale = 0.0;
+  for (size_t i = 0; i < count; ++i) {
+    if (!std::isfinite(a[i])) return std::numeric_limits<double>::infinity();
+    diff = std::max(diff, std::abs(a[i] - b[i]));
+    scale = std::max(scale, std::abs(b[i]));
+  }
+  return scale > 0 ? diff / scale : diff;
+}
+
+Materials RandomMaterials(Eigen::Index cells, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> logE(std::log(1e3), std::log(2e10)), nu(0.0, 0.49);
+  Materials materials;
+  materials.youngsModulus.resize(cells);
+  materials.poissonRatio.resize(cells);
+  for (Eigen::Index c = 0; c < cells; ++c) {
+    materials.youngsModulus[c] = std::exp(logE(rng));
+    materials.poissonRatio[c] = nu(rng);
+  }
+  return materials;
+}
+
+// dofNode: a random permutation of the nodes, with every `dropEvery`-th node dropped (-1).
+std::vector<int> RandomNumbering(Eigen::Index nodes, unsigned seed, int dropEvery, int& numDofNodes) {
+  std::vector<int> order(nodes);
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), std::mt19937(seed));
+  std::vector<int> dofNode(nodes, -1);
+  numDofNodes = 0;
+  for (Eigen::Index i = 0; i < nodes; ++i)
+    if (dropEvery <= 0 || i % dropEvery != 0) dofNode[order[i]] = numDofNodes++;
+  return dofNode;
+}
+
+// Assembles with the CPU backend and the GPU backend into copies of `pattern`; returns the
+// relative difference. The GPU copy is poisoned with NaN first so unwritten values show.
+double CompareAssembly(ComputeBackend& gpu, const TetMesh& mesh, const Materials& materials,
+                       AssemblyPattern& gpuPattern, const AssemblyPattern& pattern) {
+  AssemblyPattern cpuPattern = pattern;
+  ComputeBackend::AssemblyTimings cpuTimings, gpuTimings;
+  std::string error;
+  EXPECT_TRUE(MakeCpuBackend()->assembleStiffness(mesh, materials, cpuPattern, cpuTimings, error)) << error;
+  std::fill(gpuPattern.upper.valuePtr(), gpuPattern.upper.valuePtr() + gpuPattern.upper.nonZeros(),
+            std::numeric_limits<double>::quiet_NaN());
+  EXPECT_TRUE(gpu.assembleStiffness(mesh, materials, gpuPattern, gpuTimings, error)) << error;
+  EXPECT_GE(gpuTimings.elementStiffnessMs, 0.0);
+  EXPECT_GE(gpuTimings.assemblyMs, 0.0);
+  return RelativeMaxDifference(gpuPattern.upper.valuePtr(), cpuPattern.upper.valuePtr(),
+                               static_cast<size_t>(cpuPattern.upper.nonZeros()));
+}
+
+TEST(CudaBackend, AssembledStiffnessMatchesCpuPerCellMaterials) {
+  REQUIRE_GPU_OR_SKIP();
+  auto gpu = Gpu();
+  ASSERT_TRUE(gpu);
+  EXPECT_EQ(gpu->name().rfind("CUDA", 0), 0u) << gpu->name();
+  const TetMesh mesh = testing::MakePerturbedBox(9, 8, 7, 11);
+  int numDofNodes = 0;
+  const std::vector<int> dofNode = RandomNumbering(mesh.numPoints(), 5, 7, numDofNodes);
+  AssemblyPattern pattern = BuildAssemblyPattern(mesh, dofNode, numDofNodes);
+  AssemblyPattern gpuPattern = pattern;
+
+  const double first = CompareAssembly(*gpu, mesh, RandomMaterials(mesh.numTets(), 1), gpuPattern, pattern);
+  EXPECT_LE(first, 1e-12);
+  cuda::AssemblyDetail detail;
+  ASSERT_TRUE(cuda::LastAssemblyDetail(*gpu, detail));
+  EXPECT_FALSE(detail.patternReused);
+
+  // Same pattern object again with new materials: the cached gather map is reused and the new
+  // materials are used.
+  const double second = CompareAssembly(*gpu, mesh, RandomMaterials(mesh.numTets(), 2), gpuPattern, pattern);
+  EXPECT_LE(second, 1e-12);
+  ASSERT_TRUE(cuda::LastAssemblyDetail(*gpu, detail));
+  EXPECT_TRUE(detail.patternReused);
+  EXPECT_GT(detail.kernelBytes, 0.0);
+  std::printf("relative max difference GPU vs CPU: %.3e, %.3e\n", first, second);
+}
+
+TEST(CudaBackend, AssembledStiffnessMatchesCpuUniformMaterialAndNewPattern) {
+  REQUIRE_GPU_OR_SKIP();
+  auto gpu = Gpu();
+  ASSERT_TRUE(gpu);
+  TetMesh mesh = testing::MakePerturbedBox(12, 5, 6, 21);
+  const Materials uniform = Materials::Uniform(3.0e3, 0.45);
+  for (unsigned seed : {1u, 2u}) {
+    int numDofNodes = 0;
+    const std::vector<int> dofNode = RandomNumbering(mesh.numPoints(), 100 + seed, seed == 1 ? 0 : 5, numDofNodes);
+    AssemblyPattern pattern = BuildAssemblyPattern(mesh, dofNode, numDofNodes);
+    AssemblyPattern gpuPattern = pattern;
+    EXPECT_LE(CompareAssembly(*gpu, mesh, uniform, gpuPattern, pattern), 1e-12) << "numbering " << seed;
+  }
+  // Moved points with the same pattern: the new coordinates are used.
+  int numDofNodes = 0;
+  const std::vector<int> dofNode = RandomNumbering(mesh.numPoints(), 7, 0, numDofNodes);
+  AssemblyPattern pattern = BuildAssemblyPattern(mesh, dofNode, numDofNodes);
+  AssemblyPattern gpuPattern = pattern;
+  EXPECT_LE(CompareAssembly(*gpu, mesh, uniform, gpuPattern, pattern), 1e-12);
+  mesh.points *= 1.7;
+  mesh.points.col(2).array() += 0.3;
+  EXPECT_LE(CompareAssembly(*gpu, mesh, uniform, gpuPattern, pattern), 1e-12);
+}
+
+TEST(CudaBackend, SingleTetrahedronEqualsTetStiffness) {
+  REQUIRE_GPU_OR_SKIP();
+  auto gpu = Gpu();
+  ASSERT_TRUE(gpu);
+  TetMesh mesh;
+  mesh.points.resize(4, 3);
+  mesh.points << 0.1, 0.0, 0.2, 1.3, 0.1, 0.0, 0.2, 0.9, 0.1, 0.3, 0.2, 1.4;
+  mesh.tets.resize(1, 4);
+  mesh.tets << 0, 1, 2, 3;
+  AssemblyPattern pattern = BuildAssemblyPattern(mesh, {0, 1, 2, 3}, 4);
+  ComputeBackend::AssemblyTimings timings;
+  std::string error;
+  ASSERT_TRUE(gpu->assembleStiffness(mesh, Materials::Uniform(1000.0, 0.3), pattern, timings, error)) << error;
+  const Eigen::MatrixXd assembled = Eigen::MatrixXd(pattern.upper).selfadjointView<Eigen::Upper>();
+  const ElementMatrix ke = TetStiffness(mesh.points.cast<double>(), 1000.0, 0.3);
+  EXPECT_LE((assembled - ke).cwiseAbs().maxCoeff() / ke.cwiseAbs().maxCoeff(), 1e-13);
+}
+
+TEST(CudaBackend, ResponseApplyMatchesCpuFromSeveralThreads) {
+  REQUIRE_GPU_OR_SKIP();
+  auto gpu = Gpu();
+  ASSERT_TRUE(gpu);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd response(1537, 401);
+  for (Eigen::Index i = 0; i < response.size(); ++i) response.data()[i] = normal(rng);
+  std::string error;
+  auto op = gpu->makeResponseOperator(response, error);
+  ASSERT_TRUE(op) << error;
+
+  std::vector<Eigen::VectorXd> inputs(64);
+  for (auto& v : inputs) {
+    v.resize(response.cols());
+    for (Eigen::Index i = 0; i < v.size(); ++i) v[i] = normal(rng);
+  }
+  std::vector<double> worst(4, 0.0);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      for (int rep = 0; rep < 25; ++rep) {
+        const Eigen::VectorXd& roi = inputs[(t * 25 + rep) % inputs.size()];
+        Eigen::VectorXd kept = Eigen::VectorXd::Constant(3, std::nan(""));
+        std::string threadError;
+        if (!op->apply(roi, kept, threadError)) {
+          worst[t] = std::numeric_limits<double>::infinity();
+          return;
+        }
+        const Eigen::VectorXd reference = response * roi;
+        if (kept.size() != reference.size()) {
+          worst[t] = std::numeric_limits<double>::infinity();
+          return;
+        }
+        worst[t] = std::max(worst[t], RelativeMaxDifference(kept.data(), reference.data(), kept.size()));
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (double w : worst) EXPECT_LE(w, 1e-12);
+
+  Eigen::VectorXd kept;
+  EXPECT_FALSE(op->apply(Eigen::VectorXd::Zero(5), kept, error));
+  EXPECT_FALSE(error.empty());
+}
+
+TEST(CudaBackend, EmptyResponse) {
+  REQUIRE_GPU_OR_SKIP();
+  auto gpu = Gpu();
+  ASSERT_TRUE(gpu);
+  std::string error;
+  auto op = gpu->makeResponseOperator(Eigen::MatrixXd::Zero(7, 0), error);
+  ASSERT_TRUE(op) << error;
+  Eigen::VectorXd kept;
+  ASSERT_TRUE(op->apply(Eigen::VectorXd(0), kept, error)) << error;
+  EXPECT_EQ(kept.size(), 7);
+  EXPECT_EQ(kept.cwiseAbs().maxCoeff(), 0.0);
+}
+
+// The whole precompute/solve with the CUDA backend against the CPU backend.
+void CompareFullPipeline(SolveMethod method) {
+  const FaceLikeScene scene = MakeFaceLikeScene(6, 3, 0.15);
+  PrecomputeRequest request;
+  request.mesh = scene.shell.mesh;
+  request.materials = RandomMaterials(request.mesh.numTets(), 9);
+  request.sets.constrained = scene.constrained;
+  request.sets.movable = scene.movable;
+  request.sets.kept = scene.kept;
+  request.options.method = method;
+
+  std::mt19937 rng(4);
+  std::normal_distribution<double> normal(0.0, 0.01);
+  SolveInput input;
+  input.movableDisplacement.resize(static_cast<Eigen::Index>(scene.movable.size()), 3);
+  for (Eigen::Index i = 0; i < input.movableDisplacement.size(); ++i)
+    input.movableDisplacement.data()[i] = normal(rng);
+
+  SolveResult results[2];
+  for (int b = 0; b < 2; ++b) {
+    std::string error;
+    request.options.backend = b == 0 ? MakeCpuBackend() : cuda::MakeCudaBackend(error);
+    ASSERT_TRUE(request.options.backend) << error;
+    std::shared_ptr<const CondensedSystem> system;
+    const Status pre = Precompute(request, system);
+    ASSERT_TRUE(pre.ok) << pre.message;
+    const Status solved = Solve(*system, input, results[b]);
+    ASSERT_TRUE(solved.ok) << solved.message;
+    if (b == 1) {
+      EXPECT_NE(Describe(*system).backend.find("CUDA"), std::string::npos) << Describe(*system).backend;
+    }
+  }
+  ASSERT_EQ(results[0].keptDisplacement.rows(), static_cast<Eigen::Index>(scene.kept.size()));
+  ASSERT_EQ(results[1].keptDisplacement.rows(), results[0].keptDisplacement.rows());
+  const double diff = RelativeMaxDifference(results[1].keptDisplacement.data(),
+                                            results[0].keptDisplacement.data(),
+                                            static_cast<size_t>(results[0].keptDisplacement.size()));
+  EXPECT_LE(diff, 1e-10) << MethodName(method);
+  EXPECT_GT(results[0].keptDisplacement.cwiseAbs().maxCoeff(), 0.0);
+  std::printf("%s: relative max difference of kept displacements GPU vs CPU: %.3e\n", MethodName(method), diff);
+}
+
+TEST(CudaBackend, PrecomputeAndSolveDenseResponseMatchCpu) {
+  REQUIRE_GPU_OR_SKIP();
+  CompareFullPipeline(SolveMethod::DenseResponse);
+}
+
+TEST(CudaBackend, PrecomputeAndSolveCachedFactorMatchCpu) {
+  REQUIRE_GPU_OR_SKIP();
+  CompareFullPipeline(SolveMethod::CachedFactor);
+}
+
+// The dense response built with GPU triangular solves equals Core's CPU response, in one pass and
+// in several passes over the ROI columns, and its operator applies it.
+TEST(CudaBackend, DenseResponseOnGpuMatchesCoreResponse) {
+  REQUIRE_GPU_OR_SKIP();
+  const FaceLikeScene scene = MakeFaceLikeScene(6, 3, 0.15);
+  PrecomputeRequest request;
+  request.mesh = scene.shell.mesh;
+  request.materials = RandomMaterials(request.mesh.numTets(), 12);
+  request.sets.constrained = scene.constrained;
+  request.sets.movable = scene.movable;
+  request.sets.kept = scene.kept;
+  request.options.method = SolveMethod::DenseResponse;
+  std::shared_ptr<const CondensedSystem> system;
+  const Status pre = Precompute(request, system);
+  ASSERT_TRUE(pre.ok) << pre.message;
+  ASSERT_EQ(system->method, SolveMethod::DenseResponse);
+  const Eigen::MatrixXd& reference = system->response;
+  ASSERT_GT(reference.size(), 0);
+
+  cuda::SupernodalCholesky factor;
+  std::string error;
+  ASSERT_TRUE(factor.factor(system->kff, error)) << error;
+  for (int maxColumns : {0, 17}) {
+    Eigen::MatrixXd response = Eigen::MatrixXd::Constant(3, 3, std::nan(""));
+    std::unique_ptr<ResponseOperator> op;
+    cuda::DenseResponseDetail detail;
+    ASSERT_TRUE(cuda::BuildDenseResponse(factor.view(), &system->kff, system->kfr, reference.rows(), &response, &op,
+                                         detail, error, maxColumns))
+        << error;
+    ASSERT_EQ(response.rows(), reference.rows());
+    ASSERT_EQ(response.cols(), reference.cols());
+    const double diff = RelativeMaxDifference(response.data(), reference.data(), static_cast<size_t>(reference.size()));
+    EXPECT_LE(diff, 1e-10) << "maxColumns " << maxColumns;
+    EXPECT_LE(detail.worstRelativeResidual, 1e-10);
+    EXPECT_GT(detail.worstRelativeResidual, 0.0); // the check ran
+    if (maxColumns > 0) EXPECT_GT(detail.blocks, 1);
+    std::printf("GPU response (%d passes): relative difference %.3e, worst residual %.3e\n", detail.blocks, diff,
+                detail.worstRelativeResidual);
+    ASSERT_TRUE(op);
+    std::mt19937 rng(maxColumns + 1);
+    std::normal_distribution<double> normal;
+    Eigen::VectorXd roi(reference.cols());
+    for (Eigen::Index i = 0; i < roi.size(); ++i) roi[i] = normal(rng);
+    Eigen::VectorXd kept;
+    ASSERT_TRUE(op->apply(roi, kept, error)) << error;
+    const Eigen::VectorXd expected = reference * roi;
+    EXPECT_LE(RelativeMaxDifference(kept.data(), expected.data(), static_cast<size_t>(expected.size())), 1e-10);
+  }
+}
+
+} // namespace
+} // namespace faceplan
