@@ -1,0 +1,28 @@
+"""The main job's pipeline on the Badin face scene, shared by the demo, the image tests and the GUI
+test: an ROI on the lower border of the mandible (chin), a Bezier cut that reduces it (as in the
+ICAT 2008 paper's Figures 12 and 13) and the soft tissue's deformation."""
+from paraview import simple
+
+# The cut: a gently curved surface 6 mm above the chin's lowest point (the bone below it goes).
+CUT_Z = 60.0
+CURVE_U = [40, -30, CUT_Z, 60, -30, CUT_Z - 0.5, 80, -30, CUT_Z - 0.5, 100, -30, CUT_Z]
+CURVE_V = [40, -30, CUT_Z, 40, -10, CUT_Z + 0.5, 40, 10, CUT_Z + 0.5, 40, 30, CUT_Z]
+
+
+def build(data_dir):
+    """Returns (tissue, mandible, roi, cut, fem) proxies; LoadPlugin must have run first."""
+    tissue = simple.XMLUnstructuredGridReader(registrationName="face_tissue.vtu",
+                                       FileName=[data_dir + "/face/face_tissue.vtu"])
+    mandible = simple.XMLPolyDataReader(registrationName="mandible.vtp",
+                                 FileName=[data_dir + "/face/mandible.vtp"])
+    roi = simple.ROIExtract(registrationName="ROIExtract", Input=mandible)
+    roi.Region = "Sphere"
+    roi.Region.Center = [70.0, 0.0, 58.0]
+    roi.Region.Radius = 22.0
+    cut = simple.BezierCut(registrationName="BezierCut", Input=roi)
+    cut.CurveU = CURVE_U
+    cut.CurveV = CURVE_V
+    cut.FlipNormal = 1  # the surface's normal points down: the bone below is cut away
+    fem = simple.CondensedFEMDeform(registrationName="CondensedFEMDeform", Input=tissue, Bone=cut)
+    fem.ContactDistance = 1.0
+    return tissue, mandible, roi, cut, fem
