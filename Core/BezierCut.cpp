@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <unordered_map>
@@ -574,6 +573,12 @@ public:
     }
     for (std::size_t i = 0; i < moved_.size(); ++i)
       if (moved_[i]) movedIds_.push_back(std::int64_t(i));
+    incident_.assign(moved_.size(), {});
+    for (std::size_t k = 0; k < touched_.size(); ++k)
+      for (int j = 0; j < 3; ++j) {
+        const std::int64_t v = tris_[touched_[k]].v[j];
+        if (moved_[v]) incident_[v].push_back(std::int64_t(k));
+      }
     // Expected orientation of the moved region within S.
     double s = 0;
     for (std::size_t k = 0; k < touched_.size(); ++k) {
@@ -584,6 +589,13 @@ public:
       s += a0_[k].dot(n);
     }
     sigma_ = s < 0 ? -1.0 : 1.0;
+    // The rim: moved vertices next to unmoved ones. Their direct projection keeps the direction
+    // of their edges, which keeps the steep triangles joining them to the unmoved bone oriented, so
+    // relaxation only moves them when they are part of a bad triangle themselves.
+    rim_.assign(moved_.size(), 0);
+    for (std::int64_t i : movedIds_)
+      for (std::int64_t j : nbrs_[i])
+        if (!moved_[j]) rim_[i] = 1;
     activeTri_.assign(tris_.size(), 0);
     for (std::int64_t t : touched_) activeTri_[t] = 1;
   }
@@ -596,13 +608,102 @@ public:
     return FinalCheck(P, nullptr, why);
   }
 
+  // Local repair on S itself: relax growing neighbourhoods of the bad triangles of the direct
+  // projection (the rest keeps its direct projection).
+  bool LocalRepair(int maxRelax, SurfacePoints& P, std::string& why) {
+    uv_ = foot_;
+    P = X0_;
+    ResetRegion();
+    for (std::int64_t i : movedIds_) Place(P, i, 1.0);
+    std::vector<std::int64_t> bad;
+    if (Untangle(P, 200) && FinalCheck(P, nullptr, why)) return true;
+    // Harmonic relaxation of growing neighbourhoods, each followed by untangling.
+    uv_ = foot_;
+    for (std::int64_t i : movedIds_) Place(P, i, 1.0);
+    for (int iter = 0; iter < maxRelax; ++iter) {
+      if (FinalCheck(P, &bad, why)) return true;
+      if (!Relax(P, bad, 1.0, 1 << std::min(iter, 20))) break;
+      Untangle(P, 100);
+    }
+    return FinalCheck(P, nullptr, why);
+  }
+
+  // Signed size of touched triangle k with its current points, relative to its original area:
+  // for a triangle whose vertices all moved, sigma * (area vector . n(uv of `at`)) / |a0|; for the
+  // others, (area vector . a0) / |a0|^2. Positive = correctly oriented.
+  double SignedSize(std::size_t k, const SurfacePoints& P, std::int64_t at) const {
+    const double A0 = a0_[k].norm();
+    if (!(A0 > 0)) return 1.0;
+    const Vector3d a1 = AreaVector(tris_[touched_[k]], P);
+    if (full_[k]) return sigma_ * a1.dot(S_.UnitNormal(uv_[at].x(), uv_[at].y())) / A0;
+    return a1.dot(a0_[k]) / (A0 * A0);
+  }
+
+  // Untangling: each moved vertex of a flipped or degenerate triangle (and its moved neighbours)
+  // moves within S to maximise the smallest signed size of its triangles (pattern search in
+  // (u,v)). Returns true when no triangle is flipped or degenerate any more.
+  bool Untangle(SurfacePoints& P, int maxSweeps) {
+    std::vector<std::int64_t> bad, verts;
+    std::vector<std::uint8_t> mark(moved_.size(), 0);
+    for (int sweep = 0; sweep < maxSweeps; ++sweep) {
+      CollectBad(P, a0_, false, true, bad);
+      if (bad.empty()) return true;
+      verts.clear();
+      for (std::int64_t tr : bad)
+        for (int j = 0; j < 3; ++j) {
+          const std::int64_t v = tris_[tr].v[j];
+          if (!moved_[v]) continue;
+          if (!mark[v]) { mark[v] = 1; verts.push_back(v); }
+          if (sweep % 2 == 1)
+            for (std::int64_t w : nbrs_[v])
+              if (moved_[w] && !mark[w]) { mark[w] = 1; verts.push_back(w); }
+        }
+      for (std::int64_t v : verts) {
+        mark[v] = 0;
+        OptimizeVertex(P, v);
+      }
+    }
+    CollectBad(P, a0_, false, true, bad);
+    return bad.empty();
+  }
+
+  void OptimizeVertex(SurfacePoints& P, std::int64_t i) {
+    auto worst = [&]() {
+      double w = std::numeric_limits<double>::infinity();
+      for (std::int64_t k : incident_[i]) w = std::min(w, SignedSize(std::size_t(k), P, i));
+      return w;
+    };
+    double h = 0;
+    for (std::int64_t j : nbrs_[i]) h += ((moved_[j] ? uv_[j] : foot_[j]) - uv_[i]).norm();
+    h = nbrs_[i].empty() ? 1e-3 : 0.5 * h / double(nbrs_[i].size());
+    if (!(h > 1e-12)) h = 1e-3;
+    double best = worst();
+    Vector2d bestUV = uv_[i];
+    static const double dirs[8][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {0.7071, 0.7071}, {-0.7071, 0.7071}, {0.7071, -0.7071}, {-0.7071, -0.7071}};
+    for (int it = 0; it < 40 && h > 1e-9; ++it) {
+      bool improved = false;
+      const Vector2d base = bestUV;
+      for (const auto& d : dirs) {
+        uv_[i] = Vector2d(Clamp01(base.x() + h * d[0]), Clamp01(base.y() + h * d[1]));
+        Place(P, i, 1.0);
+        const double w = worst();
+        if (w > best) {
+          best = w;
+          bestUV = uv_[i];
+          improved = true;
+        }
+      }
+      if (!improved) h *= 0.5;
+    }
+    uv_[i] = bestUV;
+    Place(P, i, 1.0);
+  }
+
   // Mapping through T intermediary surfaces.
   bool Intermediary(int T, int maxRelax, SurfacePoints& P, std::string& why) {
     uv_ = foot_;
     P = X0_;
-    region_.clear();
-    inRegion_.assign(moved_.size(), 0);
-    solvedOnce_ = false;
+    ResetRegion();
     std::vector<Vector3d> prev = a0_;
     std::vector<std::int64_t> bad;
     for (int s = 1; s <= T; ++s) {
@@ -625,6 +726,12 @@ public:
   }
 
   const std::vector<Vector2d>& Parameters() const { return uv_; }
+
+  void ResetRegion() {
+    region_.clear();
+    inRegion_.assign(moved_.size(), 0);
+    solvedOnce_ = false;
+  }
 
 private:
   void Place(SurfacePoints& P, std::int64_t i, double t) const {
@@ -668,15 +775,6 @@ private:
       if (s == TriState::Ok) continue;
       bad.push_back(touched_[k]);
       (s == TriState::Degenerate ? degenerate : flipped)++;
-      if (std::getenv("FACEPLAN_DEBUG")) {
-        const Tri& tr = tris_[touched_[k]];
-        std::fprintf(stderr, "bad tri %lld full=%d a0=(%g %g %g) a1=(%g %g %g)\n", (long long)touched_[k], int(full_[k]),
-                     a0_[k].x(), a0_[k].y(), a0_[k].z(), AreaVector(tr, P).x(), AreaVector(tr, P).y(), AreaVector(tr, P).z());
-        for (int j = 0; j < 3; ++j)
-          std::fprintf(stderr, "   v%lld moved=%d x0=(%g %g %g) x=(%g %g %g) uv=(%g %g)\n", (long long)tr.v[j], int(moved_[tr.v[j]]),
-                       X0_(tr.v[j], 0), X0_(tr.v[j], 1), X0_(tr.v[j], 2), P(tr.v[j], 0), P(tr.v[j], 1), P(tr.v[j], 2),
-                       uv_[tr.v[j]].x(), uv_[tr.v[j]].y());
-      }
     }
     if (bad.empty()) {
       bad = NewIntersections(tris_, X0_, P, activeTri_);
@@ -712,7 +810,7 @@ private:
       const std::size_t end = region_.size();
       for (std::size_t k = begin; k < end; ++k)
         for (std::int64_t w : nbrs_[region_[k]])
-          if (moved_[w] && !inRegion_[w]) {
+          if (moved_[w] && !inRegion_[w] && !rim_[w]) {
             inRegion_[w] = 1;
             region_.push_back(w);
           }
@@ -768,6 +866,8 @@ private:
   std::vector<std::uint8_t> activeTri_;
   std::vector<std::int64_t> region_; // vertices relaxed so far (this schedule)
   std::vector<std::uint8_t> inRegion_;
+  std::vector<std::uint8_t> rim_;
+  std::vector<std::vector<std::int64_t>> incident_; // touched triangles (indices into touched_) per moved vertex
   bool solvedOnce_ = false;
   double sigma_ = 1.0;
 };
@@ -797,15 +897,16 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
   std::vector<std::uint8_t> moved(n, 0);
   std::vector<Vector2d> foot(n, Vector2d::Zero());
   std::int64_t inside = 0;
+  std::vector<std::int64_t> boundaryOnSide; // ROIBoundary vertices beyond the surface (never move)
   for (std::int64_t i = 0; i < n; ++i) {
     if (!roiMask[i]) continue;
     const SurfaceProjection pr = surf.Project(mesh.points.row(i).transpose());
     foot[i] = Vector2d(pr.u, pr.v); // also for unmoved ROI vertices: relaxation boundary values
     if (!pr.inside) continue;
     ++inside;
-    if (roiBoundary[i]) continue;
     const bool side = options.operation == CutOperation::Cut ? pr.signedDistance > 0 : pr.signedDistance < 0;
-    if (side) moved[i] = 1;
+    if (side && !roiBoundary[i]) moved[i] = 1;
+    if (side && roiBoundary[i] && std::abs(pr.signedDistance) > 1e-9 * surf.Size()) boundaryOnSide.push_back(i);
   }
   if (inside == 0)
     return Status::Error("surface not meeting the ROI: no ROI vertex projects inside the (u,v) "
@@ -851,6 +952,10 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
   std::string why;
   bool ok = mapper.Direct(P, why);
   std::string directWhy = why;
+  if (!ok && options.localRepair && mapper.LocalRepair(options.maxRelaxIterations, P, why)) {
+    ok = true;
+    r.intermediarySteps = 1; // S itself is the only surface used
+  }
   if (!ok) {
     for (int T : options.stepSchedules) {
       if (T < 1) continue;
@@ -861,10 +966,26 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
       }
     }
   }
-  if (!ok)
+  if (!ok) {
+    std::string hint = "Try a smaller cut, a larger ROI, a finer mesh or a smoother surface";
+    std::int64_t nearMoved = 0, example = -1;
+    for (std::int64_t b : boundaryOnSide)
+      for (std::int64_t j : nbrs[b])
+        if (moved[j]) {
+          ++nearMoved;
+          if (example < 0) example = b;
+          break;
+        }
+    if (nearMoved > 0)
+      hint = std::to_string(nearMoved) + " ROIBoundary vertices (which never move) lie on the " +
+             (options.operation == CutOperation::Cut ? "cut" : "fill") +
+             " side next to moved vertices (e.g. vertex " + std::to_string(example) + " at " +
+             Pt(mesh.points.row(example).transpose()) +
+             "): enlarge the ROI so that its boundary stays on the other side of the surface";
     return Status::Error("the cut could not be mapped onto the surface without folding the mesh: direct "
                          "projection gave " + directWhy + "; after the intermediary surfaces " + why +
-                         ". Try a smaller ROI, a finer mesh or a smoother surface");
+                         ". " + hint);
+  }
 
   const std::vector<Vector2d>& uv = mapper.Parameters();
   for (std::int64_t i = 0; i < n; ++i) {

@@ -25,14 +25,20 @@
 // triangle that originally faced n is the same as keeping its normal's sign.
 // Polygons with more than 3 points are checked through a fan triangulation.
 //
-// Where direct projection would fold or collapse triangles, vertices are mapped through
-// intermediary surfaces: at step t = s/T (s = 1..T) vertex i sits at (1-t) x_i + t S(u_i,v_i), and
-// after each step the moved vertices near flipped, degenerate or badly squashed triangles are
-// relaxed tangentially (their (u_i,v_i) move so that the vertex approaches the centroid of its
-// neighbours within that intermediary surface), until no triangle is flipped relative to the
-// previous step. After the last step (t = 1) the full check above (flips and intersections, the
-// latter through a uniform spatial hash over the moved neighbourhood) must pass; otherwise a few
-// schedules with more steps are tried and, failing all, an error is returned, never a bad mesh.
+// Where direct projection would fold or collapse triangles, the moved vertices are relaxed
+// tangentially within S (only their (u,v) change, so they stay on S), in this order until the
+// full check passes:
+//  1. local repair on S: untangling (each vertex of a flipped/degenerate triangle, then also its
+//     moved neighbours, moves by a pattern search in (u,v) to maximise the smallest signed size of
+//     its triangles), then harmonic (uniform Tutte) relaxation of neighbourhoods of the bad
+//     triangles that double their ring count each round, each followed by untangling;
+//  2. intermediary surfaces as in the ICAT 2008 paper: at step t = s/T (s = 1..T) vertex i sits at
+//     (1-t) x_i + t S(u_i,v_i); after each step the vertices near triangles that flipped relative to
+//     the previous step, degenerated or became badly squashed are relaxed harmonically, and at
+//     t = 1 the full check (flips and new intersections, the latter through a uniform spatial
+//     hash over the moved neighbourhood) must pass. Schedules with more steps are tried in turn.
+// If all fail, an error is returned (naming ROIBoundary vertices that lie beyond the surface, the
+// usual cause), never a bad mesh.
 #include "Status.h"
 #include "SurfaceMesh.h"
 
@@ -104,6 +110,7 @@ struct BezierCutOptions {
   CutOperation operation = CutOperation::Cut;
   bool flipNormal = false;
   int displayResolution = 16;     // tessellation intervals per Bezier segment (output port 1)
+  bool localRepair = true;                  // step 1 of the fallback (off: intermediary surfaces only)
   std::vector<int> stepSchedules = {8, 32}; // numbers of intermediary surfaces tried in turn
   int maxRelaxIterations = 24;    // relaxation rounds per step (the region doubles its rings each round)
 };
@@ -115,7 +122,8 @@ struct BezierCutResult {
   std::vector<Eigen::Vector2d> parameters; // (u,v) of each moved vertex (others: 0)
   std::int64_t numMoved = 0;
   std::int64_t numInsidePatch = 0;  // ROI vertices projecting inside the patch
-  int intermediarySteps = 0;        // 0: direct projection was valid
+  int intermediarySteps = 0;        // 0: direct projection was valid; 1: local repair on S;
+                                    // T > 1: mapped through T intermediary surfaces
   double maxDistanceToSurface = 0;  // max over moved vertices of |x - S(u,v)| (should be ~1e-15)
   SurfaceMesh operativeSurface;     // triangles of S for display
   std::string mappingNote;           // why intermediary surfaces were needed (informational)

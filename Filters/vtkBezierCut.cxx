@@ -156,11 +156,14 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   }
   for (const std::string& w : result.warnings) vtkWarningMacro(<< "Bezier Cut: " << w);
 
-  // Output 0: same cells and arrays, new points (same precision as the input's).
+  // Output 0: same cells and arrays, new points. They are always double precision: rounding the
+  // moved points to float could flip the tiny triangles that a valid cut may contain (unmoved
+  // points keep their values exactly; float to double is exact).
   output->ShallowCopy(input);
   vtkNew<vtkPoints> points;
-  points->SetDataType(input->GetPoints()->GetDataType());
-  points->DeepCopy(input->GetPoints());
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  for (vtkIdType i = 0; i < n; ++i) points->SetPoint(i, input->GetPoints()->GetPoint(i));
   vtkNew<vtkDoubleArray> displacement;
   displacement->SetName("Displacement");
   displacement->SetNumberOfComponents(3);
@@ -171,7 +174,7 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
     double before[3], after[3];
     input->GetPoints()->GetPoint(i, before);
     points->SetPoint(i, result.points(i, 0), result.points(i, 1), result.points(i, 2));
-    points->GetPoint(i, after); // as stored (float inputs round here)
+    points->GetPoint(i, after);
     displacement->SetTuple3(i, after[0] - before[0], after[1] - before[1], after[2] - before[2]);
   }
   output->SetPoints(points);

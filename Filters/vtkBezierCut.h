@@ -11,7 +11,7 @@
  * other side. See Core/BezierCut.h for the exact rules and guarantees (no flipped, degenerate or
  * newly intersecting triangles; intermediary surfaces when direct projection would fold).
  *
- * Output port 0: the input's cells and point order with the new coordinates, a point vector array
+ * Output port 0: the input's cells and point order with the new coordinates (double precision), a point vector array
  * `Displacement` (exactly zero where unmoved), the input's arrays (ROIMask, ROIBoundary, ...)
  * passed through, and field data `NumberOfMovedPoints`, `IntermediarySteps`.
  * Output port 1: the operative surface as triangles (point arrays `Normals`, `UV`).
