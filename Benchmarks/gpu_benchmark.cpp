@@ -20,6 +20,7 @@
 #endif
 
 #include <algorithm>
+#include <dlfcn.h>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -131,6 +132,8 @@ struct Options {
   long long cpuPrecomputeMaxTets = 200000;
   bool precompute = true;
   bool residual = true;
+  bool gpuFactor = true;
+  bool blasSweep = true;
 };
 
 std::vector<std::string> Split(const std::string& s) {
@@ -159,14 +162,15 @@ struct Row { // one line of the human-readable tables
 // CHOLMOD factorization), with the response's triangular solves on the GPU. Every stage is Core's
 // or the CUDA library's; only the glue is here, until CondensedFEM calls the GPU response itself.
 struct PipelineTimes {
-  double layoutMs = 0, patternMs = 0, assemblyMs = 0, splitMs = 0, analyzeMs = 0, factorizeMs = 0, totalMs = 0;
+  double layoutMs = 0, patternMs = 0, assemblyMs = 0, splitMs = 0, analyzeMs = 0, factorizeMs = 0, factorDownloadMs = 0,
+         totalMs = 0;
   double factorNonzeros = 0, freeDofs = 0;
   cuda::DenseResponseDetail response;
 };
 
 bool RunGpuPipeline(const PrecomputeRequest& request, const std::shared_ptr<ComputeBackend>& gpu, bool residual,
-                    Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op, PipelineTimes& t,
-                    std::string& error) {
+                    bool gpuFactor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op, PipelineTimes& t,
+                    SparseMatrix* kffOut, std::string& error) {
   const double start = NowMs();
   double lap = start;
   auto next = [&lap]() {
@@ -212,9 +216,12 @@ bool RunGpuPipeline(const PrecomputeRequest& request, const std::shared_ptr<Comp
   t.freeDofs = freeDofs;
 
   cuda::SupernodalCholesky factor;
-  if (!factor.factor(kff, error)) return false;
+  // GPU: CHOLMOD's ordering/symbolic on the CPU, numeric factorization on the GPU, copied back into
+  // the CHOLMOD factor (so CPU solves for loads work as with Core's factor).
+  if (gpuFactor ? !factor.factorOnGpu(kff, error, true) : !factor.factor(kff, error)) return false;
   t.analyzeMs = factor.analyzeMs();
   t.factorizeMs = factor.factorizeMs();
+  t.factorDownloadMs = factor.downloadMs();
   t.factorNonzeros = factor.factorNonzeros();
   next();
   if (!cuda::BuildDenseResponse(factor.view(), residual ? &kff : nullptr, kfr, 3 * keptFree, &response, &op,
@@ -222,7 +229,14 @@ bool RunGpuPipeline(const PrecomputeRequest& request, const std::shared_ptr<Comp
     return false;
   next();
   t.totalMs = NowMs() - start;
+  if (kffOut) *kffOut = std::move(kff);
   return true;
+}
+
+// CHOLMOD's CPU factorization time against the number of OpenBLAS threads.
+using SetBlasThreads = void (*)(int);
+SetBlasThreads BlasThreadSetter() {
+  return reinterpret_cast<SetBlasThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
 }
 #endif
 
@@ -246,6 +260,8 @@ int main(int argc, char** argv) {
     else if (a == "--cpu-precompute-max-tets") opt.cpuPrecomputeMaxTets = std::atoll(next().c_str());
     else if (a == "--no-precompute") opt.precompute = false;
     else if (a == "--no-residual") opt.residual = false;
+    else if (a == "--cpu-factor") opt.gpuFactor = false;
+    else if (a == "--no-blas-sweep") opt.blasSweep = false;
     else {
       std::fprintf(stderr,
                    "usage: %s [--out results.json] [--cases kidney,heart,mandible,10k,100k,1M] "
@@ -299,6 +315,7 @@ int main(int argc, char** argv) {
 
   std::vector<Row> rows;
   std::string casesJson;
+  int bestBlasThreads = 0; // from the first case that sweeps
   auto cpu = MakeCpuBackend();
   for (const Case& c : cases) {
     Row row;
@@ -494,7 +511,8 @@ int main(int argc, char** argv) {
       if (gpu) {
         PipelineTimes pt;
         std::string error;
-        if (RunGpuPipeline(request, gpu, opt.residual, pipelineResponse, pipelineOp, pt, error)) {
+        SparseMatrix kff;
+        if (RunGpuPipeline(request, gpu, opt.residual, opt.gpuFactor, pipelineResponse, pipelineOp, pt, &kff, error)) {
           row.gpuPrecomputeS = pt.totalMs / 1e3;
           row.responseResidual = pt.response.worstRelativeResidual;
           Json pj;
@@ -505,6 +523,8 @@ int main(int argc, char** argv) {
           pj.num("split_ms", pt.splitMs);
           pj.num("analyze_ms", pt.analyzeMs);
           pj.num("factorize_ms", pt.factorizeMs);
+          pj.str("factorization", opt.gpuFactor ? "GPU numeric (CHOLMOD symbolic on the CPU)" : "CHOLMOD on the CPU");
+          pj.num("factor_download_ms", pt.factorDownloadMs);
           pj.num("response_wall_ms", pt.response.wallMs);
           pj.num("response_upload_ms", pt.response.uploadMs);
           pj.num("response_forward_ms", pt.response.forwardMs);
@@ -523,14 +543,41 @@ int main(int argc, char** argv) {
           pj.num("worst_relative_residual", pt.response.worstRelativeResidual);
           j.raw("gpu_pipeline_precompute", pj.text());
           std::printf("gpu pipeline precompute: %.2f s = layout %.0f + pattern %.0f + assembly %.0f + split %.0f + analyze %.0f + "
-                      "factorize %.0f + response %.0f ms (upload %.0f, forward %.0f, backward %.0f, residual %.0f, "
+                      "factorize %.0f (+ copy to CHOLMOD %.0f) + response %.0f ms (upload %.0f, forward %.0f, backward %.0f, residual %.0f, "
                       "extract %.0f, download %.0f; %d supernodes, %.0f GFLOP at %.2f TFLOP/s, residual %.2e)\n",
                       row.gpuPrecomputeS, pt.layoutMs, pt.patternMs, pt.assemblyMs, pt.splitMs, pt.analyzeMs,
-                      pt.factorizeMs, pt.response.wallMs, pt.response.uploadMs, pt.response.forwardMs,
+                      pt.factorizeMs, pt.factorDownloadMs, pt.response.wallMs, pt.response.uploadMs, pt.response.forwardMs,
                       pt.response.backwardMs, pt.response.residualMs, pt.response.extractMs, pt.response.downloadMs,
                       pt.response.supernodes, pt.response.flops / 1e9,
                       pt.response.flops / ((pt.response.forwardMs + pt.response.backwardMs) * 1e-3) / 1e12,
                       pt.response.worstRelativeResidual);
+          // CPU factorization of the same matrix against the OpenBLAS thread count.
+          if (opt.blasSweep && row.tets >= 100000 && BlasThreadSetter()) {
+            std::vector<int> counts;
+            if (bestBlasThreads > 0) counts = {bestBlasThreads};
+            else counts = {16, 8, 4, 2, 1};
+            Json sj;
+            double best = INFINITY;
+            for (int threads : counts) {
+              BlasThreadSetter()(threads);
+              cuda::SupernodalCholesky cpuFactor;
+              std::string ferr;
+              const double w0 = NowMs();
+              const bool fok = cpuFactor.factor(kff, ferr);
+              const double ms = NowMs() - w0;
+              std::printf("CPU CHOLMOD factorization with %2d OpenBLAS threads: analyze %.0f ms, factorize %.0f ms%s\n",
+                          threads, cpuFactor.analyzeMs(), cpuFactor.factorizeMs(), fok ? "" : " FAILED");
+              std::fflush(stdout);
+              sj.num("threads_" + std::to_string(threads) + "_factorize_ms", cpuFactor.factorizeMs());
+              if (fok && cpuFactor.factorizeMs() < best) {
+                best = cpuFactor.factorizeMs();
+                if (counts.size() > 1) bestBlasThreads = threads;
+              }
+              (void)ms;
+            }
+            BlasThreadSetter()(static_cast<int>(std::thread::hardware_concurrency()));
+            j.raw("cpu_factorization_vs_blas_threads", sj.text());
+          }
           if (coreCpuSystem && coreCpuSystem->response.size() == pipelineResponse.size()) {
             row.responseDiff = RelativeMaxDifference(pipelineResponse.data(), coreCpuSystem->response.data(),
                                                      static_cast<size_t>(pipelineResponse.size()));

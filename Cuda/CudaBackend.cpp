@@ -24,20 +24,11 @@ namespace faceplan::cuda {
 
 using detail::CudaResponse;
 using detail::InitDevice;
+using detail::ParallelCopy;
 using detail::DeviceArray;
 using detail::PinnedArray;
 
 namespace {
-
-// memcpy split over the hardware threads (large host copies are bandwidth-bound per thread).
-void ParallelCopy(void* dst, const void* src, size_t bytes) {
-  constexpr size_t chunk = size_t(2) << 20;
-  const std::int64_t chunks = static_cast<std::int64_t>((bytes + chunk - 1) / chunk);
-  ParallelFor(chunks, 4, [&](std::int64_t begin, std::int64_t end) {
-    const size_t from = static_cast<size_t>(begin) * chunk, to = std::min(bytes, static_cast<size_t>(end) * chunk);
-    if (to > from) std::memcpy(static_cast<char*>(dst) + from, static_cast<const char*>(src) + from, to - from);
-  });
-}
 
 // Cheap identity check of a large index array: its size and up to 16384 evenly spread entries.
 // Together with the addresses and sizes it decides whether a cached pattern is the same one.
@@ -331,6 +322,48 @@ bool InitDevice(std::string& error) {
     return false;
   }
   return true;
+}
+
+bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream, std::string& error) {
+  constexpr size_t chunk = size_t(64) << 20;
+  if (bytes <= chunk) {
+    PinnedArray stage;
+    if (!stage.ensure(bytes, error)) return false;
+    FP_CUDA_TRY(cudaMemcpyAsync(stage.as<void>(), src, bytes, cudaMemcpyDeviceToHost, stream));
+    FP_CUDA_TRY(cudaStreamSynchronize(stream));
+    ParallelCopy(dst, stage.as<void>(), bytes);
+    return true;
+  }
+  PinnedArray stage[2];
+  cudaEvent_t done[2] = {nullptr, nullptr};
+  auto cleanup = [&]() {
+    for (cudaEvent_t& e : done)
+      if (e) cudaEventDestroy(e);
+  };
+  auto run = [&]() -> bool {
+    for (int b = 0; b < 2; ++b) {
+      if (!stage[b].ensure(chunk, error)) return false;
+      FP_CUDA_TRY(cudaEventCreateWithFlags(&done[b], cudaEventDisableTiming));
+    }
+    const size_t chunks = (bytes + chunk - 1) / chunk;
+    for (size_t k = 0; k <= chunks; ++k) {
+      if (k < chunks) { // start chunk k (its buffer's previous chunk was copied out at step k-1)
+        const size_t off = k * chunk, len = std::min(chunk, bytes - off);
+        FP_CUDA_TRY(cudaMemcpyAsync(stage[k % 2].as<void>(), static_cast<const char*>(src) + off, len,
+                                    cudaMemcpyDeviceToHost, stream));
+        FP_CUDA_TRY(cudaEventRecord(done[k % 2], stream));
+      }
+      if (k > 0) { // finish chunk k-1 while chunk k transfers
+        const size_t off = (k - 1) * chunk, len = std::min(chunk, bytes - off);
+        FP_CUDA_TRY(cudaEventSynchronize(done[(k - 1) % 2]));
+        ParallelCopy(static_cast<char*>(dst) + off, stage[(k - 1) % 2].as<void>(), len);
+      }
+    }
+    return true;
+  };
+  const bool ok = run();
+  cleanup();
+  return ok;
 }
 
 } // namespace detail

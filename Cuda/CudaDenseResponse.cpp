@@ -7,6 +7,7 @@
 #include "StageTimings.h"
 
 #include <cholmod.h>
+#include <cusolverDn.h>
 #include <cusparse.h>
 
 #include <algorithm>
@@ -29,13 +30,23 @@ namespace faceplan::cuda {
 using detail::CudaResponse;
 using detail::DeviceArray;
 
+namespace {
+template <class T> bool Upload(DeviceArray& dst, const T* src, size_t count, cudaStream_t stream, std::string& error) {
+  if (!dst.ensure(sizeof(T) * std::max<size_t>(count, 1), error)) return false;
+  if (count > 0) FP_CUDA_TRY(cudaMemcpyAsync(dst.as<T>(), src, sizeof(T) * count, cudaMemcpyHostToDevice, stream));
+  return true;
+}
+} // namespace
+
 // ---------------------------------------------------------------------------------------------
 // SupernodalCholesky: CHOLMOD on the CPU with the settings of Core's CholmodFactor.
 
 struct SupernodalCholesky::Impl {
   cholmod_common common;
   cholmod_factor* factor = nullptr;
-  double analyzeMs = 0.0, factorizeMs = 0.0;
+  double analyzeMs = 0.0, factorizeMs = 0.0, downloadMs = 0.0;
+  DeviceArray deviceX; // numeric factor on the GPU (factorOnGpu)
+  bool hostNumeric = false;
   Impl() {
     cholmod_start(&common);
     common.supernodal = CHOLMOD_SUPERNODAL;
@@ -51,11 +62,8 @@ struct SupernodalCholesky::Impl {
 SupernodalCholesky::SupernodalCholesky() : impl_(std::make_unique<Impl>()) {}
 SupernodalCholesky::~SupernodalCholesky() = default;
 
-bool SupernodalCholesky::factor(const SparseMatrix& upper, std::string& error) {
-  if (!upper.isCompressed() || upper.rows() != upper.cols()) {
-    error = "SupernodalCholesky: the matrix must be square and compressed";
-    return false;
-  }
+namespace {
+cholmod_sparse ViewUpper(const SparseMatrix& upper) {
   cholmod_sparse view{};
   view.nrow = static_cast<size_t>(upper.rows());
   view.ncol = static_cast<size_t>(upper.cols());
@@ -69,7 +77,19 @@ bool SupernodalCholesky::factor(const SparseMatrix& upper, std::string& error) {
   view.dtype = CHOLMOD_DOUBLE;
   view.sorted = 1;
   view.packed = 1;
+  return view;
+}
+} // namespace
+
+bool SupernodalCholesky::factor(const SparseMatrix& upper, std::string& error) {
+  if (!upper.isCompressed() || upper.rows() != upper.cols()) {
+    error = "SupernodalCholesky: the matrix must be square and compressed";
+    return false;
+  }
+  cholmod_sparse view = ViewUpper(upper);
   cholmod_free_factor(&impl_->factor, &impl_->common);
+  impl_->deviceX.release();
+  impl_->hostNumeric = false;
   StageClock clock;
   impl_->factor = cholmod_analyze(&view, &impl_->common);
   impl_->analyzeMs = clock.lapMs();
@@ -92,6 +112,178 @@ bool SupernodalCholesky::factor(const SparseMatrix& upper, std::string& error) {
     error = "CHOLMOD did not return a supernodal LL^T factor with 32-bit indices";
     return false;
   }
+  impl_->hostNumeric = true;
+  return true;
+}
+
+#define FP_CUSOLVER_TRY(expr)                                                                      \
+  do {                                                                                             \
+    const cusolverStatus_t fpSolverStatus_ = (expr);                                               \
+    if (fpSolverStatus_ != CUSOLVER_STATUS_SUCCESS) {                                              \
+      error = "cuSOLVER error " + std::to_string(static_cast<int>(fpSolverStatus_)) + " in " #expr; \
+      return false;                                                                                \
+    }                                                                                              \
+  } while (0)
+
+namespace {
+struct FactorResources {
+  cudaStream_t stream = nullptr;
+  cublasHandle_t blas = nullptr;
+  cusolverDnHandle_t solver = nullptr;
+  ~FactorResources() {
+    if (solver) cusolverDnDestroy(solver);
+    if (blas) cublasDestroy(blas);
+    if (stream) cudaStreamDestroy(stream);
+  }
+};
+} // namespace
+
+bool SupernodalCholesky::factorOnGpu(const SparseMatrix& upper, std::string& error, bool hostCopy) {
+  if (!upper.isCompressed() || upper.rows() != upper.cols()) {
+    error = "SupernodalCholesky: the matrix must be square and compressed";
+    return false;
+  }
+  if (!detail::InitDevice(error)) return false;
+  cholmod_sparse view = ViewUpper(upper);
+  cholmod_free_factor(&impl_->factor, &impl_->common);
+  impl_->deviceX.release();
+  impl_->hostNumeric = false;
+  impl_->downloadMs = 0.0;
+  StageClock clock;
+  impl_->factor = cholmod_analyze(&view, &impl_->common);
+  impl_->analyzeMs = clock.lapMs();
+  cholmod_factor* L = impl_->factor;
+  if (!L || impl_->common.status < CHOLMOD_OK) {
+    error = "CHOLMOD ordering failed (status " + std::to_string(impl_->common.status) + ")";
+    return false;
+  }
+  if (!L->is_super || L->itype != CHOLMOD_INT) {
+    error = "CHOLMOD's analysis is not supernodal with 32-bit indices";
+    return false;
+  }
+  const int n = static_cast<int>(L->n), nsuper = static_cast<int>(L->nsuper);
+  const int* super = static_cast<const int*>(L->super);
+  const int* pi = static_cast<const int*>(L->pi);
+  const int* px = static_cast<const int*>(L->px);
+  const int* perm = static_cast<const int*>(L->Perm);
+  std::vector<int> pinv(n), colSuper(n);
+  for (int k = 0; k < n; ++k) pinv[perm[k]] = k;
+  std::vector<std::int64_t> px64(nsuper + 1);
+  int maxCol = 1, maxRow = 1;
+  long long maxUpdate = 1;
+  for (int t = 0; t < nsuper; ++t) {
+    for (int k = super[t]; k < super[t + 1]; ++k) colSuper[k] = t;
+    const int nscol = super[t + 1] - super[t], nsrow = pi[t + 1] - pi[t];
+    maxCol = std::max(maxCol, nscol);
+    maxRow = std::max(maxRow, nsrow);
+    maxUpdate = std::max(maxUpdate, static_cast<long long>(nsrow - nscol) * (nsrow - nscol));
+  }
+  for (int t = 0; t <= nsuper; ++t) px64[t] = px[t];
+  const size_t xsize = static_cast<size_t>(px[nsuper]);
+
+  FactorResources r;
+  FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.stream, cudaStreamNonBlocking));
+  FP_CUBLAS_TRY(cublasCreate(&r.blas));
+  FP_CUBLAS_TRY(cublasSetStream(r.blas, r.stream));
+  FP_CUSOLVER_TRY(cusolverDnCreate(&r.solver));
+  FP_CUSOLVER_TRY(cusolverDnSetStream(r.solver, r.stream));
+  DeviceArray dSuper, dPi, dPx, dS, dColSuper, dPinv, dStart, dRow, dVal, dC, dWork, dInfo;
+  if (!Upload(dSuper, super, nsuper + 1, r.stream, error) || !Upload(dPi, pi, nsuper + 1, r.stream, error) ||
+      !Upload(dPx, px64.data(), px64.size(), r.stream, error) ||
+      !Upload(dS, static_cast<const int*>(L->s), static_cast<size_t>(pi[nsuper]), r.stream, error) ||
+      !Upload(dColSuper, colSuper.data(), colSuper.size(), r.stream, error) ||
+      !Upload(dPinv, pinv.data(), pinv.size(), r.stream, error) ||
+      !Upload(dStart, upper.outerIndexPtr(), static_cast<size_t>(n) + 1, r.stream, error) ||
+      !Upload(dRow, upper.innerIndexPtr(), static_cast<size_t>(upper.nonZeros()), r.stream, error) ||
+      !Upload(dVal, upper.valuePtr(), static_cast<size_t>(upper.nonZeros()), r.stream, error))
+    return false;
+  if (!impl_->deviceX.ensure(sizeof(double) * std::max<size_t>(xsize, 1), error) ||
+      !dC.ensure(sizeof(double) * static_cast<size_t>(maxUpdate), error) ||
+      !dInfo.ensure(sizeof(int) * std::max(nsuper, 1), error))
+    return false;
+  int lwork = 0;
+  FP_CUSOLVER_TRY(cusolverDnDpotrf_bufferSize(r.solver, CUBLAS_FILL_MODE_LOWER, maxCol, impl_->deviceX.as<double>(),
+                                              maxRow, &lwork));
+  if (!dWork.ensure(sizeof(double) * (2 * static_cast<size_t>(std::max(lwork, 1)) + 256), error)) return false;
+  double* Lx = impl_->deviceX.as<double>();
+  FP_CUDA_TRY(cudaMemsetAsync(Lx, 0, sizeof(double) * xsize, r.stream));
+  FP_CUDA_TRY(cudaMemsetAsync(dInfo.as<int>(), 0, sizeof(int) * std::max(nsuper, 1), r.stream));
+  detail::SupernodalStructure st;
+  st.super = dSuper.as<int>();
+  st.pi = dPi.as<int>();
+  st.px = dPx.as<std::int64_t>();
+  st.s = dS.as<int>();
+  st.colSuper = dColSuper.as<int>();
+  FP_CUDA_TRY(detail::LaunchAssembleSupernodal(dStart.as<int>(), dRow.as<int>(), dVal.as<double>(), n, dPinv.as<int>(),
+                                               st, Lx, r.stream));
+  const double one = 1.0, zero = 0.0;
+  for (int t = 0; t < nsuper; ++t) {
+    const int nscol = super[t + 1] - super[t], nsrow = pi[t + 1] - pi[t], off = nsrow - nscol;
+    double* block = Lx + px64[t];
+    FP_CUSOLVER_TRY(cusolverDnDpotrf(r.solver, CUBLAS_FILL_MODE_LOWER, nscol, block, nsrow, dWork.as<double>(),
+                                     2 * std::max(lwork, 1), dInfo.as<int>() + t));
+    if (off > 0) {
+      FP_CUBLAS_TRY(cublasDtrsm(r.blas, CUBLAS_SIDE_RIGHT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_T, CUBLAS_DIAG_NON_UNIT,
+                                off, nscol, &one, block, nsrow, block + nscol, nsrow));
+      FP_CUBLAS_TRY(cublasDsyrk(r.blas, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N, off, nscol, &one, block + nscol, nsrow,
+                                &zero, dC.as<double>(), off));
+      FP_CUDA_TRY(detail::LaunchScatterUpdate(dC.as<double>(), off, dS.as<int>() + pi[t] + nscol, st, Lx, r.stream));
+    }
+  }
+  std::vector<int> info(std::max(nsuper, 1));
+  FP_CUDA_TRY(cudaMemcpyAsync(info.data(), dInfo.as<int>(), sizeof(int) * info.size(), cudaMemcpyDeviceToHost,
+                              r.stream));
+  FP_CUDA_TRY(cudaStreamSynchronize(r.stream));
+  impl_->factorizeMs = clock.lapMs();
+  for (int t = 0; t < nsuper; ++t)
+    if (info[t] != 0) {
+      impl_->deviceX.release();
+      error = "matrix is not positive definite (GPU factorization stopped at column " +
+              std::to_string(super[t] + std::abs(info[t]) - 1) + ")";
+      return false;
+    }
+  if (hostCopy) {
+    if (!cholmod_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, L, &impl_->common) || !L->x || L->xsize != xsize) {
+      error = "CHOLMOD could not allocate the numeric factor";
+      return false;
+    }
+    if (!detail::DownloadLarge(L->x, Lx, sizeof(double) * xsize, r.stream, error)) return false;
+    L->minor = L->n;
+    impl_->hostNumeric = true;
+    impl_->downloadMs = clock.lapMs();
+  }
+  return true;
+}
+
+void SupernodalCholesky::releaseDevice() { impl_->deviceX.release(); }
+
+bool SupernodalCholesky::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, std::string& error) const {
+  if (!impl_->factor || !impl_->hostNumeric) {
+    error = "SupernodalCholesky: no numeric factor on the host";
+    return false;
+  }
+  if (static_cast<size_t>(b.rows()) != impl_->factor->n) {
+    error = "SupernodalCholesky: right-hand side has the wrong size";
+    return false;
+  }
+  cholmod_dense rhs{};
+  rhs.nrow = b.rows();
+  rhs.ncol = b.cols();
+  rhs.nzmax = b.size();
+  rhs.d = b.rows();
+  rhs.x = const_cast<double*>(b.data());
+  rhs.xtype = CHOLMOD_REAL;
+  rhs.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense* result = cholmod_solve(CHOLMOD_A, impl_->factor, &rhs, &impl_->common);
+  if (!result) {
+    error = "CHOLMOD solve failed";
+    return false;
+  }
+  x.resize(b.rows(), b.cols());
+  for (Eigen::Index c = 0; c < b.cols(); ++c)
+    std::copy(static_cast<const double*>(result->x) + c * result->d,
+              static_cast<const double*>(result->x) + c * result->d + b.rows(), x.col(c).data());
+  cholmod_free_dense(&result, &impl_->common);
   return true;
 }
 
@@ -107,11 +299,14 @@ SupernodalFactorView SupernodalCholesky::view() const {
   v.s = static_cast<const int*>(L->s);
   v.x = static_cast<const double*>(L->x);
   v.perm = static_cast<const int*>(L->Perm);
+  v.x = impl_->hostNumeric ? static_cast<const double*>(L->x) : nullptr;
+  v.deviceX = impl_->deviceX.capacity() > 0 ? impl_->deviceX.as<double>() : nullptr;
   return v;
 }
 
 double SupernodalCholesky::analyzeMs() const { return impl_->analyzeMs; }
 double SupernodalCholesky::factorizeMs() const { return impl_->factorizeMs; }
+double SupernodalCholesky::downloadMs() const { return impl_->downloadMs; }
 double SupernodalCholesky::factorNonzeros() const { return impl_->common.lnz; }
 
 // ---------------------------------------------------------------------------------------------
@@ -178,12 +373,6 @@ void PermutedFullCsr(const SparseMatrix& upper, const std::vector<int>& pinv, st
   });
 }
 
-template <class T> bool Upload(DeviceArray& dst, const T* src, size_t count, cudaStream_t stream, std::string& error) {
-  if (!dst.ensure(sizeof(T) * std::max<size_t>(count, 1), error)) return false;
-  if (count > 0) FP_CUDA_TRY(cudaMemcpyAsync(dst.as<T>(), src, sizeof(T) * count, cudaMemcpyHostToDevice, stream));
-  return true;
-}
-
 bool Elapsed(cudaEvent_t a, cudaEvent_t b, double& accumulate, std::string& error) {
   float ms = 0.f;
   FP_CUDA_TRY(cudaEventElapsedTime(&ms, a, b));
@@ -195,7 +384,7 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
            Eigen::MatrixXd* responseHost, std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail,
            std::string& error, int maxColumnsPerPass) {
   const int n = L.n;
-  if (n <= 0 || !L.super || !L.pi || !L.px || !L.s || !L.x || !L.perm) {
+  if (n <= 0 || !L.super || !L.pi || !L.px || !L.s || !(L.x || L.deviceX) || !L.perm) {
     error = "BuildDenseResponse: no supernodal factor";
     return false;
   }
@@ -248,7 +437,7 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   if (kff) PermutedFullCsr(*kff, pinv, kStart, kCol, kVal);
 
   FP_CUDA_TRY(cudaEventRecord(r.ev[0], r.stream));
-  if (!Upload(dLx, L.x, lxCount, r.stream, error) || !Upload(dLs, L.s, lsCount, r.stream, error) ||
+  if ((!L.deviceX && !Upload(dLx, L.x, lxCount, r.stream, error)) || !Upload(dLs, L.s, lsCount, r.stream, error) ||
       !Upload(dPinv, pinv.data(), pinv.size(), r.stream, error) ||
       !Upload(dFrStart, kfr.outerIndexPtr(), static_cast<size_t>(roi) + 1, r.stream, error) ||
       !Upload(dFrRow, kfr.innerIndexPtr(), static_cast<size_t>(kfr.nonZeros()), r.stream, error) ||
@@ -296,7 +485,7 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
 
   double* Y = dY.as<double>();
   double* T = dT.as<double>();
-  const double* Lx = dLx.as<double>();
+  const double* Lx = L.deviceX ? L.deviceX : dLx.as<double>();
   const int* Ls = dLs.as<int>();
   const double one = 1.0, minusOne = -1.0, zero = 0.0;
   std::vector<double> sums(nbMax);
@@ -393,9 +582,9 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   dLx.release();
   if (responseHost) {
     StageClock clock;
-    FP_CUDA_TRY(cudaMemcpyAsync(responseHost->data(), dResponse.as<double>(),
-                                sizeof(double) * static_cast<size_t>(keptRows) * roi, cudaMemcpyDeviceToHost, r.stream));
-    FP_CUDA_TRY(cudaStreamSynchronize(r.stream));
+    if (!detail::DownloadLarge(responseHost->data(), dResponse.as<double>(),
+                               sizeof(double) * static_cast<size_t>(keptRows) * roi, r.stream, error))
+      return false;
     detail.downloadMs = clock.lapMs();
   }
   if (op) {

@@ -32,6 +32,7 @@ struct SupernodalFactorView {
   const int* s = nullptr;     // row indices
   const double* x = nullptr;  // column-major nsrow x nscol blocks
   const int* perm = nullptr;  // n
+  const double* deviceX = nullptr; // x already in GPU memory (SupernodalCholesky::factorOnGpu), or null
 };
 
 // CHOLMOD analyze + supernodal factorize of a symmetric positive definite matrix given by its
@@ -43,10 +44,21 @@ public:
   SupernodalCholesky(const SupernodalCholesky&) = delete;
   SupernodalCholesky& operator=(const SupernodalCholesky&) = delete;
 
+  // CHOLMOD ordering, symbolic and numeric factorization on the CPU.
   bool factor(const SparseMatrix& upper, std::string& error);
+  // CHOLMOD ordering and symbolic analysis on the CPU, numeric factorization on the GPU
+  // (right-looking supernodal: cuSOLVER DPOTRF, cuBLAS DTRSM and DSYRK per supernode, updates
+  // scattered into the ancestors). The factor stays in GPU memory (view().deviceX); with
+  // `hostCopy` it is also copied into the CHOLMOD factor, so that CPU solves work as after factor().
+  bool factorOnGpu(const SparseMatrix& upper, std::string& error, bool hostCopy = true);
+  // Frees the GPU copy (the host factor, if any, stays).
+  void releaseDevice();
   SupernodalFactorView view() const;
+  // x = A^-1 b on the CPU with CHOLMOD (needs the host factor).
+  bool solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, std::string& error) const;
   double analyzeMs() const;
-  double factorizeMs() const;
+  double factorizeMs() const;   // numeric factorization (GPU: including uploads)
+  double downloadMs() const;    // GPU factor to the CHOLMOD factor (factorOnGpu with hostCopy)
   double factorNonzeros() const;
 
 private:

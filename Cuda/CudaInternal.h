@@ -2,6 +2,7 @@
 // Internal pieces shared by the CUDA backend's translation units (not installed, not public).
 #include "ComputeBackend.h"
 #include "CudaCheck.h"
+#include "ParallelFor.h"
 
 #include <cuda_runtime_api.h>
 
@@ -82,6 +83,21 @@ private:
   void* ptr_ = nullptr;
   size_t capacity_ = 0;
 };
+
+// memcpy split over the hardware threads (one thread cannot saturate host memory, and first-touch
+// page faults of a fresh destination are spread too).
+inline void ParallelCopy(void* dst, const void* src, size_t bytes) {
+  constexpr size_t chunk = size_t(2) << 20;
+  const std::int64_t chunks = static_cast<std::int64_t>((bytes + chunk - 1) / chunk);
+  ParallelFor(chunks, 4, [&](std::int64_t begin, std::int64_t end) {
+    const size_t from = static_cast<size_t>(begin) * chunk, to = std::min(bytes, static_cast<size_t>(end) * chunk);
+    if (to > from) std::memcpy(static_cast<char*>(dst) + from, static_cast<const char*>(src) + from, to - from);
+  });
+}
+
+// Large device-to-host copy into pageable memory: through two page-locked buffers, the device
+// copy of one chunk overlapping the parallel host copy of the previous one.
+bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream, std::string& error);
 
 // kept = response * roi with the response in GPU memory: cuBLAS DGEMV on one stream, pinned
 // host buffers for the two small vectors, one mutex (apply may be called from several threads).

@@ -145,6 +145,46 @@ __global__ void ColumnSquaredNormsKernel(const double* __restrict__ R, std::int6
   atomicAdd(sums + c, sum);
 }
 
+// Position of `row` in supernode t's sorted row list (it is there by construction).
+__device__ __forceinline__ int RowPosition(const SupernodalStructure& st, int t, int row) {
+  int lo = st.pi[t], hi = st.pi[t + 1] - 1;
+  while (lo < hi) {
+    const int mid = (lo + hi) >> 1;
+    if (st.s[mid] < row) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo - st.pi[t];
+}
+
+__global__ void AssembleSupernodalKernel(const int* __restrict__ colStart, const int* __restrict__ rowIndex,
+                                         const double* __restrict__ values, int n, const int* __restrict__ pinv,
+                                         SupernodalStructure st, double* __restrict__ Lx) {
+  const int j = blockIdx.x * blockDim.x + threadIdx.x;
+  if (j >= n) return;
+  const int pj = pinv[j];
+  for (int p = colStart[j]; p < colStart[j + 1]; ++p) {
+    const int pi = pinv[rowIndex[p]];
+    const int row = pi > pj ? pi : pj, col = pi > pj ? pj : pi;
+    const int t = st.colSuper[col];
+    const int nsrow = st.pi[t + 1] - st.pi[t];
+    Lx[st.px[t] + RowPosition(st, t, row) + static_cast<std::int64_t>(col - st.super[t]) * nsrow] = values[p];
+  }
+}
+
+// blockIdx.y (grid-stride) picks the update's column jj; threads run over its rows ii >= jj.
+__global__ void ScatterUpdateKernel(const double* __restrict__ C, int count, const int* __restrict__ rows,
+                                    SupernodalStructure st, double* __restrict__ Lx) {
+  for (int jj = blockIdx.y; jj < count; jj += gridDim.y) {
+    const int gc = rows[jj];
+    const int t = st.colSuper[gc];
+    const int nsrow = st.pi[t + 1] - st.pi[t];
+    double* column = Lx + st.px[t] + static_cast<std::int64_t>(gc - st.super[t]) * nsrow;
+    const double* src = C + static_cast<std::int64_t>(jj) * count;
+    for (int ii = jj + blockIdx.x * blockDim.x + threadIdx.x; ii < count; ii += gridDim.x * blockDim.x)
+      column[RowPosition(st, t, rows[ii])] -= src[ii];
+  }
+}
+
 unsigned RowGrid(int count) { return static_cast<unsigned>(count < 65535 ? count : 65535); }
 
 } // namespace
@@ -191,6 +231,22 @@ cudaError_t LaunchColumnSquaredNorms(const double* R, std::int64_t rows, int nb,
   const std::int64_t rowBlocks = (rows + rowsPerBlock - 1) / rowsPerBlock;
   const dim3 grid(static_cast<unsigned>((nb + 127) / 128), static_cast<unsigned>(rowBlocks));
   ColumnSquaredNormsKernel<<<grid, 128, 0, stream>>>(R, rows, nb, rowsPerBlock, sums);
+  return cudaGetLastError();
+}
+
+cudaError_t LaunchAssembleSupernodal(const int* colStart, const int* rowIndex, const double* values, int n,
+                                     const int* pinv, SupernodalStructure st, double* Lx, cudaStream_t stream) {
+  if (n <= 0) return cudaSuccess;
+  AssembleSupernodalKernel<<<(n + 127) / 128, 128, 0, stream>>>(colStart, rowIndex, values, n, pinv, st, Lx);
+  return cudaGetLastError();
+}
+
+cudaError_t LaunchScatterUpdate(const double* C, int count, const int* rows, SupernodalStructure st, double* Lx,
+                                cudaStream_t stream) {
+  if (count <= 0) return cudaSuccess;
+  const int threads = count >= 256 ? 256 : (count >= 64 ? 64 : 32);
+  const dim3 grid(static_cast<unsigned>(std::min((count + threads - 1) / threads, 32)), RowGrid(count));
+  ScatterUpdateKernel<<<grid, threads, 0, stream>>>(C, count, rows, st, Lx);
   return cudaGetLastError();
 }
 

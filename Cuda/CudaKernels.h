@@ -43,6 +43,25 @@ cudaError_t LaunchExtractResponse(const double* Y, const int* pinv, int keptRows
 cudaError_t LaunchColumnSquaredNorms(const double* R, std::int64_t rows, int nb, double* sums,
                                      cudaStream_t stream);
 
+// ---- Supernodal Cholesky (numeric, on CHOLMOD's symbolic supernodal structure) ----
+// The structure arrays (super, pi, px, s, colSuper = supernode of each column) live on the device.
+struct SupernodalStructure {
+  const int* super = nullptr;
+  const int* pi = nullptr;
+  const std::int64_t* px = nullptr;
+  const int* s = nullptr;
+  const int* colSuper = nullptr;
+};
+
+// Lx[...] = A(perm, perm) lower entries, from the upper triangle of A in CSC (Lx zeroed first).
+cudaError_t LaunchAssembleSupernodal(const int* colStart, const int* rowIndex, const double* values, int n,
+                                     const int* pinv, SupernodalStructure st, double* Lx, cudaStream_t stream);
+
+// Subtracts the lower triangle of the update C (count x count, column-major) of a supernode whose
+// off-diagonal rows are `rows` from the ancestors' blocks.
+cudaError_t LaunchScatterUpdate(const double* C, int count, const int* rows, SupernodalStructure st, double* Lx,
+                                cudaStream_t stream);
+
 // Whether the kernels in this library can run on the current device (an sm_90 build on an
 // older GPU cannot). cudaSuccess when they can.
 cudaError_t CheckKernelImage();

@@ -61,7 +61,7 @@ add_subdirectory(Core)
 add_subdirectory($ROOT/Cuda Cuda)
 add_subdirectory($ROOT/Testing/Cuda Testing/Cuda)
 add_executable(gpu_benchmark $ROOT/Benchmarks/gpu_benchmark.cpp)
-target_link_libraries(gpu_benchmark PRIVATE FacePlanCuda FacePlanCore Threads::Threads)
+target_link_libraries(gpu_benchmark PRIVATE FacePlanCuda FacePlanCore Threads::Threads \${CMAKE_DL_LIBS})
 CMAKE
   BUILD=/tmp/build-snap
   if configure "$SRC" "$BUILD" > "$OUT/configure-snap.log" 2>&1 && \
