@@ -30,13 +30,13 @@ using detail::PinnedArray;
 
 namespace {
 
-// Cheap identity check of a large index array: its size and up to 16384 evenly spread entries.
+// Cheap identity check of a large index array: its size and up to 2048 evenly spread entries.
 // Together with the addresses and sizes it decides whether a cached pattern is the same one.
 std::uint64_t Fingerprint(const int* data, size_t count, std::uint64_t seed) {
   std::uint64_t h = 1469598103934665603ull ^ seed ^ (static_cast<std::uint64_t>(count) << 17);
   auto mix = [&h](std::uint32_t v) { h = (h ^ v) * 1099511628211ull; };
   if (count == 0) return h;
-  const size_t samples = std::min<size_t>(count, 16384);
+  const size_t samples = std::min<size_t>(count, 2048);
   for (size_t s = 0; s < samples; ++s) {
     const size_t i = samples == count ? s : s * (count - 1) / (samples - 1);
     mix(static_cast<std::uint32_t>(data[i]));
@@ -64,6 +64,8 @@ public:
   ~CudaBackendImpl() override {
     for (cudaEvent_t& e : events_)
       if (e) cudaEventDestroy(e);
+    for (cudaEvent_t& e : chunkDone_)
+      if (e) cudaEventDestroy(e);
     if (stream_) cudaStreamDestroy(stream_);
   }
 
@@ -74,6 +76,7 @@ public:
     name_ = std::string("CUDA (") + prop.name + ")";
     FP_CUDA_TRY(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
     for (cudaEvent_t& e : events_) FP_CUDA_TRY(cudaEventCreate(&e));
+    for (cudaEvent_t& e : chunkDone_) FP_CUDA_TRY(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
     return true;
   }
 
@@ -248,10 +251,29 @@ private:
     FP_CUDA_TRY(detail::LaunchGather(gatherStart_.as<int>(), packedIndex_.as<int>(), packed_.as<double>(),
                                      static_cast<int>(nnz), values_.as<double>(), stream_));
     FP_CUDA_TRY(cudaEventRecord(events_[3], stream_));
-    FP_CUDA_TRY(cudaMemcpyAsync(dstValues, values_.as<double>(), valueBytes, cudaMemcpyDeviceToHost, stream_));
+    // The values come back in a few chunks, each copied out of the staging buffer while the next
+    // one is still on the link.
+    const int chunks = pinnedTransfers_ ? static_cast<int>(std::min<size_t>(4, 1 + valueBytes / (size_t(8) << 20))) : 1;
+    const size_t chunkBytes = (valueBytes / chunks + 7) & ~size_t(7);
+    for (int c = 0; c < chunks; ++c) {
+      const size_t from = std::min(valueBytes, c * chunkBytes), to = std::min(valueBytes, (c + 1) * chunkBytes);
+      if (to > from)
+        FP_CUDA_TRY(cudaMemcpyAsync(reinterpret_cast<char*>(dstValues) + from,
+                                    reinterpret_cast<const char*>(values_.as<double>()) + from, to - from,
+                                    cudaMemcpyDeviceToHost, stream_));
+      FP_CUDA_TRY(cudaEventRecord(chunkDone_[c], stream_));
+    }
     FP_CUDA_TRY(cudaEventRecord(events_[4], stream_));
+    if (pinnedTransfers_) {
+      for (int c = 0; c < chunks; ++c) {
+        FP_CUDA_TRY(cudaEventSynchronize(chunkDone_[c]));
+        const size_t from = std::min(valueBytes, c * chunkBytes), to = std::min(valueBytes, (c + 1) * chunkBytes);
+        if (to > from)
+          ParallelCopy(reinterpret_cast<char*>(pattern.upper.valuePtr()) + from,
+                       reinterpret_cast<const char*>(dstValues) + from, to - from);
+      }
+    }
     FP_CUDA_TRY(cudaStreamSynchronize(stream_));
-    if (pinnedTransfers_) ParallelCopy(pattern.upper.valuePtr(), dstValues, valueBytes);
 
     float ms[4] = {0, 0, 0, 0};
     for (int i = 0; i < 4; ++i) FP_CUDA_TRY(cudaEventElapsedTime(&ms[i], events_[i], events_[i + 1]));
@@ -279,6 +301,7 @@ private:
   std::string name_ = "CUDA";
   cudaStream_t stream_ = nullptr;
   cudaEvent_t events_[5] = {nullptr, nullptr, nullptr, nullptr, nullptr};
+  cudaEvent_t chunkDone_[4] = {nullptr, nullptr, nullptr, nullptr};
   // Cached per pattern: cells, gather map.
   PatternKey key_;
   bool cachedValid_ = false;
