@@ -9,6 +9,8 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <sstream>
 #include <thread>
 
@@ -24,13 +26,16 @@ const char* MethodName(SolveMethod method) {
   return "?";
 }
 
+const char* ElementOrderName(ElementOrder order) {
+  return order == ElementOrder::Quadratic ? "Quadratic" : "Linear";
+}
+
 namespace {
 
-NodeLayout MakeLayout(const TetMesh& mesh, const NodeSets& sets) {
-  const Eigen::Index n = mesh.numPoints();
-  std::vector<char> used(n, 0), constrained(n, 0), kept(n, 0);
-  for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
-    for (int k = 0; k < 4; ++k) used[mesh.tets(e, k)] = 1;
+// `used` marks the nodes some cell references (corner and, for quadratic cells, mid-edge nodes).
+NodeLayout MakeLayout(const std::vector<char>& used, const NodeSets& sets) {
+  const Eigen::Index n = static_cast<Eigen::Index>(used.size());
+  std::vector<char> constrained(n, 0), kept(n, 0);
   for (int i : sets.constrained) constrained[i] = 1;
   for (int i : sets.kept) kept[i] = 1;
 
@@ -73,6 +78,103 @@ Eigen::VectorXd FreeNodeMass(const TetMesh& mesh, const Materials& materials, co
     }
   }
   return mass;
+}
+
+// Consistent unit-body-force load per free node of a quadratic mesh (integral of rho N_a).
+Eigen::VectorXd FreeNodeMassQuadratic(const QuadraticMesh& mesh, const Materials& materials,
+                                      const NodeLayout& layout) {
+  Eigen::VectorXd mass = Eigen::VectorXd::Zero(layout.freeNodes());
+  if (materials.density.size() == 0) return mass;
+  Tet10Nodes nodes;
+  for (Eigen::Index e = 0; e < mesh.cells.rows(); ++e) {
+    const double rho = materials.rho(e);
+    if (rho == 0.0) continue;
+    for (int k = 0; k < 10; ++k) nodes.row(k) = mesh.points.row(mesh.cells(e, k));
+    const Eigen::Matrix<double, 10, 1> integral = Tet10ShapeIntegrals(nodes);
+    for (int k = 0; k < 10; ++k) {
+      const int pos = layout.dofNode[mesh.cells(e, k)];
+      if (pos >= 0 && pos < layout.freeNodes()) mass[pos] += rho * integral[k];
+    }
+  }
+  return mass;
+}
+
+// x = K_FF^-1 b with double-precision iterative refinement: while a column's relative residual
+// exceeds `tolerance`, solve for the residual and correct (at most `maxSteps` times). `worst`
+// receives the largest relative residual after refinement and `steps` the refinement steps taken.
+Status RefinedSolve(const CondensedSystem& sys, const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
+                    bool concurrent, double tolerance, int maxSteps, double& worst, int& steps) {
+  auto solve = [&](const Eigen::MatrixXd& rhs, Eigen::MatrixXd& out) {
+    return concurrent ? sys.factor.solveConcurrently(rhs, out) : sys.factor.solve(rhs, out);
+  };
+  Status s = solve(b, x);
+  if (!s) return s;
+  const Eigen::VectorXd norms = b.colwise().norm().transpose();
+  steps = 0;
+  for (;;) {
+    const Eigen::MatrixXd residual = b - sys.kff.selfadjointView<Eigen::Upper>() * x;
+    worst = 0.0;
+    for (Eigen::Index c = 0; c < b.cols(); ++c) {
+      const double r = residual.col(c).norm();
+      worst = std::max(worst, norms[c] > 0.0 ? r / norms[c] : r);
+    }
+    if (!std::isfinite(worst) || worst <= tolerance || steps >= maxSteps) break;
+    Eigen::MatrixXd correction;
+    s = solve(residual, correction);
+    if (!s) return s;
+    x += correction;
+    ++steps;
+  }
+  return Status::Ok();
+}
+
+// The caller's node sets extended to the mid-edge nodes of a quadratic mesh. `derived` receives,
+// for each mid-edge ROI node (appended after the caller's movable nodes), its ends' positions in
+// the caller's movable list (-1 for a fixed end).
+NodeSets QuadraticNodeSets(const QuadraticMesh& q, const NodeSets& sets,
+                           std::vector<std::array<int, 2>>& derived) {
+  const Eigen::Index n = q.numCorners;
+  std::vector<char> constrained(n, 0);
+  std::vector<int> movablePos(n, -1);
+  for (int i : sets.constrained) constrained[i] = 1;
+  for (size_t k = 0; k < sets.movable.size(); ++k)
+    if (movablePos[sets.movable[k]] < 0) movablePos[sets.movable[k]] = static_cast<int>(k);
+  NodeSets out = sets;
+  derived.clear();
+  for (size_t e = 0; e < q.edges.size(); ++e) {
+    const int a = q.edges[e][0], b = q.edges[e][1];
+    if (!constrained[a] || !constrained[b]) continue; // interior: kept nodes are corners only
+    const int node = static_cast<int>(n + static_cast<Eigen::Index>(e));
+    out.constrained.push_back(node);
+    if (movablePos[a] >= 0 || movablePos[b] >= 0) {
+      out.movable.push_back(node);
+      derived.push_back({movablePos[a], movablePos[b]});
+    }
+  }
+  return out;
+}
+
+// Relative deviation of a backend's response operator from the double response, on random ROI
+// vectors (a float operator shows ~1e-7; a double one ~1e-16).
+double ProbeResponseOperator(const CondensedSystem& sys, ResponseOperator& op, std::string& error) {
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  double worst = 0.0;
+  for (int probe = 0; probe < 2; ++probe) {
+    Eigen::VectorXd roi(sys.response.cols());
+    for (Eigen::Index k = 0; k < roi.size(); ++k) roi[k] = uniform(rng);
+    Eigen::VectorXd approx;
+    if (!op.apply(roi, approx, error)) return std::numeric_limits<double>::infinity();
+    const Eigen::VectorXd exact = sys.response * roi;
+    if (approx.size() != exact.size()) {
+      error = "operator returned the wrong size";
+      return std::numeric_limits<double>::infinity();
+    }
+    const double norm = exact.norm();
+    const double dev = (approx - exact).norm();
+    worst = std::max(worst, norm > 0.0 ? dev / norm : dev);
+  }
+  return worst;
 }
 
 // Per-edit flop counts decide between a dense product and a sparse solve (both exact).
@@ -137,17 +239,14 @@ Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
       const Eigen::Index c0 = b * block, cols = std::min(block, roiDofs - c0);
       const Eigen::MatrixXd rhs = Eigen::MatrixXd(sys.kfr.middleCols(c0, cols));
       Eigen::MatrixXd x;
-      Status s = sys.factor.solveConcurrently(rhs, x);
+      double blockWorst = 0.0;
+      int steps = 0;
+      Status s = RefinedSolve(sys, rhs, x, true, sys.residualTolerance, sys.maxRefinementSteps,
+                              blockWorst, steps);
       if (!s) {
         std::lock_guard<std::mutex> lock(resultMutex);
         failure = s;
         return;
-      }
-      const Eigen::MatrixXd residual = sys.kff.selfadjointView<Eigen::Upper>() * x - rhs;
-      double blockWorst = 0.0;
-      for (Eigen::Index c = 0; c < cols; ++c) {
-        const double norm = rhs.col(c).norm();
-        if (norm > 0.0) blockWorst = std::max(blockWorst, residual.col(c).norm() / norm);
       }
       sys.response.middleCols(c0, cols) = -x.topRows(keptDofs); // disjoint columns per block
       std::lock_guard<std::mutex> lock(resultMutex);
@@ -184,23 +283,87 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
   Status status = ValidateMeshAndMaterials(mesh, request.materials);
   if (status) status = ValidateNodeSets(mesh, request.sets);
   if (status) status = CheckEveryComponentConstrained(mesh, request.sets.constrained);
+  if (status) status = CheckRigidModesHeld(mesh, request.sets.constrained);
   if (!status) return status;
-
-  sys->numMeshNodes = mesh.numPoints();
+  if (!(options.residualTolerance > 0.0) || options.maxRefinementSteps < 0)
+    return Status::Error("residualTolerance must be positive and maxRefinementSteps non-negative");
+  SystemInfo& info = sys->info;
+  if (options.sliverQualityThreshold > 0.0) {
+    QualityReport quality;
+    const std::string w = CheckElementQuality(mesh, options.sliverQualityThreshold, &quality);
+    if (!w.empty()) status.warnings.push_back(w);
+    info.sliverCells = quality.belowThreshold;
+    info.worstQuality = quality.worstQuality;
+  }
+  sys->residualTolerance = options.residualTolerance;
+  sys->maxRefinementSteps = options.maxRefinementSteps;
+  sys->strainWarningLimit = options.strainWarningLimit;
+  sys->numOutputNodes = mesh.numPoints();
+  sys->cornerMesh = mesh;
   sys->kept = request.sets.kept;
-  sys->layout = MakeLayout(mesh, request.sets);
+  sys->movableNodes = request.sets.movable;
+  const bool quadratic = options.elementOrder == ElementOrder::Quadratic;
+  info.elementOrder = options.elementOrder;
+
+  // Quadratic elements: the TET10 mesh and the node sets extended to its mid-edge nodes.
+  QuadraticMesh qmesh;
+  NodeSets solverSets;
+  if (quadratic) {
+    qmesh = MakeQuadraticMesh(mesh, options.midEdgeProjection);
+    if (!qmesh.points.allFinite())
+      return Status::Error("the mid-edge projection returned non-finite coordinates");
+    solverSets = QuadraticNodeSets(qmesh, request.sets, sys->derivedMovable);
+  }
+  const NodeSets& sets = quadratic ? solverSets : request.sets;
+  sys->numMeshNodes = quadratic ? qmesh.points.rows() : mesh.numPoints();
+  info.solverNodes = sys->numMeshNodes;
+  {
+    std::vector<char> used(sys->numMeshNodes, 0);
+    if (quadratic) {
+      for (Eigen::Index k = 0; k < qmesh.cells.size(); ++k) used[qmesh.cells.data()[k]] = 1;
+    } else {
+      for (Eigen::Index k = 0; k < mesh.tets.size(); ++k) used[mesh.tets.data()[k]] = 1;
+    }
+    sys->layout = MakeLayout(used, sets);
+  }
   const NodeLayout& layout = sys->layout;
+  {
+    // Cells a kept-only solve can check for large strain: every corner kept or constrained.
+    std::vector<char> known(mesh.numPoints(), 0);
+    for (int i : request.sets.kept) known[i] = 1;
+    for (int i : request.sets.constrained) known[i] = 1;
+    for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
+      if (known[mesh.tets(e, 0)] && known[mesh.tets(e, 1)] && known[mesh.tets(e, 2)] && known[mesh.tets(e, 3)])
+        sys->checkableCells.push_back(static_cast<int>(e));
+  }
   t[Stage::Separation].ms = clock.lapMs();
   report(0.05, "separation");
   if (cancelled()) return Status::Error("cancelled");
 
   AssemblyPattern pattern =
-      BuildAssemblyPattern(mesh, layout.dofNode, static_cast<int>(layout.meshNode.size()));
+      quadratic ? BuildCellAssemblyPattern(qmesh.cells.data(), qmesh.cells.rows(), 10, layout.dofNode,
+                                           static_cast<int>(layout.meshNode.size()))
+                : BuildAssemblyPattern(mesh, layout.dofNode, static_cast<int>(layout.meshNode.size()));
   const double patternMs = clock.lapMs();
   std::shared_ptr<ComputeBackend> backend = options.backend ? options.backend : MakeCpuBackend();
   ComputeBackend::AssemblyTimings at;
   std::string error;
-  if (!backend->assembleStiffness(mesh, request.materials, pattern, at, error)) {
+  if (quadratic) {
+    // The backends implement 4-node cells; 10-node cells are computed and assembled on the CPU.
+    std::vector<double> packed;
+    std::vector<long long> invalid;
+    ComputePackedTet10Stiffness(qmesh, request.materials, packed, invalid, options.quadraticMeanDilatation);
+    if (!invalid.empty()) {
+      std::ostringstream msg;
+      msg << invalid.size() << " quadratic cells have a non-positive Jacobian after the mid-edge "
+          << "projection (first: cell " << invalid.front()
+          << "); the projection moves mid-edge nodes too far for these cells";
+      return Status::Error(msg.str());
+    }
+    at.elementStiffnessMs = clock.lapMs();
+    AssembleFromPacked(packed, pattern);
+    at.assemblyMs = clock.lapMs();
+  } else if (!backend->assembleStiffness(mesh, request.materials, pattern, at, error)) {
     status.warnings.push_back(backend->name() + " backend failed (" + error + "); used the CPU");
     backend = MakeCpuBackend();
     at = {};
@@ -223,10 +386,11 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
   sys->kfr.makeCompressed();
   { AssemblyPattern().upper.swap(pattern.upper); } // free the global pattern early
   pattern = AssemblyPattern();
-  sys->nodeMass = FreeNodeMass(mesh, request.materials, layout);
+  sys->nodeMass = quadratic ? FreeNodeMassQuadratic(qmesh, request.materials, layout)
+                            : FreeNodeMass(mesh, request.materials, layout);
+  qmesh = QuadraticMesh();
   t[Stage::Separation].ms += clock.lapMs();
 
-  SystemInfo& info = sys->info;
   info.backend = sys->backendName;
   info.freeDofs = freeDofs;
   info.keptDofs = 3LL * layout.keptFree;
@@ -234,8 +398,8 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
   info.interiorDofs = 3LL * layout.interior;
 
   if (freeDofs > 0) {
-    status = sys->factor.analyze(sys->kff);
-    if (!status) return status;
+    Status as = sys->factor.analyze(sys->kff); // (not into `status`: that would drop its warnings)
+    if (!as) return as;
     t[Stage::Reordering].ms = clock.lapMs();
     info.factorNonzeros = sys->factor.factorNonzeros();
     report(0.25, "reordering");
@@ -243,6 +407,8 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
     Status fs = sys->factor.factorize(sys->kff);
     if (!fs) return fs;
     t[Stage::Factorization].ms = clock.lapMs();
+    const double rcond = sys->factor.reciprocalConditionEstimate();
+    info.conditionEstimate = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
     report(0.6, "factorization");
   }
   sys->method = ChooseMethod(options, double(info.keptDofs), double(info.roiDofs),
@@ -259,10 +425,31 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
       status.warnings.push_back(backend->name() + " could not hold the response (" + error +
                                 "); edits run on the CPU");
       sys->responseOperator = MakeCpuBackend()->makeResponseOperator(sys->response, error);
+    } else if (options.backend) {
+      // A backend may hold the response in lower precision: probe it against the double response.
+      std::string probeError;
+      info.responseProbeError = ProbeResponseOperator(*sys, *sys->responseOperator, probeError);
+      std::ostringstream note;
+      note.precision(3);
+      if (!(info.responseProbeError <= options.responseTolerance)) {
+        note << backend->name() << " response operator deviates by " << info.responseProbeError
+             << " from the double response (tolerance " << options.responseTolerance
+             << (probeError.empty() ? "" : "; " + probeError)
+             << "): edits are redone in double precision on the CPU";
+        status.warnings.push_back(note.str());
+        sys->responseOperator = MakeCpuBackend()->makeResponseOperator(sys->response, error);
+        sys->responseRedoneInDouble = info.responseRedoneInDouble = true;
+        sys->precisionNote = note.str();
+      } else if (info.responseProbeError > 1e-13) {
+        note << backend->name() << " response operator deviates by " << info.responseProbeError
+             << " from the double response (within the tolerance " << options.responseTolerance << ")";
+        sys->precisionNote = note.str();
+      }
     }
     t[Stage::Condensation].ms = clock.lapMs();
   }
   t[Stage::Total].ms = total.elapsedMs();
+  info.warnings = status.warnings;
   report(1.0, "done");
   out = sys;
   return status;
@@ -295,8 +482,16 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
     result.timings.stages[s].reused = true;
   }
 
-  // Boundary condition: the ROI's prescribed displacements.
-  const Eigen::Index movable = static_cast<Eigen::Index>(layout.roiPosition.size());
+  result.conditionEstimate = sys.info.conditionEstimate;
+  result.elementOrder = sys.info.elementOrder;
+  result.redoneInDouble = sys.responseRedoneInDouble;
+  result.precisionNote = sys.precisionNote;
+  Status status = Status::Ok();
+
+  // Boundary condition: the ROI's prescribed displacements (and, for quadratic cells, the mean of
+  // their ends at mid-edge ROI nodes).
+  const Eigen::Index derived = static_cast<Eigen::Index>(sys.derivedMovable.size());
+  const Eigen::Index movable = static_cast<Eigen::Index>(layout.roiPosition.size()) - derived;
   if (input.movableDisplacement.rows() != movable)
     return Status::Error("expected " + std::to_string(movable) + " ROI displacements, got " +
                          std::to_string(input.movableDisplacement.rows()));
@@ -306,17 +501,26 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
   for (Eigen::Index k = 0; k < movable; ++k)
     if (layout.roiPosition[k] >= 0)
       roi.segment<3>(3 * layout.roiPosition[k]) = input.movableDisplacement.row(k).transpose();
+  for (Eigen::Index d = 0; d < derived; ++d) {
+    const int pos = layout.roiPosition[movable + d];
+    if (pos < 0) continue;
+    Eigen::Vector3d value = Eigen::Vector3d::Zero();
+    for (int end : sys.derivedMovable[d])
+      if (end >= 0) value += 0.5 * input.movableDisplacement.row(end).transpose();
+    roi.segment<3>(3 * pos) = value;
+  }
   result.timings[Stage::BoundaryCondition] = {clock.lapMs(), false};
 
   // Loads on the free DOFs.
   const int freeDofs = 3 * layout.freeNodes();
   Eigen::VectorXd load = Eigen::VectorXd::Zero(freeDofs);
   if (input.nodalLoads.size() > 0) {
-    if (input.nodalLoads.rows() != sys.numMeshNodes)
+    if (input.nodalLoads.rows() != sys.numOutputNodes)
       return Status::Error("nodal loads must have one row per mesh point");
     if (!input.nodalLoads.allFinite()) return Status::Error("nodal loads contain NaN values");
     for (int pos = 0; pos < layout.freeNodes(); ++pos)
-      load.segment<3>(3 * pos) = input.nodalLoads.row(layout.meshNode[pos]).transpose();
+      if (layout.meshNode[pos] < sys.numOutputNodes) // mid-edge nodes of quadratic cells get none
+        load.segment<3>(3 * pos) = input.nodalLoads.row(layout.meshNode[pos]).transpose();
   }
   if (!input.gravity.allFinite()) return Status::Error("gravity contains NaN values");
   if (input.gravity.squaredNorm() > 0.0)
@@ -339,10 +543,10 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
       std::lock_guard<std::mutex> lock(sys.loadMutex);
       if (sys.lastLoad.size() != load.size() || sys.lastLoad != load) {
         Eigen::MatrixXd x;
-        Status s = sys.factor.solve(load, x);
+        double residual = 0.0;
+        Status s = RefinedSolve(sys, load, x, false, sys.residualTolerance, sys.maxRefinementSteps,
+                                residual, result.refinementSteps);
         if (!s) return s;
-        const double residual =
-            (sys.kff.selfadjointView<Eigen::Upper>() * x - load).norm() / load.norm();
         sys.lastLoad = load;
         sys.lastLoadResponse = x.col(0);
         result.relativeResidual = std::max(result.relativeResidual, residual);
@@ -353,13 +557,10 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
     Eigen::VectorXd rhs = load;
     if (roi.size() > 0) rhs.noalias() -= sys.kfr * roi;
     Eigen::MatrixXd x;
-    Status s = sys.factor.solve(rhs, x);
+    Status s = RefinedSolve(sys, rhs, x, false, sys.residualTolerance, sys.maxRefinementSteps,
+                            result.relativeResidual, result.refinementSteps);
     if (!s) return s;
     freeValues = x.col(0);
-    const double rhsNorm = rhs.norm();
-    result.relativeResidual =
-        rhsNorm > 0.0 ? (sys.kff.selfadjointView<Eigen::Upper>() * freeValues - rhs).norm() / rhsNorm
-                      : freeValues.norm();
     keptFree = freeValues.head(3 * layout.keptFree);
   }
   result.timings[Stage::Solve] = {clock.lapMs(), false};
@@ -375,15 +576,42 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
   result.keptDisplacement.resize(static_cast<Eigen::Index>(sys.kept.size()), 3);
   for (size_t k = 0; k < sys.kept.size(); ++k) result.keptDisplacement.row(k) = valueOf(sys.kept[k], keptFree);
   if (input.recoverInterior) {
-    result.allDisplacement.resize(sys.numMeshNodes, 3);
-    for (Eigen::Index i = 0; i < sys.numMeshNodes; ++i)
+    result.allDisplacement.resize(sys.numOutputNodes, 3);
+    for (Eigen::Index i = 0; i < sys.numOutputNodes; ++i)
       result.allDisplacement.row(i) = valueOf(static_cast<int>(i), freeValues);
   }
   if (!result.keptDisplacement.allFinite() || !result.allDisplacement.allFinite() ||
       !std::isfinite(result.relativeResidual))
     return Status::Error("the solve produced non-finite values (ill-conditioned system?)");
+  if (result.relativeResidual > 1e3 * sys.residualTolerance) {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "relative residual " << result.relativeResidual << " after " << result.refinementSteps
+        << " refinement steps misses the tolerance " << sys.residualTolerance
+        << " (condition estimate " << result.conditionEstimate << ")";
+    status.warnings.push_back(msg.str());
+  }
+
+  // Large-strain and inversion check on the caller's linear cells: every cell when the interior
+  // was recovered, else the cells whose corners are all kept or constrained.
+  if (sys.strainWarningLimit > 0.0) {
+    DeformationReport deformation;
+    if (input.recoverInterior) {
+      deformation = CheckDeformation(sys.cornerMesh, result.allDisplacement, status.warnings,
+                                     sys.strainWarningLimit);
+    } else if (!sys.checkableCells.empty()) {
+      Displacements known = Displacements::Zero(sys.numOutputNodes, 3);
+      for (Eigen::Index k = 0; k < movable; ++k) known.row(sys.movableNodes[k]) = input.movableDisplacement.row(k);
+      for (size_t k = 0; k < sys.kept.size(); ++k) known.row(sys.kept[k]) = result.keptDisplacement.row(k);
+      deformation = CheckDeformation(sys.cornerMesh, known, status.warnings, sys.strainWarningLimit,
+                                     &sys.checkableCells);
+    }
+    result.largestStrain = deformation.largestStrain;
+    result.invertedCells = static_cast<long long>(deformation.invertedCells.size());
+  }
+  result.warnings = status.warnings;
   result.timings[Stage::Total] = {total.elapsedMs(), false};
-  return Status::Ok();
+  return status;
 }
 
 } // namespace
@@ -399,5 +627,45 @@ Status Solve(const CondensedSystem& system, const SolveInput& input, SolveResult
 }
 
 SystemInfo Describe(const CondensedSystem& system) { return system.info; }
+
+namespace {
+
+class FloatCpuResponse final : public ResponseOperator {
+public:
+  explicit FloatCpuResponse(const Eigen::MatrixXd& response) : response_(response.cast<float>()) {}
+  bool apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept, std::string& error) override {
+    if (response_.cols() != roi.size()) {
+      error = "ROI vector does not match the response";
+      return false;
+    }
+    const Eigen::VectorXf roiF = roi.cast<float>();
+    const Eigen::VectorXf keptF = response_ * roiF;
+    kept = keptF.cast<double>();
+    return true;
+  }
+
+private:
+  Eigen::MatrixXf response_;
+};
+
+class FloatCpuBackend final : public ComputeBackend {
+public:
+  std::string name() const override { return "CPU-float"; }
+  bool assembleStiffness(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
+                         AssemblyTimings& timings, std::string& error) override {
+    return cpu_->assembleStiffness(mesh, materials, pattern, timings, error);
+  }
+  std::unique_ptr<ResponseOperator> makeResponseOperator(const Eigen::MatrixXd& response,
+                                                         std::string&) override {
+    return std::make_unique<FloatCpuResponse>(response);
+  }
+
+private:
+  std::shared_ptr<ComputeBackend> cpu_ = MakeCpuBackend();
+};
+
+} // namespace
+
+std::shared_ptr<ComputeBackend> MakeFloatCpuBackend() { return std::make_shared<FloatCpuBackend>(); }
 
 } // namespace faceplan

@@ -7,6 +7,7 @@
 // typically the skin); interior (everything else, condensed out). Because only ROI DOFs ever carry
 // prescribed values, an edit needs nothing but the response of the kept DOFs to the ROI DOFs.
 #include "ComputeBackend.h"
+#include "QuadraticTet.h"
 #include "StageTimings.h"
 #include "Status.h"
 #include "TetMesh.h"
@@ -33,6 +34,15 @@ enum class SolveMethod {
 };
 const char* MethodName(SolveMethod method);
 
+// Element type. Linear 4-node tetrahedra lock (are too stiff) as the Poisson ratio approaches 0.5;
+// Quadratic converts the caller's linear mesh to 10-node tetrahedra internally (mid-edge nodes
+// follow their edge's end nodes into the node sets: constrained when both ends are, with the mean
+// of the ends' prescribed values; movable when both ends are constrained and one is movable;
+// otherwise interior) and reports results at the original corner nodes, so inputs and outputs keep
+// the linear mesh's numbering. See docs/STABILITY.md for when to use it and its cost.
+enum class ElementOrder { Linear, Quadratic };
+const char* ElementOrderName(ElementOrder order);
+
 struct PrecomputeOptions {
   SolveMethod method = SolveMethod::Auto;
   // Largest dense response Auto may build, in bytes.
@@ -41,6 +51,29 @@ struct PrecomputeOptions {
   std::shared_ptr<ComputeBackend> backend;
   // Columns of the response solved per block (bounds the precompute's transient memory).
   int responseBlockColumns = 256;
+
+  // ---- stability options (all optional; the defaults keep the original behaviour) ----
+  ElementOrder elementOrder = ElementOrder::Linear;
+  // Quadratic only: places the mid-edge node of a boundary edge (curved boundaries); empty keeps
+  // the straight midpoint. Called during the precompute, on the calling thread.
+  MidEdgeProjection midEdgeProjection;
+  // Quadratic only: integrate the volumetric term with the cell's mean dilatation (P2-P0 mixed
+  // element, exact and symmetric; see Tet10Stiffness). Off gives the plain fully integrated TET10,
+  // which still locks noticeably for nu >= 0.499.
+  bool quadraticMeanDilatation = true;
+  // Cells with mean-ratio quality below this give a warning (count and worst quality); 0 disables.
+  double sliverQualityThreshold = 0.02;
+  // Largest relative residual a solve accepts before it refines the solution in double precision
+  // (iterative refinement with the cached factor, up to maxRefinementSteps extra solves).
+  double residualTolerance = 1e-10;
+  int maxRefinementSteps = 3;
+  // A backend's per-edit response operator (which may compute in single precision) is probed
+  // against the double response after the precompute; when its relative deviation exceeds this,
+  // edits are redone in double on the CPU and the diagnostics say so.
+  double responseTolerance = 1e-9;
+  // Strain above which a solve warns that linear FEM is outside its range (0 disables the check,
+  // which also skips the inverted-cell check).
+  double strainWarningLimit = 0.1;
 };
 
 struct SolveInput {
@@ -60,6 +93,16 @@ struct SolveResult {
   SolveMethod method = SolveMethod::FullReference;
   std::string backend;
   StageTimings timings; // precompute stages marked reused, plus this solve's own stages
+
+  // ---- diagnostics added for stability (additive) ----
+  double conditionEstimate = 0.0; // 1 / CHOLMOD rcond of the free block (a cheap lower estimate)
+  int refinementSteps = 0;        // double-precision refinement steps this solve needed
+  bool redoneInDouble = false;    // a lower-precision response missed the tolerance; done in double
+  std::string precisionNote;      // how the per-edit product was computed when not plain double
+  double largestStrain = 0.0;     // over the cells the solve could check (see CheckDeformation)
+  long long invertedCells = 0;    // cells inverted in the deformed result
+  ElementOrder elementOrder = ElementOrder::Linear;
+  std::vector<std::string> warnings; // the same as the returned Status's warnings
 };
 
 // May be called from several worker threads at once (make it thread-safe, e.g. an atomic store).
@@ -97,7 +140,21 @@ struct SystemInfo {
   double responseBytes = 0.0;
   std::string choiceReason;
   StageTimings precomputeTimings;
+
+  // ---- diagnostics added for stability (additive) ----
+  double conditionEstimate = 0.0;  // 1 / CHOLMOD rcond of the free block (0 when there is none)
+  ElementOrder elementOrder = ElementOrder::Linear;
+  long long solverNodes = 0;       // nodes of the solved mesh (corners + mid-edge nodes if quadratic)
+  long long sliverCells = 0;       // cells below sliverQualityThreshold
+  double worstQuality = 1.0;       // smallest mean-ratio quality
+  double responseProbeError = 0.0; // relative deviation of the backend's response operator
+  bool responseRedoneInDouble = false;
+  std::vector<std::string> warnings; // the precompute's warnings
 };
 SystemInfo Describe(const CondensedSystem& system);
+
+// A CPU backend whose per-edit response operator stores and applies the response in single
+// precision (like a float GPU path). Used to test the precision fallback; assembly is in double.
+std::shared_ptr<ComputeBackend> MakeFloatCpuBackend();
 
 } // namespace faceplan

@@ -2,6 +2,9 @@
 
 #include "ElementStiffness.h"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -140,6 +143,186 @@ Status CheckEveryComponentConstrained(const TetMesh& mesh, const std::vector<int
         << count << ": " << cells << " cells, bounds [" << lo(0) << ", " << hi(0) << "] x [" << lo(1)
         << ", " << hi(1) << "] x [" << lo(2) << ", " << hi(2)
         << "]); tie it to bone or remove it, or its stiffness matrix is singular";
+    return Status::Error(out.str());
+  }
+  return Status::Ok();
+}
+
+double TetMeanRatio(const Eigen::Matrix<double, 4, 3>& c) {
+  const double v = std::abs(TetVolume(c));
+  double sum = 0.0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) sum += (c.row(i) - c.row(j)).squaredNorm();
+  if (!(sum > 0.0)) return 0.0;
+  return 12.0 * std::cbrt(3.0 * v * 3.0 * v) / sum;
+}
+
+std::string CheckElementQuality(const TetMesh& mesh, double threshold, QualityReport* out) {
+  QualityReport report;
+  std::vector<std::pair<double, long long>> low;
+  TetCorners corners;
+  for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
+    for (int k = 0; k < 4; ++k) corners.row(k) = mesh.points.row(mesh.tets(e, k));
+    const double q = TetMeanRatio(corners);
+    if (q < report.worstQuality) {
+      report.worstQuality = q;
+      report.worstCell = e;
+    }
+    if (q < threshold) low.push_back({q, e});
+  }
+  report.belowThreshold = static_cast<long long>(low.size());
+  const size_t shown = std::min<size_t>(low.size(), 10);
+  std::partial_sort(low.begin(), low.begin() + shown, low.end());
+  for (size_t k = 0; k < shown; ++k) report.worstIds.push_back(low[k].second);
+  std::string warning;
+  if (!low.empty()) {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << low.size() << " sliver tetrahedra with mean-ratio quality below " << threshold
+        << " (worst " << report.worstQuality << " in cell " << report.worstCell << "; worst cells "
+        << IdList(report.worstIds) << "); the solve is exact, but stresses there are unreliable";
+    warning = msg.str();
+  }
+  if (out) *out = report;
+  return warning;
+}
+
+DeformationReport CheckDeformation(const TetMesh& mesh,
+                                   const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& u,
+                                   std::vector<std::string>& warnings, double strainLimit,
+                                   const std::vector<int>* cells) {
+  DeformationReport report;
+  const Eigen::Index count = cells ? static_cast<Eigen::Index>(cells->size()) : mesh.numTets();
+  if (u.rows() < mesh.numPoints()) return report;
+  for (Eigen::Index k = 0; k < count; ++k) {
+    const Eigen::Index e = cells ? (*cells)[k] : k;
+    Eigen::Matrix3d edges, du;
+    for (int j = 0; j < 3; ++j) {
+      edges.col(j) = (mesh.points.row(mesh.tets(e, j + 1)) - mesh.points.row(mesh.tets(e, 0))).transpose();
+      du.col(j) = (u.row(mesh.tets(e, j + 1)) - u.row(mesh.tets(e, 0))).transpose();
+    }
+    if (!(edges.determinant() > 0.0)) continue;
+    const Eigen::Matrix3d grad = du * edges.inverse(); // d u_i / d x_j
+    const Eigen::Matrix3d strain = 0.5 * (grad + grad.transpose());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(strain, Eigen::EigenvaluesOnly);
+    const double largest = eig.eigenvalues().cwiseAbs().maxCoeff();
+    ++report.cellsChecked;
+    if (largest > report.largestStrain) {
+      report.largestStrain = largest;
+      report.largestStrainCell = e;
+    }
+    if (!((Eigen::Matrix3d::Identity() + grad).determinant() > 0.0)) report.invertedCells.push_back(e);
+  }
+  if (report.largestStrain > strainLimit) {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "largest strain " << 100.0 * report.largestStrain << "% (cell " << report.largestStrainCell
+        << ") exceeds " << 100.0 * strainLimit
+        << "%: linear FEM is outside its small-strain range, so the result is only qualitative";
+    warnings.push_back(msg.str());
+  }
+  if (!report.invertedCells.empty())
+    warnings.push_back(std::to_string(report.invertedCells.size()) +
+                       " tetrahedra are inverted in the deformed result (cells " +
+                       IdList(report.invertedCells) + "): the displacement is too large for linear FEM");
+  return report;
+}
+
+Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrained) {
+  const Eigen::Index n = mesh.numPoints(), m = mesh.numTets();
+  // Face-connected pieces: union cells that share a triangle.
+  std::vector<int> parent(m);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<std::pair<std::array<int, 3>, int>> faces(static_cast<size_t>(m) * 4);
+  for (Eigen::Index e = 0; e < m; ++e)
+    for (int k = 0; k < 4; ++k) {
+      std::array<int, 3> f;
+      for (int j = 0, t = 0; j < 4; ++j)
+        if (j != k) f[t++] = mesh.tets(e, j);
+      std::sort(f.begin(), f.end());
+      faces[e * 4 + k] = {f, static_cast<int>(e)};
+    }
+  std::sort(faces.begin(), faces.end());
+  for (size_t k = 1; k < faces.size(); ++k)
+    if (faces[k].first == faces[k - 1].first) {
+      const int a = FindRoot(parent, faces[k].second), b = FindRoot(parent, faces[k - 1].second);
+      if (a != b) parent[a] = b;
+    }
+  std::vector<int> pieceOf(m), label(m, -1);
+  int pieces = 0;
+  for (Eigen::Index e = 0; e < m; ++e) {
+    const int r = FindRoot(parent, static_cast<int>(e));
+    if (label[r] < 0) label[r] = pieces++;
+    pieceOf[e] = label[r];
+  }
+  if (pieces == 0) return Status::Ok();
+  std::vector<std::vector<int>> nodesOf(pieces);
+  for (Eigen::Index e = 0; e < m; ++e)
+    for (int k = 0; k < 4; ++k) nodesOf[pieceOf[e]].push_back(mesh.tets(e, k));
+  for (auto& v : nodesOf) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+  }
+  const double scale = (mesh.points.colwise().maxCoeff() - mesh.points.colwise().minCoeff()).norm();
+  // True when the held nodes among `nodes` include three non-collinear points.
+  std::vector<char> held(n, 0);
+  for (int i : constrained)
+    if (i >= 0 && i < n) held[i] = 1;
+  auto spans = [&](const std::vector<int>& nodes) {
+    int first = -1, second = -1;
+    double farthest = 0.0;
+    for (int i : nodes) {
+      if (!held[i]) continue;
+      if (first < 0) {
+        first = i;
+        continue;
+      }
+      const double d = (mesh.points.row(i) - mesh.points.row(first)).norm();
+      if (d > farthest) {
+        farthest = d;
+        second = i;
+      }
+    }
+    if (second < 0 || farthest <= 1e-9 * scale) return false;
+    const Eigen::RowVector3d axis = (mesh.points.row(second) - mesh.points.row(first)) / farthest;
+    for (int i : nodes) {
+      if (!held[i]) continue;
+      const Eigen::RowVector3d d = mesh.points.row(i) - mesh.points.row(first);
+      if ((d - d.dot(axis) * axis).norm() > 1e-6 * farthest) return true;
+    }
+    return false;
+  };
+  std::vector<char> pieceHeld(pieces, 0);
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int p = 0; p < pieces; ++p) {
+      if (pieceHeld[p] || !spans(nodesOf[p])) continue;
+      pieceHeld[p] = 1;
+      changed = true;
+      for (int i : nodesOf[p]) held[i] = 1; // a held piece holds the nodes it shares
+    }
+  }
+  for (int p = 0; p < pieces; ++p) {
+    if (pieceHeld[p]) continue;
+    long long cells = 0;
+    Eigen::RowVector3d lo = Eigen::RowVector3d::Constant(INFINITY), hi = -lo;
+    for (Eigen::Index e = 0; e < m; ++e) {
+      if (pieceOf[e] != p) continue;
+      ++cells;
+      for (int k = 0; k < 4; ++k) {
+        lo = lo.cwiseMin(mesh.points.row(mesh.tets(e, k)));
+        hi = hi.cwiseMax(mesh.points.row(mesh.tets(e, k)));
+      }
+    }
+    int heldNodes = 0;
+    for (int i : nodesOf[p]) heldNodes += held[i];
+    std::ostringstream out;
+    out << "a piece of the mesh can move rigidly (piece " << p << " of " << pieces
+        << " face-connected pieces: " << cells << " cells, bounds [" << lo(0) << ", " << hi(0)
+        << "] x [" << lo(1) << ", " << hi(1) << "] x [" << lo(2) << ", " << hi(2) << "]); it is held by "
+        << heldNodes << " node(s) that are constrained or shared with held tissue, which do not span "
+        << "a plane (it hangs on a node or an edge); tie it to bone or remove it, or its stiffness "
+        << "matrix is singular";
     return Status::Error(out.str());
   }
   return Status::Ok();
