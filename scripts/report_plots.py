@@ -104,7 +104,9 @@ def figure(rows, scenes, total, path):
     n = len(scenes)
     cols = 3 if n > 4 else n
     nrows = math.ceil(n / cols)
-    fig, axes = plt.subplots(nrows, cols, figsize=(5.2 * cols, 4.0 * nrows + 1.2), squeeze=False)
+    width = max(5.2 * cols, 10.0)
+    ncol = 4 if width >= 12 else 3
+    fig, axes = plt.subplots(nrows, cols, figsize=(width, 4.0 * nrows + 1.2), squeeze=False)
     for i, s in enumerate(scenes):
         ax = axes[i // cols][i % cols]
         sr = [r for r in rows if r["scene"] == s]
@@ -122,10 +124,12 @@ def figure(rows, scenes, total, path):
             if l not in handles:
                 handles[l] = h
                 labels.append(l)
-    fig.legend([handles[l] for l in labels], labels, loc="lower center", ncol=4, fontsize=7, frameon=False)
-    fig.suptitle("FacePlan: relative error against " + ("precompute + one edit" if total else "per-edit")
-                 + " run time (0 drawn at 1e-17; dotted: 1e-16)", fontsize=11)
-    fig.tight_layout(rect=(0, 0.04 + 0.02 * math.ceil(len(labels) / 4), 1, 0.97))
+    fig.legend([handles[l] for l in labels], labels, loc="lower center", ncol=ncol, fontsize=7, frameon=False)
+    fig.suptitle("Relative error against " + ("precompute + one edit" if total else "per-edit")
+                 + " run time (0 drawn at 1e-17; dotted: 1e-16)", fontsize=10)
+    height = 4.0 * nrows + 1.2
+    legend_in = 0.16 * math.ceil(len(labels) / ncol) + 0.25
+    fig.tight_layout(rect=(0, legend_in / height, 1, 1 - 0.45 / height))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
