@@ -59,7 +59,8 @@ bool SameRequest(const PrecomputeRequest& a, const PrecomputeRequest& b) {
          a.materials.density.size() == b.materials.density.size() &&
          a.materials.density == b.materials.density && a.sets.constrained == b.sets.constrained &&
          a.sets.movable == b.sets.movable && a.sets.kept == b.sets.kept &&
-         a.options.method == b.options.method && a.options.backend == b.options.backend;
+         a.options.method == b.options.method && a.options.backend == b.options.backend &&
+         a.options.elementOrder == b.options.elementOrder;
 }
 
 void AddScalar(vtkFieldData* fd, const char* name, double value) {
@@ -258,9 +259,13 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   // Auto lets Core pick the cheapest exact cached path; Condensed forces the explicit condensed
   // (dense kept-by-ROI) response, the paper's method.
   if (this->Method == METHOD_CONDENSED) request.options.method = faceplan::SolveMethod::DenseResponse;
+  const bool quadratic = this->ElementOrder == QUADRATIC_ELEMENTS;
+  if (quadratic) request.options.elementOrder = faceplan::ElementOrder::Quadratic;
 
   // ---- backend --------------------------------------------------------------------------------
   std::vector<std::string> notes;
+  if (quadratic && this->Method == METHOD_FULL_REFERENCE)
+    notes.push_back("the FullReference method supports linear elements only: solved with linear elements");
   if (this->Backend != BACKEND_CPU) {
     if (!cache.cudaProbed) {
       cache.cudaProbed = true;
@@ -334,6 +339,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
     vtkErrorMacro(<< status.message);
     return 1;
   }
+  for (const auto& w : status.warnings) notes.push_back(w); // the solve's (large strain, inversion)
   for (const auto& w : notes) vtkWarningMacro(<< w);
   this->UpdateProgress(0.95);
 
@@ -341,7 +347,18 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   if (this->Verify) {
     faceplan::SolveResult reference;
     faceplan::SolveInput verifyInput = input;
-    faceplan::Status vs = faceplan::SolveFullReference(request, verifyInput, reference);
+    faceplan::Status vs;
+    if (quadratic && this->Method != METHOD_FULL_REFERENCE) {
+      // The reference solve is linear: verify a quadratic result against a fresh, uncached
+      // quadratic cached-factor solve instead.
+      PrecomputeRequest fresh = request;
+      fresh.options.method = faceplan::SolveMethod::CachedFactor;
+      std::shared_ptr<const faceplan::CondensedSystem> freshSystem;
+      vs = faceplan::Precompute(fresh, freshSystem);
+      if (vs) vs = faceplan::Solve(*freshSystem, verifyInput, reference);
+    } else {
+      vs = faceplan::SolveFullReference(request, verifyInput, reference);
+    }
     if (!vs) {
       vtkErrorMacro("verification solve failed: " << vs.message);
       return 1;
@@ -402,6 +419,12 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   AddString(fd, "Method", faceplan::MethodName(result.method));
   AddString(fd, "Backend", result.backend);
   if (this->Verify) AddScalar(fd, "VerifyMaxRelativeError", verifyError);
+  AddScalar(fd, "ConditionEstimate", result.conditionEstimate);
+  AddScalar(fd, "LargestStrain", result.largestStrain);
+  AddScalar(fd, "InvertedCells", static_cast<double>(result.invertedCells));
+  AddString(fd, "ElementOrder", faceplan::ElementOrderName(
+                                    this->Method == METHOD_FULL_REFERENCE ? faceplan::ElementOrder::Linear
+                                                                          : request.options.elementOrder));
   output->SetFieldData(fd);
 
   // Stage table, like the paper's Table 2.
@@ -433,5 +456,6 @@ void vtkCondensedFEMDeform::PrintSelf(ostream& os, vtkIndent indent) {
      << indent << "ContactDistance: " << this->ContactDistance << "\n"
      << indent << "OutputMode: " << this->OutputMode << "\n"
      << indent << "Backend: " << this->Backend << "\n"
-     << indent << "Method: " << this->Method << "\n";
+     << indent << "Method: " << this->Method << "\n"
+     << indent << "ElementOrder: " << this->ElementOrder << "\n";
 }

@@ -13,7 +13,9 @@
  * Output port 0: the deformed tissue (Volume mode: every tetrahedron; Surface mode: the tissue's
  * boundary triangles only, and interior displacements are never computed) with point array
  * `Displacement` and field data `RelativeResidual`, `SolveTimeMs`, `PrecomputeTimeMs`, `Method`,
- * `Backend` (and `VerifyMaxRelativeError` with Verify on).
+ * `Backend` (and `VerifyMaxRelativeError` with Verify on), `ConditionEstimate`, `ElementOrder`,
+ * `LargestStrain` and `InvertedCells`. Precompute and solve warnings (slivers, strain above 10%,
+ * cells inverted by the displacement, single-precision fallback) are reported with vtkWarningMacro.
  * Output port 1: a vtkTable of stage timings (columns `Stage`, `TimeMs`, `Reused`, `Backend`).
  *
  * The precompute (assembly, ordering, factorization, condensation) runs on a worker thread and is
@@ -38,6 +40,7 @@ public:
   enum OutputModes { VOLUME = 0, SURFACE = 1 };
   enum Backends { BACKEND_AUTO = 0, BACKEND_CPU = 1, BACKEND_CUDA = 2 };
   enum Methods { METHOD_AUTO = 0, METHOD_CONDENSED = 1, METHOD_FULL_REFERENCE = 2 };
+  enum ElementOrders { LINEAR_ELEMENTS = 1, QUADRATIC_ELEMENTS = 2 };
 
   /// Connects the bone surface (port 1).
   void SetBoneConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
@@ -86,6 +89,15 @@ public:
   vtkGetMacro(Method, int);
 
   ///@{
+  /// Element order: LINEAR_ELEMENTS (1, 4-node tetrahedra, the default) or QUADRATIC_ELEMENTS (2):
+  /// Core converts the tissue to 10-node tetrahedra with mean dilatation, which do not lock for
+  /// nearly incompressible tissue (Poisson ratio >= 0.49); outputs stay at the input's points.
+  /// FullReference is linear only (a quadratic request then runs linear, with a warning).
+  vtkSetClampMacro(ElementOrder, int, LINEAR_ELEMENTS, QUADRATIC_ELEMENTS);
+  vtkGetMacro(ElementOrder, int);
+  ///@}
+
+  ///@{
   /// Also run the reference full solve and report the largest relative difference to it.
   vtkSetMacro(Verify, bool);
   vtkGetMacro(Verify, bool);
@@ -113,6 +125,7 @@ protected:
   int Backend = BACKEND_AUTO;
   int Method = METHOD_AUTO;
   bool Verify = false;
+  int ElementOrder = LINEAR_ELEMENTS;
   int PrecomputeCount = 0;
 
 private:
