@@ -1,13 +1,18 @@
 #include "CholmodFactor.h"
 
+#include "BlasThreads.h"
+
+#include <algorithm>
 #include <cholmod.h>
 #include <string>
+#include <thread>
 
 namespace faceplan {
 
 struct CholmodFactor::Impl {
   mutable cholmod_common common;
   cholmod_factor* factor = nullptr;
+  bool numeric = false; // factor holds numeric values (factorize or markFactorized)
   mutable std::mutex mutex;
   // Solve workspaces reused across solves, so a per-edit solve allocates nothing.
   mutable cholmod_dense* x = nullptr;
@@ -79,6 +84,7 @@ Status CholmodFactor::analyze(const SparseMatrix& upper) {
   if (!upper.isCompressed()) return Status::Error("internal: matrix not compressed");
   cholmod_sparse view = ViewUpper(upper);
   cholmod_free_factor(&impl_->factor, &impl_->common);
+  impl_->numeric = false;
   impl_->factor = cholmod_analyze(&view, &impl_->common);
   if (!impl_->factor || impl_->common.status < CHOLMOD_OK)
     return Status::Error("CHOLMOD ordering failed (status " + std::to_string(impl_->common.status) +
@@ -90,6 +96,13 @@ Status CholmodFactor::factorize(const SparseMatrix& upper) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   if (!impl_->factor) return Status::Error("internal: factorize before analyze");
   cholmod_sparse view = ViewUpper(upper);
+  impl_->numeric = false;
+  // At most 8 OpenBLAS threads for the supernodal BLAS calls: on the 16-core GPU machine OpenBLAS
+  // with all 16 threads made this factorization 20x slower than with 8 (BENCHMARKS.md, GPU section:
+  // 14.1 s against 0.72 s at 100k tetrahedra, 127 s against 21.6 s at 1M), and fewer threads lose
+  // little elsewhere. A no-op when the BLAS is not OpenBLAS.
+  const int blasThreads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
+  ScopedBlasThreads cappedBlas(blasThreads);
   const int ok = cholmod_factorize(&view, impl_->factor, &impl_->common);
   if (!ok || impl_->common.status == CHOLMOD_OUT_OF_MEMORY)
     return Status::Error("CHOLMOD factorization ran out of memory");
@@ -98,12 +111,13 @@ Status CholmodFactor::factorize(const SparseMatrix& upper) {
                          std::to_string(impl_->factor->minor) +
                          "): a part of the mesh is not held by any constrained node, or an "
                          "element is degenerate");
+  impl_->numeric = true;
   return Status::Ok();
 }
 
 Status CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
-  if (!impl_->factor) return Status::Error("internal: solve before factorize");
+  if (!impl_->factor || !impl_->numeric) return Status::Error("internal: solve before factorize");
   if (static_cast<size_t>(b.rows()) != impl_->factor->n)
     return Status::Error("internal: right-hand side has the wrong size");
   cholmod_dense rhs = ViewDense(b);
@@ -115,7 +129,7 @@ Status CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const 
 }
 
 Status CholmodFactor::solveConcurrently(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
-  if (!impl_->factor) return Status::Error("internal: solve before factorize");
+  if (!impl_->factor || !impl_->numeric) return Status::Error("internal: solve before factorize");
   if (static_cast<size_t>(b.rows()) != impl_->factor->n)
     return Status::Error("internal: right-hand side has the wrong size");
   cholmod_common common;
@@ -132,6 +146,24 @@ Status CholmodFactor::solveConcurrently(const Eigen::MatrixXd& b, Eigen::MatrixX
   return status;
 }
 
+bool CholmodFactor::isFactorized() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->factor && impl_->numeric;
+}
+
+cholmod_factor* CholmodFactor::cholmodFactor() { return impl_->factor; }
+cholmod_common* CholmodFactor::cholmodCommon() { return &impl_->common; }
+
+Status CholmodFactor::markFactorized() {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  const cholmod_factor* L = impl_->factor;
+  if (!L) return Status::Error("internal: markFactorized before analyze");
+  if (L->xtype != CHOLMOD_REAL || !L->x || !L->is_ll || L->minor < L->n)
+    return Status::Error("internal: markFactorized on a factor without numeric LL^T values");
+  impl_->numeric = true;
+  return Status::Ok();
+}
+
 double CholmodFactor::factorNonzeros() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   return impl_->common.lnz;
@@ -139,7 +171,7 @@ double CholmodFactor::factorNonzeros() const {
 
 double CholmodFactor::reciprocalConditionEstimate() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
-  return impl_->factor ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
+  return impl_->factor && impl_->numeric ? cholmod_rcond(impl_->factor, &impl_->common) : 0.0;
 }
 
 } // namespace faceplan

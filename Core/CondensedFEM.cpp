@@ -408,23 +408,67 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
     info.factorNonzeros = sys->factor.factorNonzeros();
     report(0.25, "reordering");
     if (cancelled()) return Status::Error("cancelled");
-    Status fs = sys->factor.factorize(sys->kff);
-    if (!fs) return fs;
-    t[Stage::Factorization].ms = clock.lapMs();
-    const double rcond = sys->factor.reciprocalConditionEstimate();
-    info.conditionEstimate = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
-    report(0.6, "factorization");
   }
+  // The method needs only the analysis (the factor's size), so it is chosen before the numeric
+  // factorization, which a backend may then do together with the response.
   sys->method = ChooseMethod(options, double(info.keptDofs), double(info.roiDofs),
                              info.factorNonzeros, info.choiceReason);
   if (freeDofs == 0) sys->method = SolveMethod::CachedFactor;
   info.method = sys->method;
 
+  // Backend factorization + response (CUDA: numeric factorization and dense response on the GPU).
+  // Whatever it does not deliver is done on the CPU below, with a warning.
+  bool backendResponse = false;
+  std::unique_ptr<ResponseOperator> backendOperator;
+  if (freeDofs > 0 && sys->method == SolveMethod::DenseResponse && backend->providesFactorAndResponse()) {
+    ComputeBackend::FactorResponseReport fr;
+    std::string hookError;
+    bool ok = backend->factorAndBuildResponse(sys->kff, sys->kfr, 3 * layout.keptFree, sys->factor,
+                                              sys->response, backendOperator, fr, hookError);
+    const bool factored = sys->factor.isFactorized();
+    if (ok && !(fr.worstRelativeResidual <= sys->residualTolerance)) {
+      std::ostringstream why;
+      why << "its response's relative residual " << fr.worstRelativeResidual << " exceeds "
+          << sys->residualTolerance;
+      hookError = why.str();
+      ok = false;
+    }
+    const double hookMs = clock.lapMs();
+    const double factorMs = factored ? std::min(fr.factorizationMs, hookMs) : hookMs;
+    t[Stage::Factorization].ms += factorMs;
+    t[Stage::Condensation].ms += hookMs - factorMs;
+    if (ok && factored && sys->response.rows() == info.keptDofs && sys->response.cols() == info.roiDofs) {
+      backendResponse = true;
+      sys->responseResidual = fr.worstRelativeResidual;
+      report(0.95, "dense response");
+    } else {
+      if (ok) hookError = "internal: the response or the factor is missing";
+      status.warnings.push_back(backend->name() + " factorization/response failed (" + hookError + "); " +
+                                (factored ? "the response was built" : "factorized and built the response") +
+                                " on the CPU");
+      sys->response.resize(0, 0);
+      backendOperator.reset();
+    }
+  }
+  if (freeDofs > 0) {
+    if (!sys->factor.isFactorized()) {
+      Status fs = sys->factor.factorize(sys->kff);
+      if (!fs) return fs;
+      t[Stage::Factorization].ms += clock.lapMs();
+    }
+    const double rcond = sys->factor.reciprocalConditionEstimate();
+    info.conditionEstimate = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
+    if (!backendResponse) report(0.6, "factorization");
+  }
+
   if (sys->method == SolveMethod::DenseResponse) {
-    Status rs = BuildResponse(*sys, options, cancel, progress);
-    if (!rs) return rs;
+    if (!backendResponse) {
+      Status rs = BuildResponse(*sys, options, cancel, progress);
+      if (!rs) return rs;
+    }
     info.responseBytes = 8.0 * double(sys->response.size());
-    sys->responseOperator = backend->makeResponseOperator(sys->response, error);
+    sys->responseOperator = backendOperator ? std::move(backendOperator)
+                                            : backend->makeResponseOperator(sys->response, error);
     if (!sys->responseOperator) {
       status.warnings.push_back(backend->name() + " could not hold the response (" + error +
                                 "); edits run on the CPU");
@@ -450,7 +494,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
         sys->precisionNote = note.str();
       }
     }
-    t[Stage::Condensation].ms = clock.lapMs();
+    t[Stage::Condensation].ms += clock.lapMs();
   }
   t[Stage::Total].ms = total.elapsedMs();
   info.warnings = status.warnings;

@@ -1,6 +1,7 @@
 #include "CudaBackend.h"
 
 #include "CudaCheck.h"
+#include "CudaDenseResponse.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
 #include "ElementStiffness.h"
@@ -99,6 +100,35 @@ public:
     auto op = std::make_unique<CudaResponse>();
     if (!op->init(response, error)) return nullptr;
     return op;
+  }
+
+  // Numeric factorization and dense response on the GPU (CudaDenseResponse.h). Not under mutex_:
+  // it uses its own stream and handles, and assemblies may run meanwhile.
+  bool providesFactorAndResponse() const override { return true; }
+  bool factorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr, Eigen::Index keptDofs,
+                              CholmodFactor& factor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
+                              FactorResponseReport& report, std::string& error) override {
+    FactorAndResponseDetail detail;
+    const bool ok = FactorAndBuildResponse(kffUpper, kfr, keptDofs, factor, response, op, detail, error);
+    report.factorizationMs = detail.factorizeMs + detail.factorDownloadMs;
+    report.worstRelativeResidual = detail.response.worstRelativeResidual;
+    std::ostringstream line;
+    line.precision(3);
+    line << "GPU numeric factorization " << detail.factorizeMs << " ms (+ " << detail.factorDownloadMs
+         << " ms copy into CHOLMOD), GPU response " << detail.response.wallMs << " ms ("
+         << detail.response.supernodes << " supernodes, " << detail.response.blocks << " pass(es), residual "
+         << detail.response.worstRelativeResidual << ")";
+    report.detail = line.str();
+    std::lock_guard<std::mutex> lock(factorMutex_);
+    detail.succeeded = ok;
+    detail.call = ++factorCalls_;
+    lastFactor_ = detail;
+    return ok;
+  }
+  bool lastFactorDetail(FactorAndResponseDetail& detail) const {
+    std::lock_guard<std::mutex> lock(factorMutex_);
+    detail = lastFactor_;
+    return factorCalls_ > 0;
   }
 
   AssemblyDetail lastDetail() const {
@@ -312,6 +342,9 @@ private:
   PinnedArray stageIn_, stageOut_;
   bool pinnedTransfers_ = true;
   AssemblyDetail last_;
+  mutable std::mutex factorMutex_;
+  FactorAndResponseDetail lastFactor_;
+  long long factorCalls_ = 0;
 };
 
 } // namespace
@@ -489,6 +522,11 @@ bool LastAssemblyDetail(const ComputeBackend& backend, AssemblyDetail& detail) {
   if (!impl) return false;
   detail = impl->lastDetail();
   return true;
+}
+
+bool LastFactorAndResponseDetail(const ComputeBackend& backend, FactorAndResponseDetail& detail) {
+  const auto* impl = dynamic_cast<const CudaBackendImpl*>(&backend);
+  return impl && impl->lastFactorDetail(detail);
 }
 
 void ReleasePatternCache(ComputeBackend& backend) {

@@ -152,11 +152,29 @@ bool SupernodalCholesky::factorOnGpu(const SparseMatrix& upper, std::string& err
   StageClock clock;
   impl_->factor = cholmod_analyze(&view, &impl_->common);
   impl_->analyzeMs = clock.lapMs();
-  cholmod_factor* L = impl_->factor;
-  if (!L || impl_->common.status < CHOLMOD_OK) {
+  if (!impl_->factor || impl_->common.status < CHOLMOD_OK) {
     error = "CHOLMOD ordering failed (status " + std::to_string(impl_->common.status) + ")";
     return false;
   }
+  if (!detail::FactorAnalysedOnGpu(upper, impl_->factor, &impl_->common, impl_->deviceX, hostCopy,
+                                   impl_->factorizeMs, impl_->downloadMs, error))
+    return false;
+  impl_->hostNumeric = hostCopy;
+  return true;
+}
+
+namespace detail {
+
+bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common, DeviceArray& deviceX,
+                         bool hostCopy, double& factorizeMs, double& downloadMs, std::string& error) {
+  factorizeMs = downloadMs = 0.0;
+  if (!upper.isCompressed() || upper.rows() != upper.cols() || !L || !common ||
+      L->n != static_cast<size_t>(upper.rows())) {
+    error = "GPU factorization: the matrix must be square, compressed and match the analysis";
+    return false;
+  }
+  if (!InitDevice(error)) return false;
+  StageClock clock;
   if (!L->is_super || L->itype != CHOLMOD_INT) {
     error = "CHOLMOD's analysis is not supernodal with 32-bit indices";
     return false;
@@ -197,25 +215,25 @@ bool SupernodalCholesky::factorOnGpu(const SparseMatrix& upper, std::string& err
       !Upload(dRow, upper.innerIndexPtr(), static_cast<size_t>(upper.nonZeros()), r.stream, error) ||
       !Upload(dVal, upper.valuePtr(), static_cast<size_t>(upper.nonZeros()), r.stream, error))
     return false;
-  if (!impl_->deviceX.ensure(sizeof(double) * std::max<size_t>(xsize, 1), error) ||
+  if (!deviceX.ensure(sizeof(double) * std::max<size_t>(xsize, 1), error) ||
       !dC.ensure(sizeof(double) * static_cast<size_t>(maxUpdate), error) ||
       !dInfo.ensure(sizeof(int) * std::max(nsuper, 1), error))
     return false;
   int lwork = 0;
-  FP_CUSOLVER_TRY(cusolverDnDpotrf_bufferSize(r.solver, CUBLAS_FILL_MODE_LOWER, maxCol, impl_->deviceX.as<double>(),
+  FP_CUSOLVER_TRY(cusolverDnDpotrf_bufferSize(r.solver, CUBLAS_FILL_MODE_LOWER, maxCol, deviceX.as<double>(),
                                               maxRow, &lwork));
   if (!dWork.ensure(sizeof(double) * (2 * static_cast<size_t>(std::max(lwork, 1)) + 256), error)) return false;
-  double* Lx = impl_->deviceX.as<double>();
+  double* Lx = deviceX.as<double>();
   FP_CUDA_TRY(cudaMemsetAsync(Lx, 0, sizeof(double) * xsize, r.stream));
   FP_CUDA_TRY(cudaMemsetAsync(dInfo.as<int>(), 0, sizeof(int) * std::max(nsuper, 1), r.stream));
-  detail::SupernodalStructure st;
+  SupernodalStructure st;
   st.super = dSuper.as<int>();
   st.pi = dPi.as<int>();
   st.px = dPx.as<std::int64_t>();
   st.s = dS.as<int>();
   st.colSuper = dColSuper.as<int>();
-  FP_CUDA_TRY(detail::LaunchAssembleSupernodal(dStart.as<int>(), dRow.as<int>(), dVal.as<double>(), n, dPinv.as<int>(),
-                                               st, Lx, r.stream));
+  FP_CUDA_TRY(LaunchAssembleSupernodal(dStart.as<int>(), dRow.as<int>(), dVal.as<double>(), n, dPinv.as<int>(), st,
+                                       Lx, r.stream));
   const double one = 1.0, zero = 0.0;
   for (int t = 0; t < nsuper; ++t) {
     const int nscol = super[t + 1] - super[t], nsrow = pi[t + 1] - pi[t], off = nsrow - nscol;
@@ -227,33 +245,34 @@ bool SupernodalCholesky::factorOnGpu(const SparseMatrix& upper, std::string& err
                                 off, nscol, &one, block, nsrow, block + nscol, nsrow));
       FP_CUBLAS_TRY(cublasDsyrk(r.blas, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N, off, nscol, &one, block + nscol, nsrow,
                                 &zero, dC.as<double>(), off));
-      FP_CUDA_TRY(detail::LaunchScatterUpdate(dC.as<double>(), off, dS.as<int>() + pi[t] + nscol, st, Lx, r.stream));
+      FP_CUDA_TRY(LaunchScatterUpdate(dC.as<double>(), off, dS.as<int>() + pi[t] + nscol, st, Lx, r.stream));
     }
   }
   std::vector<int> info(std::max(nsuper, 1));
   FP_CUDA_TRY(cudaMemcpyAsync(info.data(), dInfo.as<int>(), sizeof(int) * info.size(), cudaMemcpyDeviceToHost,
                               r.stream));
   FP_CUDA_TRY(cudaStreamSynchronize(r.stream));
-  impl_->factorizeMs = clock.lapMs();
+  factorizeMs = clock.lapMs();
   for (int t = 0; t < nsuper; ++t)
     if (info[t] != 0) {
-      impl_->deviceX.release();
+      deviceX.release();
       error = "matrix is not positive definite (GPU factorization stopped at column " +
               std::to_string(super[t] + std::abs(info[t]) - 1) + ")";
       return false;
     }
   if (hostCopy) {
-    if (!cholmod_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, L, &impl_->common) || !L->x || L->xsize != xsize) {
+    if (!cholmod_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, L, common) || !L->x || L->xsize != xsize) {
       error = "CHOLMOD could not allocate the numeric factor";
       return false;
     }
-    if (!detail::DownloadLarge(L->x, Lx, sizeof(double) * xsize, r.stream, error)) return false;
+    if (!DownloadLarge(L->x, Lx, sizeof(double) * xsize, r.stream, error)) return false;
     L->minor = L->n;
-    impl_->hostNumeric = true;
-    impl_->downloadMs = clock.lapMs();
+    downloadMs = clock.lapMs();
   }
   return true;
 }
+
+} // namespace detail
 
 void SupernodalCholesky::releaseDevice() { impl_->deviceX.release(); }
 
@@ -603,6 +622,42 @@ bool BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix* 
   detail = DenseResponseDetail{};
   StageClock clock;
   const bool ok = Build(factor, kffUpper, kfr, keptRows, responseHost, op, detail, error, maxColumnsPerPass);
+  detail.wallMs = clock.elapsedMs();
+  return ok;
+}
+
+bool FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr, Eigen::Index keptDofs,
+                            CholmodFactor& factor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
+                            FactorAndResponseDetail& detail, std::string& error) {
+  detail = FactorAndResponseDetail{};
+  StageClock clock;
+  cholmod_factor* L = factor.cholmodFactor();
+  if (!L) {
+    error = "FactorAndBuildResponse: the factor has not been analysed";
+    return false;
+  }
+  detail.factorNonzeros = factor.factorNonzeros();
+  DeviceArray deviceX;
+  if (!detail::FactorAnalysedOnGpu(kffUpper, L, factor.cholmodCommon(), deviceX, true, detail.factorizeMs,
+                                   detail.factorDownloadMs, error))
+    return false;
+  const Status marked = factor.markFactorized();
+  if (!marked) {
+    error = marked.message;
+    return false;
+  }
+  SupernodalFactorView view;
+  view.n = static_cast<int>(L->n);
+  view.nsuper = static_cast<int>(L->nsuper);
+  view.super = static_cast<const int*>(L->super);
+  view.pi = static_cast<const int*>(L->pi);
+  view.px = static_cast<const int*>(L->px);
+  view.s = static_cast<const int*>(L->s);
+  view.x = static_cast<const double*>(L->x);
+  view.perm = static_cast<const int*>(L->Perm);
+  view.deviceX = deviceX.as<double>();
+  const bool ok = BuildDenseResponse(view, &kffUpper, kfr, keptDofs, &response, &op, detail.response, error);
+  deviceX.release();
   detail.wallMs = clock.elapsedMs();
   return ok;
 }

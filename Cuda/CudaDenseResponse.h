@@ -10,8 +10,10 @@
 // ||K_FF x - b|| / ||b|| of every column is checked on the GPU with cuSPARSE SpMM, and the
 // response can stay on the GPU as the per-edit operator (no second upload).
 //
-// The factorization itself is CHOLMOD's on the CPU (SupernodalCholesky below, same settings as
-// Core's CholmodFactor), until Core exposes its own factor's supernodal arrays.
+// The numeric factorization runs on the GPU too (FactorAndBuildResponse below, on Core's own
+// CholmodFactor after its CPU analysis; that is what Precompute() uses with the CUDA backend), or
+// on the CPU with CHOLMOD (SupernodalCholesky::factor, for comparisons).
+#include "CholmodFactor.h"
 #include "ComputeBackend.h"
 #include "StiffnessAssembly.h"
 
@@ -90,5 +92,28 @@ bool BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix* 
                         const SparseMatrix& kfr, Eigen::Index keptRows, Eigen::MatrixXd* responseHost,
                         std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail,
                         std::string& error, int maxColumnsPerPass = 0);
+
+// The CUDA backend's ComputeBackend::factorAndBuildResponse (what Precompute() runs for
+// DenseResponse with the CUDA backend): numeric factorization of `factor` (after
+// factor.analyze(kffUpper), CHOLMOD's ordering and symbolic analysis on the CPU) on the GPU, copied
+// into `factor` for CPU solves (factor.markFactorized()); then BuildDenseResponse from the factor
+// still on the GPU, with the residual check, the response copied to the host and kept on the GPU
+// as `op`. The device copy of the factor is freed before returning.
+struct FactorAndResponseDetail {
+  double factorizeMs = 0.0;      // GPU numeric factorization (uploads of the structure and K_FF included)
+  double factorDownloadMs = 0.0; // the factor copied into the CHOLMOD factor
+  DenseResponseDetail response;
+  double wallMs = 0.0;           // the whole call
+  double factorNonzeros = 0.0;
+  bool succeeded = false;
+  long long call = 0; // the backend's count of factorAndBuildResponse calls, this one included
+};
+bool FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr, Eigen::Index keptDofs,
+                            CholmodFactor& factor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
+                            FactorAndResponseDetail& detail, std::string& error);
+
+// The detail of the most recent factorAndBuildResponse call of a backend made by MakeCudaBackend
+// (see `succeeded` and `call`); false when it has had none or `backend` is not a CUDA backend.
+bool LastFactorAndResponseDetail(const ComputeBackend& backend, FactorAndResponseDetail& detail);
 
 } // namespace faceplan::cuda

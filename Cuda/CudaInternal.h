@@ -14,6 +14,9 @@
 #include <string>
 #include <utility>
 
+struct cholmod_factor_struct;
+struct cholmod_common_struct;
+
 namespace faceplan::cuda::detail {
 
 // Device memory that frees itself; grows on demand, never shrinks until release().
@@ -202,5 +205,15 @@ private:
 
 // Checks the device once (driver, presence, kernel image); used by every entry point.
 bool InitDevice(std::string& error);
+
+// Numeric supernodal LL^T factorization on the GPU of `upper` (upper triangle, the matrix that
+// `L` was analysed for by cholmod_analyze with `common`): right-looking per supernode (cuSOLVER
+// DPOTRF, cuBLAS DTRSM + DSYRK, updates scattered into the ancestors). The values stay in
+// `deviceX` (CHOLMOD's supernodal layout); with `hostCopy` they are also written into L (made
+// numeric with cholmod_change_factor), so CPU solves work as after cholmod_factorize.
+// Defined in CudaDenseResponse.cpp.
+bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor_struct* L, cholmod_common_struct* common,
+                         DeviceArray& deviceX, bool hostCopy, double& factorizeMs, double& downloadMs,
+                         std::string& error);
 
 } // namespace faceplan::cuda::detail

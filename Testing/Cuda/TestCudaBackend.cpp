@@ -247,6 +247,11 @@ void CompareFullPipeline(SolveMethod method) {
     ASSERT_TRUE(solved.ok) << solved.message;
     if (b == 1) {
       EXPECT_NE(Describe(*system).backend.find("CUDA"), std::string::npos) << Describe(*system).backend;
+      EXPECT_TRUE(pre.warnings.empty()) << pre.warnings.front(); // no fallback to the CPU
+      cuda::FactorAndResponseDetail detail;
+      // DenseResponse: the numeric factorization and the response ran on the GPU.
+      EXPECT_EQ(cuda::LastFactorAndResponseDetail(*request.options.backend, detail) && detail.succeeded,
+                method == SolveMethod::DenseResponse);
     }
   }
   ASSERT_EQ(results[0].keptDisplacement.rows(), static_cast<Eigen::Index>(scene.kept.size()));
@@ -267,6 +272,80 @@ TEST(CudaBackend, PrecomputeAndSolveDenseResponseMatchCpu) {
 TEST(CudaBackend, PrecomputeAndSolveCachedFactorMatchCpu) {
   REQUIRE_GPU_OR_SKIP();
   CompareFullPipeline(SolveMethod::CachedFactor);
+}
+
+// Precompute() with the CUDA backend and DenseResponse runs the numeric factorization and the
+// response on the GPU (the backend's factorAndBuildResponse hook), without falling back: its
+// response, its factor (loads) and its solve equal the CPU backend's.
+TEST(CudaBackend, PrecomputeUsesGpuFactorizationAndResponse) {
+  REQUIRE_GPU_OR_SKIP();
+  const FaceLikeScene scene = MakeFaceLikeScene(7, 4, 0.12);
+  PrecomputeRequest request;
+  request.mesh = scene.shell.mesh;
+  request.materials = RandomMaterials(request.mesh.numTets(), 31);
+  request.materials.density = Eigen::VectorXd::Constant(request.mesh.numTets(), 1000.0);
+  request.sets.constrained = scene.constrained;
+  request.sets.movable = scene.movable;
+  request.sets.kept = scene.kept;
+  request.options.method = SolveMethod::DenseResponse;
+
+  std::shared_ptr<const CondensedSystem> cpuSystem, gpuSystem;
+  request.options.backend = MakeCpuBackend();
+  const Status cpuPre = Precompute(request, cpuSystem);
+  ASSERT_TRUE(cpuPre.ok) << cpuPre.message;
+  auto gpu = Gpu();
+  ASSERT_TRUE(gpu);
+  ASSERT_TRUE(gpu->providesFactorAndResponse());
+  request.options.backend = gpu;
+  const Status gpuPre = Precompute(request, gpuSystem);
+  ASSERT_TRUE(gpuPre.ok) << gpuPre.message;
+  for (const std::string& w : gpuPre.warnings) ADD_FAILURE() << "warning: " << w;
+
+  cuda::FactorAndResponseDetail detail;
+  ASSERT_TRUE(cuda::LastFactorAndResponseDetail(*gpu, detail));
+  EXPECT_TRUE(detail.succeeded);
+  EXPECT_EQ(detail.call, 1);
+  EXPECT_GT(detail.factorizeMs, 0.0);
+  EXPECT_GT(detail.response.supernodes, 0);
+  EXPECT_GT(detail.response.worstRelativeResidual, 0.0); // the residual check ran
+  EXPECT_LE(detail.response.worstRelativeResidual, 1e-10);
+  const SystemInfo info = Describe(*gpuSystem);
+  EXPECT_EQ(info.method, SolveMethod::DenseResponse);
+  EXPECT_NE(info.backend.find("CUDA"), std::string::npos) << info.backend;
+  EXPECT_GT(info.precomputeTimings[Stage::Factorization].ms, 0.0);
+  EXPECT_GT(info.precomputeTimings[Stage::Condensation].ms, 0.0);
+  EXPECT_TRUE(gpuSystem->factor.isFactorized());
+  EXPECT_EQ(gpuSystem->responseResidual, detail.response.worstRelativeResidual);
+
+  ASSERT_EQ(gpuSystem->response.rows(), cpuSystem->response.rows());
+  ASSERT_EQ(gpuSystem->response.cols(), cpuSystem->response.cols());
+  const double responseDiff = RelativeMaxDifference(gpuSystem->response.data(), cpuSystem->response.data(),
+                                                    static_cast<size_t>(cpuSystem->response.size()));
+  EXPECT_LE(responseDiff, 1e-10);
+
+  // Solve with prescribed ROI displacements, gravity and nodal loads (the loads go through the
+  // GPU-computed factor copied into CHOLMOD).
+  std::mt19937 rng(8);
+  std::normal_distribution<double> normal(0.0, 0.01);
+  SolveInput input;
+  input.movableDisplacement.resize(static_cast<Eigen::Index>(scene.movable.size()), 3);
+  for (Eigen::Index i = 0; i < input.movableDisplacement.size(); ++i) input.movableDisplacement.data()[i] = normal(rng);
+  input.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
+  input.nodalLoads = Eigen::MatrixXd::Zero(request.mesh.numPoints(), 3);
+  for (Eigen::Index i = 0; i < input.nodalLoads.rows(); i += 7) input.nodalLoads.row(i) << 0.0, 0.0, 1e-3;
+  SolveResult cpuResult, gpuResult;
+  ASSERT_TRUE(Solve(*cpuSystem, input, cpuResult).ok);
+  const Status solved = Solve(*gpuSystem, input, gpuResult);
+  ASSERT_TRUE(solved.ok) << solved.message;
+  ASSERT_EQ(gpuResult.keptDisplacement.size(), cpuResult.keptDisplacement.size());
+  const double solveDiff = RelativeMaxDifference(gpuResult.keptDisplacement.data(), cpuResult.keptDisplacement.data(),
+                                                 static_cast<size_t>(cpuResult.keptDisplacement.size()));
+  EXPECT_LE(solveDiff, 1e-10);
+  EXPECT_GT(cpuResult.keptDisplacement.cwiseAbs().maxCoeff(), 0.0);
+  std::printf("Precompute with GPU factorization + response: response vs CPU %.3e, solve vs CPU %.3e, residual %.3e, "
+              "factorization %.1f ms, condensation %.1f ms\n",
+              responseDiff, solveDiff, detail.response.worstRelativeResidual,
+              info.precomputeTimings[Stage::Factorization].ms, info.precomputeTimings[Stage::Condensation].ms);
 }
 
 // The dense response built with GPU triangular solves equals Core's CPU response, in one pass and

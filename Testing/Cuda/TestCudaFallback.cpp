@@ -1,10 +1,18 @@
 // Runs on every machine (label `cuda`): the CUDA backend either works or refuses with a message,
 // so that callers can fall back to the CPU; it never throws or aborts.
 #include "CudaBackend.h"
+#include "CudaDenseResponse.h"
+
+#include "CondensedFEM.h"
+#include "CondensedSystem.h"
+#include "ShellMeshGenerator.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <random>
 
 namespace faceplan {
 namespace {
@@ -33,6 +41,118 @@ TEST(CudaFallback, DisabledByEnvironment) {
   unsetenv("FACEPLAN_DISABLE_CUDA");
   EXPECT_FALSE(backend);
   EXPECT_NE(error.find("FACEPLAN_DISABLE_CUDA"), std::string::npos) << error;
+}
+
+// The CPU backend with a factorAndBuildResponse hook: the CUDA one (GPU factorization + response;
+// fails without a GPU) or a stub that fails with or without having factorized.
+class HookBackend final : public ComputeBackend {
+public:
+  enum class Hook { Cuda, FailBeforeFactor, FailAfterFactor, LargeResidual };
+  explicit HookBackend(Hook hook) : hook_(hook) {}
+  std::string name() const override { return "Hooked"; }
+  bool assembleStiffness(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
+                         AssemblyTimings& timings, std::string& error) override {
+    return cpu_->assembleStiffness(mesh, materials, pattern, timings, error);
+  }
+  std::unique_ptr<ResponseOperator> makeResponseOperator(const Eigen::MatrixXd& response, std::string& error) override {
+    return cpu_->makeResponseOperator(response, error);
+  }
+  bool providesFactorAndResponse() const override { return true; }
+  bool factorAndBuildResponse(const SparseMatrix& kff, const SparseMatrix& kfr, Eigen::Index keptDofs,
+                              CholmodFactor& factor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
+                              FactorResponseReport& report, std::string& error) override {
+    ++calls;
+    switch (hook_) {
+    case Hook::Cuda: {
+      cuda::FactorAndResponseDetail detail;
+      const bool ok = cuda::FactorAndBuildResponse(kff, kfr, keptDofs, factor, response, op, detail, error);
+      report.factorizationMs = detail.factorizeMs + detail.factorDownloadMs;
+      report.worstRelativeResidual = detail.response.worstRelativeResidual;
+      return ok;
+    }
+    case Hook::FailBeforeFactor:
+      response = Eigen::MatrixXd::Constant(2, 2, 1.0); // garbage the caller must discard
+      error = "simulated device failure";
+      return false;
+    case Hook::FailAfterFactor:
+    case Hook::LargeResidual: {
+      const Status s = factor.factorize(kff);
+      EXPECT_TRUE(s.ok) << s.message;
+      if (hook_ == Hook::FailAfterFactor) {
+        error = "simulated failure after the factorization";
+        return false;
+      }
+      response = Eigen::MatrixXd::Zero(keptDofs, kfr.cols()); // wrong values, flagged by the residual
+      report.worstRelativeResidual = 1.0;
+      return true;
+    }
+    }
+    return false;
+  }
+  int calls = 0;
+
+private:
+  Hook hook_;
+  std::shared_ptr<ComputeBackend> cpu_ = MakeCpuBackend();
+};
+
+double RelativeMaxDifference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  if (a.rows() != b.rows() || a.cols() != b.cols()) return INFINITY;
+  const double scale = b.cwiseAbs().maxCoeff();
+  return (a - b).cwiseAbs().maxCoeff() / (scale > 0 ? scale : 1.0);
+}
+
+// Precompute with a backend whose factorization/response hook fails (no GPU, or a simulated
+// failure) falls back to the CPU with a warning, and solves exactly as the CPU backend does.
+TEST(CudaFallback, PrecomputeFallsBackWhenTheFactorResponseHookFails) {
+  const FaceLikeScene scene = MakeFaceLikeScene(5, 3, 0.15);
+  PrecomputeRequest request;
+  request.mesh = scene.shell.mesh;
+  request.materials = Materials::Uniform(3.0e3, 0.45);
+  request.sets.constrained = scene.constrained;
+  request.sets.movable = scene.movable;
+  request.sets.kept = scene.kept;
+  request.options.method = SolveMethod::DenseResponse;
+  SolveInput input;
+  input.movableDisplacement.resize(static_cast<Eigen::Index>(scene.movable.size()), 3);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal(0.0, 0.01);
+  for (Eigen::Index i = 0; i < input.movableDisplacement.size(); ++i) input.movableDisplacement.data()[i] = normal(rng);
+
+  std::shared_ptr<const CondensedSystem> reference;
+  request.options.backend = MakeCpuBackend();
+  ASSERT_FALSE(request.options.backend->providesFactorAndResponse());
+  ASSERT_TRUE(Precompute(request, reference).ok);
+  SolveResult expected;
+  ASSERT_TRUE(Solve(*reference, input, expected).ok);
+
+  const bool gpu = cuda::DeviceAvailable();
+  using Hook = HookBackend::Hook;
+  for (Hook hook : {Hook::Cuda, Hook::FailBeforeFactor, Hook::FailAfterFactor, Hook::LargeResidual}) {
+    SCOPED_TRACE(static_cast<int>(hook));
+    auto backend = std::make_shared<HookBackend>(hook);
+    request.options.backend = backend;
+    std::shared_ptr<const CondensedSystem> system;
+    const Status pre = Precompute(request, system);
+    ASSERT_TRUE(pre.ok) << pre.message;
+    EXPECT_EQ(backend->calls, 1);
+    const bool expectFallback = hook != Hook::Cuda || !gpu;
+    std::string warnings;
+    for (const std::string& w : pre.warnings) warnings += w + "\n";
+    EXPECT_EQ(warnings.find("factorization/response failed") != std::string::npos, expectFallback) << warnings;
+    if (hook == Hook::Cuda && !gpu) EXPECT_NE(warnings.find("factorized and built the response on the CPU"), std::string::npos) << warnings;
+    if (hook == Hook::FailBeforeFactor) EXPECT_NE(warnings.find("simulated device failure"), std::string::npos) << warnings;
+    if (hook == Hook::FailAfterFactor || hook == Hook::LargeResidual)
+      EXPECT_NE(warnings.find("the response was built on the CPU"), std::string::npos) << warnings;
+    if (hook == Hook::LargeResidual) EXPECT_NE(warnings.find("residual"), std::string::npos) << warnings;
+    EXPECT_TRUE(system->factor.isFactorized());
+    EXPECT_LE(RelativeMaxDifference(system->response, reference->response), 1e-10);
+    EXPECT_LE(system->responseResidual, 1e-10);
+    SolveResult result;
+    const Status solved = Solve(*system, input, result);
+    ASSERT_TRUE(solved.ok) << solved.message;
+    EXPECT_LE(RelativeMaxDifference(result.keptDisplacement, expected.keptDisplacement), 1e-10);
+  }
 }
 
 } // namespace
