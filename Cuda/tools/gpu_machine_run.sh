@@ -6,8 +6,7 @@
 #      libamd2 libcamd2 libcolamd2 libccolamd2 libmetis5 libopenblas0-pthread libgfortran5 \
 #      libquadmath0 libgomp1 libgtest-dev zlib1g-dev)
 #   tar -czf .devcarry/eigen3.tar.gz -C / usr/include/eigen3 usr/share/eigen3/cmake
-# and, only when the working tree's Core/ has uncommitted edits, a snapshot of the committed Core:
-#   git archive HEAD Core cmake | gzip > .devcarry/core-head.tar.gz
+# It builds the working tree as it is and fails when that does not build (no stale fallback).
 # Usage there: OUT=<results dir> Cuda/tools/gpu_machine_run.sh [gpu_benchmark arguments...]
 set -uo pipefail
 cd "$(dirname "$0")/../.."
@@ -48,37 +47,6 @@ if configure "$ROOT" "$BUILD" > "$OUT/configure.log" 2>&1 && \
    cmake --build "$BUILD" -j "$(nproc)" --target $TARGETS > "$OUT/build.log" 2>&1; then
   ok=1
   TESTDIR=$BUILD/Testing/Cuda
-elif [ -f .devcarry/core-head.tar.gz ]; then
-  # The working tree's Core does not build (edits in progress): use the committed Core.
-  echo "top-level build failed (see build.log); building against the committed Core snapshot"
-  tail -20 "$OUT/build.log"
-  SRC=/tmp/snapsrc
-  rm -rf "$SRC" && mkdir -p "$SRC" && tar -xzf .devcarry/core-head.tar.gz -C "$SRC"
-  cat > "$SRC/CMakeLists.txt" <<CMAKE
-cmake_minimum_required(VERSION 3.16)
-project(FacePlanGpu LANGUAGES C CXX)
-set(CMAKE_CXX_STANDARD 17)
-set(CMAKE_POSITION_INDEPENDENT_CODE ON)
-set(CMAKE_RUNTIME_OUTPUT_DIRECTORY "\${CMAKE_BINARY_DIR}/bin")
-list(APPEND CMAKE_MODULE_PATH "$SRC/cmake")
-include(CTest)
-find_package(Eigen3 3.3 REQUIRED NO_MODULE)
-find_package(CHOLMOD REQUIRED)
-find_package(Threads REQUIRED)
-find_package(ZLIB REQUIRED)
-add_subdirectory(Core)
-add_subdirectory($ROOT/Cuda Cuda)
-add_subdirectory($ROOT/Testing/Cuda Testing/Cuda)
-add_executable(gpu_benchmark $ROOT/Benchmarks/gpu_benchmark.cpp $ROOT/Benchmarks/VtuReader.cpp)
-target_include_directories(gpu_benchmark PRIVATE $ROOT/Benchmarks)
-target_link_libraries(gpu_benchmark PRIVATE FacePlanCuda FacePlanCore ZLIB::ZLIB Threads::Threads \${CMAKE_DL_LIBS})
-CMAKE
-  BUILD=/tmp/build-snap
-  if configure "$SRC" "$BUILD" > "$OUT/configure-snap.log" 2>&1 && \
-     cmake --build "$BUILD" -j "$(nproc)" --target $TARGETS > "$OUT/build-snap.log" 2>&1; then
-    ok=1
-    TESTDIR=$BUILD/Testing/Cuda
-  fi
 fi
 if [ $ok != 1 ]; then
   echo "BUILD FAILED"
