@@ -4,6 +4,7 @@
 #include "CondensedSystem.h"
 #include "ElementStiffness.h"
 #include "MeshValidation.h"
+#include "NodalPressure.h"
 #include "NodeSetValidation.h"
 
 #include <Eigen/SparseCore>
@@ -27,7 +28,12 @@ const char* MethodName(SolveMethod method) {
 }
 
 const char* ElementOrderName(ElementOrder order) {
-  return order == ElementOrder::Quadratic ? "Quadratic" : "Linear";
+  switch (order) {
+  case ElementOrder::Linear: return "Linear";
+  case ElementOrder::Quadratic: return "Quadratic";
+  case ElementOrder::QuadraticNodalPressure: return "QuadraticNodalPressure";
+  }
+  return "?";
 }
 
 namespace {
@@ -318,7 +324,12 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
   sys->cornerMesh = mesh;
   sys->kept = request.sets.kept;
   sys->movableNodes = request.sets.movable;
-  const bool quadratic = options.elementOrder == ElementOrder::Quadratic;
+  const bool quadratic = options.elementOrder == ElementOrder::Quadratic ||
+                         options.elementOrder == ElementOrder::QuadraticNodalPressure;
+  const bool nodalPressure = options.elementOrder == ElementOrder::QuadraticNodalPressure;
+  // Nodal pressure: cells give the shear part; the volumetric part is added after assembly.
+  const Materials cellMaterials = nodalPressure ? ShearOnlyMaterials(request.materials) : Materials();
+  const Materials& stiffnessMaterials = nodalPressure ? cellMaterials : request.materials;
   info.elementOrder = options.elementOrder;
 
   // Quadratic elements: the TET10 mesh and the node sets extended to its mid-edge nodes.
@@ -368,7 +379,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
     // The backends implement 4-node cells; 10-node cells are computed and assembled on the CPU.
     std::vector<double> packed;
     std::vector<long long> invalid;
-    ComputePackedTet10Stiffness(qmesh, request.materials, packed, invalid, options.quadraticMeanDilatation);
+    ComputePackedTet10Stiffness(qmesh, stiffnessMaterials, packed, invalid, options.quadraticMeanDilatation);
     if (!invalid.empty()) {
       std::ostringstream msg;
       msg << invalid.size() << " quadratic cells have a non-positive Jacobian after the mid-edge "
@@ -384,6 +395,12 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
     backend = MakeCpuBackend();
     at = {};
     backend->assembleStiffness(mesh, request.materials, pattern, at, error);
+  }
+  if (nodalPressure) { // the volumetric part, added to the shear part assembled above
+    clock.lapMs();
+    AddNodalPressureStiffness(pattern.upper, qmesh.points, qmesh.cells.data(), qmesh.cells.rows(), 10,
+                              request.materials, layout.dofNode, static_cast<int>(layout.meshNode.size()));
+    at.assemblyMs += clock.lapMs();
   }
   sys->backendName = backend->name();
   t[Stage::ElementStiffness].ms = at.elementStiffnessMs;

@@ -40,7 +40,11 @@ const char* MethodName(SolveMethod method);
 // of the ends' prescribed values; movable when both ends are constrained and one is movable;
 // otherwise interior) and reports results at the original corner nodes, so inputs and outputs keep
 // the linear mesh's numbering. See docs/STABILITY.md for when to use it and its cost.
-enum class ElementOrder { Linear, Quadratic };
+// QuadraticNodalPressure: the same 10-node cells, but the volumetric (lambda) term uses a
+// continuous pressure on the corner nodes with a lumped pressure mass (P2-P1, NodalPressure.h):
+// exact and symmetric, its error does not grow as nu -> 0.5, but its wider stencil makes the
+// factor ~6x larger and the precompute ~10x slower than Quadratic's.
+enum class ElementOrder { Linear, Quadratic, QuadraticNodalPressure };
 const char* ElementOrderName(ElementOrder order);
 
 struct PrecomputeOptions {

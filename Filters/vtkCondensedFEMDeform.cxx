@@ -259,8 +259,11 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   // Auto lets Core pick the cheapest exact cached path; Condensed forces the explicit condensed
   // (dense kept-by-ROI) response, the paper's method.
   if (this->Method == METHOD_CONDENSED) request.options.method = faceplan::SolveMethod::DenseResponse;
-  const bool quadratic = this->ElementOrder == QUADRATIC_ELEMENTS;
-  if (quadratic) request.options.elementOrder = faceplan::ElementOrder::Quadratic;
+  const bool quadratic =
+      this->ElementOrder == QUADRATIC_ELEMENTS || this->ElementOrder == QUADRATIC_NODAL_PRESSURE;
+  if (this->ElementOrder == QUADRATIC_ELEMENTS) request.options.elementOrder = faceplan::ElementOrder::Quadratic;
+  if (this->ElementOrder == QUADRATIC_NODAL_PRESSURE)
+    request.options.elementOrder = faceplan::ElementOrder::QuadraticNodalPressure;
 
   // ---- backend --------------------------------------------------------------------------------
   std::vector<std::string> notes;
