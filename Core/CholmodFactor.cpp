@@ -1,5 +1,7 @@
 #include "CholmodFactor.h"
 
+#include "CholmodViews.h"
+
 #include "BlasThreads.h"
 
 #include <algorithm>
@@ -35,37 +37,6 @@ struct CholmodFactor::Impl {
 };
 
 namespace {
-
-// A non-owning CHOLMOD view of an Eigen upper-triangular CSC matrix.
-cholmod_sparse ViewUpper(const SparseMatrix& upper) {
-  cholmod_sparse view{};
-  view.nrow = static_cast<size_t>(upper.rows());
-  view.ncol = static_cast<size_t>(upper.cols());
-  view.nzmax = static_cast<size_t>(upper.nonZeros());
-  view.p = const_cast<int*>(upper.outerIndexPtr());
-  view.i = const_cast<int*>(upper.innerIndexPtr());
-  view.x = const_cast<double*>(upper.valuePtr());
-  view.stype = 1;
-  view.itype = CHOLMOD_INT;
-  view.xtype = CHOLMOD_REAL;
-  view.dtype = CHOLMOD_DOUBLE;
-  view.sorted = 1;
-  view.packed = 1;
-  return view;
-}
-
-// A non-owning CHOLMOD view of a column-major Eigen matrix.
-cholmod_dense ViewDense(const Eigen::MatrixXd& b) {
-  cholmod_dense view{};
-  view.nrow = b.rows();
-  view.ncol = b.cols();
-  view.nzmax = b.size();
-  view.d = b.rows();
-  view.x = const_cast<double*>(b.data());
-  view.xtype = CHOLMOD_REAL;
-  view.dtype = CHOLMOD_DOUBLE;
-  return view;
-}
 
 void CopyOut(const cholmod_dense* solution, Eigen::Index rows, Eigen::Index cols, Eigen::MatrixXd& x) {
   x.resize(rows, cols);

@@ -1,5 +1,7 @@
 #include "NodalPressure.h"
 
+#include "QuadraticTet.h"
+
 #include "ElementStiffness.h"
 #include "ParallelFor.h"
 
@@ -12,20 +14,6 @@ namespace faceplan {
 
 namespace {
 
-constexpr int kEdgeCorners[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}};
-
-// Gradients of the 10 TET10 shape functions w.r.t. (L1, L2, L3) at barycentric point L (VTK order).
-Eigen::Matrix<double, 10, 3> Tet10ReferenceGradients(const Eigen::Vector4d& L) {
-  Eigen::Matrix<double, 4, 3> dL;
-  dL << -1, -1, -1, 1, 0, 0, 0, 1, 0, 0, 0, 1;
-  Eigen::Matrix<double, 10, 3> g;
-  for (int i = 0; i < 4; ++i) g.row(i) = (4.0 * L[i] - 1.0) * dL.row(i);
-  for (int e = 0; e < 6; ++e) {
-    const int i = kEdgeCorners[e][0], j = kEdgeCorners[e][1];
-    g.row(4 + e) = 4.0 * (L[i] * dL.row(j) + L[j] * dL.row(i));
-  }
-  return g;
-}
 
 double Lambda(const Materials& materials, Eigen::Index cell) {
   double lambda, mu;

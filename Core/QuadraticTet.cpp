@@ -11,28 +11,27 @@
 
 namespace faceplan {
 
-namespace {
-
-constexpr int kEdgeCorners[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}};
-
 // Gradients (w.r.t. reference coordinates xi = (L1, L2, L3)) of the 10 shape functions at the
 // barycentric point L.
-Eigen::Matrix<double, 10, 3> ReferenceGradients(const Eigen::Vector4d& L) {
+Eigen::Matrix<double, 10, 3> Tet10ReferenceGradients(const Eigen::Vector4d& L) {
   Eigen::Matrix<double, 4, 3> dL;
   dL << -1, -1, -1, 1, 0, 0, 0, 1, 0, 0, 0, 1;
   Eigen::Matrix<double, 10, 3> g;
   for (int i = 0; i < 4; ++i) g.row(i) = (4.0 * L[i] - 1.0) * dL.row(i);
   for (int e = 0; e < 6; ++e) {
-    const int i = kEdgeCorners[e][0], j = kEdgeCorners[e][1];
+    const int i = kTet10EdgeCorners[e][0], j = kTet10EdgeCorners[e][1];
     g.row(4 + e) = 4.0 * (L[i] * dL.row(j) + L[j] * dL.row(i));
   }
   return g;
 }
 
+namespace {
+
+
 Eigen::Matrix<double, 10, 1> ShapeValues(const Eigen::Vector4d& L) {
   Eigen::Matrix<double, 10, 1> n;
   for (int i = 0; i < 4; ++i) n[i] = L[i] * (2.0 * L[i] - 1.0);
-  for (int e = 0; e < 6; ++e) n[4 + e] = 4.0 * L[kEdgeCorners[e][0]] * L[kEdgeCorners[e][1]];
+  for (int e = 0; e < 6; ++e) n[4 + e] = 4.0 * L[kTet10EdgeCorners[e][0]] * L[kTet10EdgeCorners[e][1]];
   return n;
 }
 
@@ -65,8 +64,8 @@ QuadraticMesh MakeQuadraticMesh(const TetMesh& mesh, const MidEdgeProjection& pr
   std::vector<std::pair<std::uint64_t, std::int64_t>> keys(static_cast<size_t>(m) * 6);
   for (Eigen::Index c = 0; c < m; ++c)
     for (int e = 0; e < 6; ++e) {
-      std::uint64_t a = static_cast<std::uint32_t>(mesh.tets(c, kEdgeCorners[e][0]));
-      std::uint64_t b = static_cast<std::uint32_t>(mesh.tets(c, kEdgeCorners[e][1]));
+      std::uint64_t a = static_cast<std::uint32_t>(mesh.tets(c, kTet10EdgeCorners[e][0]));
+      std::uint64_t b = static_cast<std::uint32_t>(mesh.tets(c, kTet10EdgeCorners[e][1]));
       if (a > b) std::swap(a, b);
       keys[c * 6 + e] = {(a << 32) | b, c * 6 + e};
     }
@@ -106,7 +105,7 @@ QuadraticMesh MakeQuadraticMesh(const TetMesh& mesh, const MidEdgeProjection& pr
     if (j - k == 1) {
       const Face& f = faces[k];
       for (int e = 0; e < 6; ++e)
-        if (kEdgeCorners[e][0] != f.local && kEdgeCorners[e][1] != f.local)
+        if (kTet10EdgeCorners[e][0] != f.local && kTet10EdgeCorners[e][1] != f.local)
           out.boundaryEdge[out.cells(f.cell, 4 + e) - n] = 1;
     }
     k = j;
@@ -134,7 +133,7 @@ Tet10Matrix Tet10Stiffness(const Tet10Nodes& x, double E, double nu, double* min
   double volume = 0.0;
   double smallest = std::numeric_limits<double>::infinity();
   for (int q = 0; q < 4; ++q) {
-    const Eigen::Matrix<double, 10, 3> gref = ReferenceGradients(rule.L[q]);
+    const Eigen::Matrix<double, 10, 3> gref = Tet10ReferenceGradients(rule.L[q]);
     const Eigen::Matrix3d J = x.transpose() * gref; // J(i, j) = d x_i / d xi_j
     const double det = J.determinant();
     smallest = std::min(smallest, det);
@@ -161,7 +160,7 @@ Eigen::Matrix<double, 10, 1> Tet10ShapeIntegrals(const Tet10Nodes& x) {
   const Rule& rule = QuadratureRule();
   Eigen::Matrix<double, 10, 1> sum = Eigen::Matrix<double, 10, 1>::Zero();
   for (int q = 0; q < 4; ++q) {
-    const Eigen::Matrix3d J = x.transpose() * ReferenceGradients(rule.L[q]);
+    const Eigen::Matrix3d J = x.transpose() * Tet10ReferenceGradients(rule.L[q]);
     sum += rule.weight * J.determinant() * ShapeValues(rule.L[q]);
   }
   return sum;

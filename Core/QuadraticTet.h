@@ -16,6 +16,12 @@
 
 namespace faceplan {
 
+// Corner pairs of the six mid-edge nodes, in VTK_QUADRATIC_TETRA order.
+constexpr int kTet10EdgeCorners[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}};
+
+// Gradients of the 10 TET10 shape functions w.r.t. (L1, L2, L3) at barycentric point L.
+Eigen::Matrix<double, 10, 3> Tet10ReferenceGradients(const Eigen::Vector4d& L);
+
 // Places the mid-edge node of the boundary edge (a, b) whose straight midpoint is `midpoint`;
 // return `midpoint` to keep it straight.
 using MidEdgeProjection =

@@ -1,5 +1,6 @@
 #include "CudaDenseResponse.h"
 
+#include "CholmodViews.h"
 #include "CudaCheck.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
@@ -62,24 +63,6 @@ struct SupernodalCholesky::Impl {
 SupernodalCholesky::SupernodalCholesky() : impl_(std::make_unique<Impl>()) {}
 SupernodalCholesky::~SupernodalCholesky() = default;
 
-namespace {
-cholmod_sparse ViewUpper(const SparseMatrix& upper) {
-  cholmod_sparse view{};
-  view.nrow = static_cast<size_t>(upper.rows());
-  view.ncol = static_cast<size_t>(upper.cols());
-  view.nzmax = static_cast<size_t>(upper.nonZeros());
-  view.p = const_cast<int*>(upper.outerIndexPtr());
-  view.i = const_cast<int*>(upper.innerIndexPtr());
-  view.x = const_cast<double*>(upper.valuePtr());
-  view.stype = 1;
-  view.itype = CHOLMOD_INT;
-  view.xtype = CHOLMOD_REAL;
-  view.dtype = CHOLMOD_DOUBLE;
-  view.sorted = 1;
-  view.packed = 1;
-  return view;
-}
-} // namespace
 
 bool SupernodalCholesky::factor(const SparseMatrix& upper, std::string& error) {
   if (!upper.isCompressed() || upper.rows() != upper.cols()) {
