@@ -328,7 +328,9 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
     status = cache.background.wait(system);
     if (!status) cache.haveRequest = false; // a failed precompute is retried next time
     else {
-      for (const auto& w : status.warnings) notes.push_back(w);
+      // The precompute's findings (slivers, fallbacks) are reported once, not again on every edit.
+      if (freshPrecompute)
+        for (const auto& w : status.warnings) notes.push_back(w);
       status = faceplan::Solve(*system, input, result);
       const faceplan::SystemInfo info = faceplan::Describe(*system);
       precomputeMs = info.precomputeTimings[faceplan::Stage::Total].ms;
