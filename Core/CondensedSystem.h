@@ -3,21 +3,12 @@
 // CondensedFEM.cpp and the report tools that need the assembled blocks).
 #include "CholmodFactor.h"
 #include "CondensedFEM.h"
+#include "NodeLayout.h"
 
 #include <array>
 #include <mutex>
 
 namespace faceplan {
-
-// Node numbering of the DOF blocks: free nodes first (kept, then interior), then ROI nodes.
-// Constrained nodes outside the ROI and unused nodes have no DOFs (they never move).
-struct NodeLayout {
-  std::vector<int> dofNode;  // mesh node -> position in the blocks, -1 when it has no DOFs
-  std::vector<int> meshNode; // position -> mesh node
-  int keptFree = 0, interior = 0, roi = 0;
-  int freeNodes() const { return keptFree + interior; }
-  std::vector<int> roiPosition; // NodeSets::movable index -> ROI position (0-based within ROI)
-};
 
 class CondensedSystem {
 public:

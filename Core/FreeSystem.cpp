@@ -2,40 +2,25 @@
 
 #include "ElementStiffness.h"
 #include "MeshValidation.h"
+#include "NodeLayout.h"
 #include "NodeSetValidation.h"
 
 namespace faceplan {
 
 namespace {
 
-// Same rule as CondensedFEM.cpp's MakeLayout (kept free, interior, ROI).
+// The same numbering as the condensed solver's (NodeLayout).
 void MakeFreeLayout(const TetMesh& mesh, const NodeSets& sets, FreeSystem& s) {
-  const Eigen::Index n = mesh.numPoints();
-  std::vector<char> used(n, 0), constrained(n, 0), kept(n, 0);
+  std::vector<char> used(mesh.numPoints(), 0);
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
     for (int k = 0; k < 4; ++k) used[mesh.tets(e, k)] = 1;
-  for (int i : sets.constrained) constrained[i] = 1;
-  for (int i : sets.kept) kept[i] = 1;
-  s.dofNode.assign(n, -1);
-  s.meshNode.clear();
-  auto place = [&](int node) {
-    s.dofNode[node] = static_cast<int>(s.meshNode.size());
-    s.meshNode.push_back(node);
-  };
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (used[i] && !constrained[i] && kept[i]) place(static_cast<int>(i));
-  s.keptFree = static_cast<int>(s.meshNode.size());
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (used[i] && !constrained[i] && !kept[i]) place(static_cast<int>(i));
-  s.interior = static_cast<int>(s.meshNode.size()) - s.keptFree;
-  s.roiPosition.assign(sets.movable.size(), -1);
-  for (size_t k = 0; k < sets.movable.size(); ++k) {
-    const int node = sets.movable[k];
-    if (!used[node]) continue;
-    if (s.dofNode[node] < 0) place(node);
-    s.roiPosition[k] = s.dofNode[node] - s.freeNodes();
-  }
-  s.roi = static_cast<int>(s.meshNode.size()) - s.freeNodes();
+  NodeLayout layout = MakeLayout(used, sets);
+  s.dofNode = std::move(layout.dofNode);
+  s.meshNode = std::move(layout.meshNode);
+  s.keptFree = layout.keptFree;
+  s.interior = layout.interior;
+  s.roi = layout.roi;
+  s.roiPosition = std::move(layout.roiPosition);
 }
 
 } // namespace

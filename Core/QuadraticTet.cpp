@@ -244,7 +244,6 @@ AssemblyPattern BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells
     pos += dofs - p;
   }
   std::vector<int> targetOf(static_cast<size_t>(numCells) * packedSize);
-  pattern.gatherStart.assign(nnz + 1, 0);
   for (Eigen::Index e = 0; e < numCells; ++e)
     for (int p = 0; p < dofs; ++p)
       for (int q = p; q < dofs; ++q) {
@@ -261,15 +260,8 @@ AssemblyPattern BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells
           t = static_cast<int>(colStart[3 * nc + ic]) + 3 * idx + ir;
         }
         targetOf[e * packedSize + rowStart[p] + (q - p)] = t;
-        if (t >= 0) ++pattern.gatherStart[t + 1];
       }
-  for (int k = 0; k < nnz; ++k) pattern.gatherStart[k + 1] += pattern.gatherStart[k];
-  pattern.packedIndex.resize(pattern.gatherStart[nnz]);
-  std::vector<int> fill(pattern.gatherStart.begin(), pattern.gatherStart.end() - 1);
-  for (size_t idx = 0; idx < targetOf.size(); ++idx) {
-    const int t = targetOf[idx];
-    if (t >= 0) pattern.packedIndex[fill[t]++] = static_cast<int>(idx);
-  }
+  FinishGatherMap(targetOf, pattern);
   return pattern;
 }
 

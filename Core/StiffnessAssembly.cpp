@@ -16,6 +16,20 @@ int PackedPosition(int p, int q) { return p * 12 - p * (p - 1) / 2 + (q - p); }
 
 } // namespace
 
+void FinishGatherMap(const std::vector<int>& targetOf, AssemblyPattern& pattern) {
+  const int nnz = static_cast<int>(pattern.upper.nonZeros());
+  pattern.gatherStart.assign(nnz + 1, 0);
+  for (const int t : targetOf)
+    if (t >= 0) ++pattern.gatherStart[t + 1];
+  for (int k = 0; k < nnz; ++k) pattern.gatherStart[k + 1] += pattern.gatherStart[k];
+  pattern.packedIndex.resize(pattern.gatherStart[nnz]);
+  std::vector<int> fill(pattern.gatherStart.begin(), pattern.gatherStart.end() - 1);
+  for (size_t idx = 0; idx < targetOf.size(); ++idx) {
+    const int t = targetOf[idx];
+    if (t >= 0) pattern.packedIndex[fill[t]++] = static_cast<int>(idx);
+  }
+}
+
 AssemblyPattern BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode,
                                      int numDofNodes) {
   const Eigen::Index m = mesh.numTets();
@@ -77,23 +91,15 @@ AssemblyPattern BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>
     return colStart[3 * nc + ic] + 3 * idx + ir;
   };
   std::vector<int> targetOf(static_cast<size_t>(m) * kPackedElementSize);
-  pattern.gatherStart.assign(nnz + 1, 0);
   for (Eigen::Index e = 0; e < m; ++e) {
     for (int p = 0; p < 12; ++p) {
       for (int q = p; q < 12; ++q) {
         const int t = target(e, p, q);
         targetOf[e * kPackedElementSize + PackedPosition(p, q)] = t;
-        if (t >= 0) ++pattern.gatherStart[t + 1];
       }
     }
   }
-  for (int k = 0; k < nnz; ++k) pattern.gatherStart[k + 1] += pattern.gatherStart[k];
-  pattern.packedIndex.resize(pattern.gatherStart[nnz]);
-  std::vector<int> fill(pattern.gatherStart.begin(), pattern.gatherStart.end() - 1);
-  for (size_t idx = 0; idx < targetOf.size(); ++idx) {
-    const int t = targetOf[idx];
-    if (t >= 0) pattern.packedIndex[fill[t]++] = static_cast<int>(idx);
-  }
+  FinishGatherMap(targetOf, pattern);
   return pattern;
 }
 

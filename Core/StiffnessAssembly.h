@@ -26,6 +26,11 @@ struct AssemblyPattern {
 AssemblyPattern BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode,
                                      int numDofNodes);
 
+// Builds gatherStart/packedIndex from the target nonzero of every packed element entry (-1 for
+// none), by a counting sort: each gather list holds its packed indices in increasing order.
+// pattern.upper must already hold the final structure. Shared by the 4- and 10-node assemblies.
+void FinishGatherMap(const std::vector<int>& targetOf, AssemblyPattern& pattern);
+
 // upper.valuePtr()[k] = sum of packed[packedIndex[...]] over its gather range.
 void AssembleFromPacked(const std::vector<double>& packed, AssemblyPattern& pattern);
 
