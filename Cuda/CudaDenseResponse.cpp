@@ -32,6 +32,20 @@ using detail::CudaResponse;
 using detail::DeviceArray;
 
 namespace {
+
+// The structure and host values of a CHOLMOD supernodal factor, without device data.
+SupernodalFactorView ViewOfFactor(const cholmod_factor* L) {
+  SupernodalFactorView v;
+  v.n = static_cast<int>(L->n);
+  v.nsuper = static_cast<int>(L->nsuper);
+  v.super = static_cast<const int*>(L->super);
+  v.pi = static_cast<const int*>(L->pi);
+  v.px = static_cast<const int*>(L->px);
+  v.s = static_cast<const int*>(L->s);
+  v.x = static_cast<const double*>(L->x);
+  v.perm = static_cast<const int*>(L->Perm);
+  return v;
+}
 template <class T> bool Upload(DeviceArray& dst, const T* src, size_t count, cudaStream_t stream, std::string& error) {
   if (!dst.ensure(sizeof(T) * std::max<size_t>(count, 1), error)) return false;
   if (count > 0) FP_CUDA_TRY(cudaMemcpyAsync(dst.as<T>(), src, sizeof(T) * count, cudaMemcpyHostToDevice, stream));
@@ -290,18 +304,10 @@ bool SupernodalCholesky::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, std
 }
 
 SupernodalFactorView SupernodalCholesky::view() const {
-  SupernodalFactorView v;
   const cholmod_factor* L = impl_->factor;
-  if (!L || !L->is_super) return v;
-  v.n = static_cast<int>(L->n);
-  v.nsuper = static_cast<int>(L->nsuper);
-  v.super = static_cast<const int*>(L->super);
-  v.pi = static_cast<const int*>(L->pi);
-  v.px = static_cast<const int*>(L->px);
-  v.s = static_cast<const int*>(L->s);
-  v.x = static_cast<const double*>(L->x);
-  v.perm = static_cast<const int*>(L->Perm);
-  v.x = impl_->hostNumeric ? static_cast<const double*>(L->x) : nullptr;
+  if (!L || !L->is_super) return SupernodalFactorView();
+  SupernodalFactorView v = ViewOfFactor(L);
+  if (!impl_->hostNumeric) v.x = nullptr;
   v.deviceX = impl_->deviceX.capacity() > 0 ? impl_->deviceX.as<double>() : nullptr;
   return v;
 }
@@ -629,15 +635,7 @@ bool FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kf
     error = marked.message;
     return false;
   }
-  SupernodalFactorView view;
-  view.n = static_cast<int>(L->n);
-  view.nsuper = static_cast<int>(L->nsuper);
-  view.super = static_cast<const int*>(L->super);
-  view.pi = static_cast<const int*>(L->pi);
-  view.px = static_cast<const int*>(L->px);
-  view.s = static_cast<const int*>(L->s);
-  view.x = static_cast<const double*>(L->x);
-  view.perm = static_cast<const int*>(L->Perm);
+  SupernodalFactorView view = ViewOfFactor(L);
   view.deviceX = deviceX.as<double>();
   const bool ok = BuildDenseResponse(view, &kffUpper, kfr, keptDofs, &response, &op, detail.response, error);
   deviceX.release();
