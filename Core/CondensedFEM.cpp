@@ -3,9 +3,11 @@
 #include "BlasThreads.h"
 #include "CondensedSystem.h"
 #include "ElementStiffness.h"
+#include "FillReducingOrdering.h"
 #include "MeshValidation.h"
 #include "NodalPressure.h"
 #include "NodeSetValidation.h"
+#include "TrailingResponse.h"
 
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -82,13 +84,16 @@ Eigen::VectorXd FreeNodeMassQuadratic(const QuadraticMesh& mesh, const Materials
 // many right-hand sides then streams each row once (about 2.5x faster than the symmetric view).
 using RowMajorSparse = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 using RowMajorDense = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+// `initial`, when given, is used as the first solution instead of solving for b.
 Status RefinedSolve(const CondensedSystem& sys, const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
                     bool concurrent, double tolerance, int maxSteps, double& worst, int& steps,
-                    const RowMajorSparse* fullRowMajor = nullptr) {
+                    const RowMajorSparse* fullRowMajor = nullptr, const Eigen::MatrixXd* initial = nullptr) {
   auto solve = [&](const Eigen::MatrixXd& rhs, Eigen::MatrixXd& out) {
     return concurrent ? sys.factor.solveConcurrently(rhs, out) : sys.factor.solve(rhs, out);
   };
-  Status s = solve(b, x);
+  Status s = Status::Ok();
+  if (initial) x = *initial;
+  else s = solve(b, x);
   if (!s) return s;
   const Eigen::VectorXd norms = b.colwise().norm().transpose();
   steps = 0;
@@ -205,16 +210,42 @@ SolveMethod ChooseMethod(const PrecomputeOptions& options, double keptDofs, doub
 
 // Columns of the response, solved in blocks: one single-threaded solve per core at a time, each
 // with its own CHOLMOD workspace, blocks sized so the transient memory stays near 1 GB.
+// First the cheap path (backward substitutions from the trailing block, residual estimated by
+// random probes; TrailingResponse.h); when it is unavailable or its estimate misses the tolerance,
+// full solves with a residual and iterative refinement per column.
 Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
                      const std::atomic<bool>* cancel, const ProgressCallback& progress) {
   const Eigen::Index keptDofs = 3 * sys.layout.keptFree, roiDofs = sys.kfr.cols();
   const Eigen::Index freeDofs = sys.kff.rows();
-  sys.response.resize(keptDofs, roiDofs);
   const int threads = static_cast<int>(std::max(1u, std::min(std::thread::hardware_concurrency(), 16u)));
   const double bytesPerColumn = 8.0 * 5.0 * double(std::max<Eigen::Index>(freeDofs, 1));
   const Eigen::Index memoryBlock = static_cast<Eigen::Index>(1.0e9 / (bytesPerColumn * threads));
   const Eigen::Index largestBlock = std::clamp<Eigen::Index>(std::min<Eigen::Index>(memoryBlock, options.responseBlockColumns), 8,
                                                       std::max(8, options.responseBlockColumns));
+  if (sys.factor.trailingDofs() > 0) {
+    TrailingResponseResult fast;
+    Status fs = BuildTrailingResponse(
+        sys.factor, sys.kff, sys.kfr, keptDofs, largestBlock, cancel,
+        [&progress](double f) { if (progress) progress(0.6 + 0.4 * f, "dense response"); }, fast);
+    if (!fs) return fs;
+    std::ostringstream how;
+    how.precision(3);
+    if (fast.residualEstimate <= sys.residualTolerance) {
+      sys.response = std::move(fast.response);
+      sys.responseResidual = fast.residualEstimate;
+      how << "backward substitutions from the ROI-coupled trailing block; relative residual "
+          << fast.residualEstimate << " estimated with " << fast.probes << " random probes";
+      sys.info.responsePath = how.str();
+      return Status::Ok();
+    }
+    how << "full solves with per-column residuals and refinement (the probe estimate "
+        << fast.residualEstimate << " of the backward-substitution response missed "
+        << sys.residualTolerance << ")";
+    sys.info.responsePath = how.str();
+  } else {
+    sys.info.responsePath = "full solves with per-column residuals and refinement";
+  }
+  sys.response.resize(keptDofs, roiDofs);
   const Eigen::Index evenShare = (roiDofs + threads - 1) / threads; // keep every core busy
   const Eigen::Index block = std::max<Eigen::Index>(1, std::min(largestBlock, evenShare));
   const Eigen::Index blocks = (roiDofs + block - 1) / block;
@@ -401,8 +432,42 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
   info.interiorDofs = 3LL * layout.interior;
 
   if (freeDofs > 0) {
-    Status as = sys->factor.analyze(sys->kff); // (not into `status`: that would drop its warnings)
-    if (!as) return as;
+    // METIS on the node graph with the ROI-coupled nodes last (FillReducingOrdering.h). That
+    // halves a response solve but makes those nodes a dense block of the factor, which does not
+    // pay when the ROI is large; then the ordering without it is analysed too and the one with
+    // the lower estimated precompute is kept: factorization flops plus one solve per ROI DOF
+    // (forward + backward, or backward + the trailing block). CHOLMOD's own choice if neither
+    // ordering can be made.
+    const double roiColumns = double(sys->kfr.cols());
+    auto estimatedCost = [roiColumns](double nonzeros, double flops, int trailing) {
+      const double solveFlops = trailing > 0 ? 2.0 * nonzeros + double(trailing) * trailing : 4.0 * nonzeros;
+      return flops + roiColumns * solveFlops;
+    };
+    std::vector<FillReducingOrdering> candidates(1);
+    bool settled = false;
+    if (sys->kfr.cols() > 0 &&
+        OrderNodesWithTrailing(sys->kff, 3, NodesCoupledTo(sys->kfr, layout.freeNodes(), 3), candidates[0]).ok) {
+      Status as = sys->factor.analyze(sys->kff, candidates, estimatedCost);
+      if (!as) return as;
+      // Settled without the other ordering when even losing the whole trailing block (t^3/3
+      // flops, t^2/2 entries) could not make full solves cheaper: t^3/3 + 3 r t^2 <= 2 r nnz(L).
+      const double block = sys->factor.trailingDofs(), r = roiColumns;
+      settled = block > 0 &&
+                block * block * block / 3.0 + 3.0 * r * block * block <= 2.0 * r * sys->factor.factorNonzeros();
+    } else {
+      candidates.clear();
+    }
+    if (!settled) {
+      FillReducingOrdering plain;
+      if (OrderNodesWithTrailing(sys->kff, 3, {}, plain).ok) candidates.push_back(std::move(plain));
+    }
+    if (!settled) {
+      Status as = sys->factor.analyze(sys->kff, candidates, estimatedCost);
+      if (!as) return as; // (not into `status`: that would drop its warnings)
+    }
+    info.ordering = candidates.empty() ? "CHOLMOD default"
+                    : std::string(candidates.front().method) +
+                          (sys->factor.trailingDofs() > 0 ? ", ROI-coupled DOFs last" : "");
     t[Stage::Reordering].ms = clock.lapMs();
     info.factorNonzeros = sys->factor.factorNonzeros();
     report(0.25, "reordering");
@@ -585,7 +650,7 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
     if (!sys.responseOperator->apply(roi, keptFree, error))
       return Status::Error("dense response update failed: " + error);
     result.relativeResidual = sys.responseResidual;
-    result.residualIsBound = true;
+    result.residualFromPrecompute = true;
     if (hasLoad) {
       std::lock_guard<std::mutex> lock(sys.loadMutex);
       if (sys.lastLoad.size() != load.size() || sys.lastLoad != load) {
@@ -602,10 +667,32 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
     }
   } else {
     Eigen::VectorXd rhs = load;
-    if (roi.size() > 0) rhs.noalias() -= sys.kfr * roi;
+    Eigen::VectorXd roiLoad; // -K_FR roi: non-zero only on the ROI-coupled (trailing) DOFs
+    if (roi.size() > 0) roiLoad.noalias() = -(sys.kfr * roi);
+    if (roi.size() > 0) rhs += roiLoad;
+    // With the ROI-coupled DOFs ordered last, the ROI part needs only a backward substitution;
+    // a load's part is solved in full and reused while the load does not change.
+    Eigen::MatrixXd initial;
+    if (roi.size() > 0 && sys.factor.trailingDofs() > 0) {
+      const SparseMatrix roiRhs = roiLoad.sparseView();
+      Status s = sys.factor.solveTrailing(roiRhs, initial);
+      if (!s) return s;
+      if (hasLoad) {
+        std::lock_guard<std::mutex> lock(sys.loadMutex);
+        if (sys.lastLoad.size() != load.size() || sys.lastLoad != load) {
+          Eigen::MatrixXd x;
+          s = sys.factor.solve(load, x);
+          if (!s) return s;
+          sys.lastLoad = load;
+          sys.lastLoadResponse = x.col(0);
+        }
+        initial.col(0) += sys.lastLoadResponse;
+      }
+    }
     Eigen::MatrixXd x;
     Status s = RefinedSolve(sys, rhs, x, false, sys.residualTolerance, sys.maxRefinementSteps,
-                            result.relativeResidual, result.refinementSteps);
+                            result.relativeResidual, result.refinementSteps, nullptr,
+                            initial.size() > 0 ? &initial : nullptr);
     if (!s) return s;
     freeValues = x.col(0);
     keptFree = freeValues.head(3 * layout.keptFree);

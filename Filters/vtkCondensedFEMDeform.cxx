@@ -417,7 +417,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   const double solveMs = result.timings[faceplan::Stage::Total].ms;
   vtkNew<vtkFieldData> fd;
   AddScalar(fd, "RelativeResidual", result.relativeResidual);
-  AddScalar(fd, "ResidualIsBound", result.residualIsBound ? 1.0 : 0.0);
+  AddScalar(fd, "ResidualFromPrecompute", result.residualFromPrecompute ? 1.0 : 0.0);
   AddScalar(fd, "SolveTimeMs", solveMs);
   AddScalar(fd, "PrecomputeTimeMs", precomputeMs);
   AddScalar(fd, "PrecomputeReused", freshPrecompute || this->Method == METHOD_FULL_REFERENCE ? 0.0 : 1.0);
