@@ -173,11 +173,15 @@ double ProbeResponseOperator(const CondensedSystem& sys, ResponseOperator& op, s
 // triangular solve runs at about a third of a dense product's flop rate (scripts/report measured
 // 3.3 against 1.1 GFLOP/s median over its scenes), so its flops are weighted by that ratio.
 constexpr double kSparseSolveFlopWeight = 3.0;
+// A factor solve of an edit is a backward substitution plus the trailing block's forward one when
+// the ROI-coupled DOFs were ordered last (trailingDofs > 0), else both full substitutions.
 SolveMethod ChooseMethod(const PrecomputeOptions& options, double keptDofs, double roiDofs,
-                         double factorNonzeros, std::string& reason) {
+                         double factorNonzeros, double trailingDofs, std::string& reason) {
   const double denseBytes = 8.0 * keptDofs * roiDofs;
   const double denseFlops = 2.0 * keptDofs * roiDofs;
-  const double factorFlops = 4.0 * factorNonzeros * kSparseSolveFlopWeight;
+  const double solveFlops =
+      trailingDofs > 0 ? 2.0 * factorNonzeros + trailingDofs * trailingDofs : 4.0 * factorNonzeros;
+  const double factorFlops = solveFlops * kSparseSolveFlopWeight;
   std::ostringstream why;
   why.precision(3);
   if (options.method == SolveMethod::DenseResponse || options.method == SolveMethod::CachedFactor) {
@@ -476,7 +480,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
   // The method needs only the analysis (the factor's size), so it is chosen before the numeric
   // factorization, which a backend may then do together with the response.
   sys->method = ChooseMethod(options, double(info.keptDofs), double(info.roiDofs),
-                             info.factorNonzeros, info.choiceReason);
+                             info.factorNonzeros, double(sys->factor.trailingDofs()), info.choiceReason);
   if (freeDofs == 0) sys->method = SolveMethod::CachedFactor;
   info.method = sys->method;
 
