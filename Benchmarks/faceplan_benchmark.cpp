@@ -64,7 +64,8 @@ int main(int argc, char** argv) {
     else if (key == "--reference-repeats") referenceRepeats = std::stoi(value);
     else if (key == "--method") method = value;
     else if (key == "--ccx") ccxDir = value;
-    else if (key == "--ccx-repeats") ccxRepeats = std::max(1, std::stoi(value));
+    else if (key == "--ccx-repeats")
+      ccxRepeats = std::max(1, std::stoi(value));
     else if (key == "--json") jsonPath = value;
     else {
       std::fprintf(stderr, "unknown option %s\n", key.c_str());
@@ -139,10 +140,12 @@ int main(int argc, char** argv) {
     for (int r = 0; r < ccxRepeats; ++r) {
       ccx = bench::RunCalculix(request, input.movableDisplacement, ccxDir,
                                static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
-      if (!ccx.ok) break;
+      if (!ccx.ok)
+        break;
       ccxMs.push_back(ccx.wallMs);
     }
-    if (ccx.ok) ccx.wallMs = Median(ccxMs);
+    if (ccx.ok)
+      ccx.wallMs = Median(ccxMs);
     if (ccx.ok) diffCcx = (condensedKept - ccx.keptDisplacement).cwiseAbs().maxCoeff() /
                           ccx.keptDisplacement.cwiseAbs().maxCoeff();
     else std::fprintf(stderr, "CalculiX: %s\n", ccx.error.c_str());
@@ -159,7 +162,9 @@ int main(int argc, char** argv) {
               referenceMedian, referenceMedian / editMedian, peakCondensedMB, PeakRssMB());
   std::printf("max rel. difference to reference %.2e, worst residual %.2e\n", diffReference, worstResidual);
   std::printf("ordering: %s; response: %s\n", info.ordering.c_str(), info.responsePath.c_str());
-  if (ccx.ok) std::printf("CalculiX %.1f ms (median of %d), max rel. difference %.2e\n", ccx.wallMs, ccxRepeats, diffCcx);
+  if (ccx.ok)
+    std::printf("CalculiX %.1f ms (median of %d), max rel. difference %.2e\n", ccx.wallMs,
+                ccxRepeats, diffCcx);
 
   if (!jsonPath.empty()) {
     std::ofstream out(jsonPath);
@@ -173,13 +178,18 @@ int main(int argc, char** argv) {
     for (int k = 0; k < kNumStages; ++k)
       out << (k ? ", " : "") << "\"" << StageName(static_cast<Stage>(k)) << "\": " << Median(stageMs[k]);
     out << "},\n  \"edits\": " << edits << ", \"edit_ms_median\": " << editMedian
-        << ", \"edit_ms_p10\": " << Quantile(editMs, 0.1) << ", \"edit_ms_p90\": " << Quantile(editMs, 0.9)
-        << ",\n  \"reference_ms_median\": " << referenceMedian << ", \"reference_over_edit\": "
-        << referenceMedian / editMedian << ",\n  \"peak_rss_condensed_mb\": " << peakCondensedMB
-        << ", \"peak_rss_all_mb\": " << PeakRssMB() << ",\n  \"max_rel_diff_reference\": " << diffReference
-        << ", \"worst_relative_residual\": " << worstResidual << ",\n  \"ccx_ms\": "
-        << (ccx.ok ? ccx.wallMs : -1.0) << ", \"ccx_repeats\": " << ccxRepeats << ", \"max_rel_diff_ccx\": " << diffCcx
-        << ",\n  \"ordering\": \"" << info.ordering << "\", \"response_path\": \"" << info.responsePath << "\"\n}\n";
+        << ", \"edit_ms_p10\": " << Quantile(editMs, 0.1)
+        << ", \"edit_ms_p90\": " << Quantile(editMs, 0.9)
+        << ",\n  \"reference_ms_median\": " << referenceMedian
+        << ", \"reference_over_edit\": " << referenceMedian / editMedian
+        << ",\n  \"peak_rss_condensed_mb\": " << peakCondensedMB
+        << ", \"peak_rss_all_mb\": " << PeakRssMB()
+        << ",\n  \"max_rel_diff_reference\": " << diffReference
+        << ", \"worst_relative_residual\": " << worstResidual
+        << ",\n  \"ccx_ms\": " << (ccx.ok ? ccx.wallMs : -1.0)
+        << ", \"ccx_repeats\": " << ccxRepeats << ", \"max_rel_diff_ccx\": " << diffCcx
+        << ",\n  \"ordering\": \"" << info.ordering << "\", \"response_path\": \""
+        << info.responsePath << "\"\n}\n";
   }
   return 0;
 }

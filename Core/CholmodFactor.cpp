@@ -54,7 +54,8 @@ struct CholmodFactor::Impl {
 
 void CholmodFactor::Impl::extractTrailingBlock() {
   trailingBlock.resize(0, 0);
-  if (trailing == 0 || !factor || !factor->is_super) return;
+  if (trailing == 0 || !factor || !factor->is_super)
+    return;
   const int n = static_cast<int>(factor->n), first = n - trailing;
   trailingBlock = Eigen::MatrixXd::Zero(trailing, trailing);
   const int* super = static_cast<const int*>(factor->super);
@@ -63,12 +64,14 @@ void CholmodFactor::Impl::extractTrailingBlock() {
   const int* s = static_cast<const int*>(factor->s);
   const double* values = static_cast<const double*>(factor->x);
   for (size_t k = 0; k < factor->nsuper; ++k) {
-    if (super[k + 1] <= first) continue;
+    if (super[k + 1] <= first)
+      continue;
     const int rows = pi[k + 1] - pi[k];
     for (int j = std::max(super[k], first); j < super[k + 1]; ++j)
       for (int r = 0; r < rows; ++r) {
         const int row = s[pi[k] + r];
-        if (row >= j) trailingBlock(row - first, j - first) = values[px[k] + (j - super[k]) * rows + r];
+        if (row >= j)
+          trailingBlock(row - first, j - first) = values[px[k] + (j - super[k]) * rows + r];
       }
   }
 }
@@ -88,17 +91,20 @@ CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
 CholmodFactor::~CholmodFactor() = default;
 
 Status CholmodFactor::analyze(const SparseMatrix& upper, const FillReducingOrdering* ordering) {
-  if (!ordering) return analyze(upper, std::vector<FillReducingOrdering>{}, {});
+  if (!ordering)
+    return analyze(upper, std::vector<FillReducingOrdering>{}, {});
   return analyze(upper, std::vector<FillReducingOrdering>{*ordering}, {});
 }
 
-Status CholmodFactor::analyze(const SparseMatrix& upper, const std::vector<FillReducingOrdering>& candidates,
+Status CholmodFactor::analyze(const SparseMatrix& upper,
+                              const std::vector<FillReducingOrdering>& candidates,
                               const OrderingCost& cost) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   if (!upper.isCompressed()) return Status::Error("internal: matrix not compressed");
   const int n = static_cast<int>(upper.rows());
   for (const FillReducingOrdering& c : candidates)
-    if (static_cast<int>(c.permutation.size()) != n) return Status::Error("internal: ordering does not match the matrix");
+    if (static_cast<int>(c.permutation.size()) != n)
+      return Status::Error("internal: ordering does not match the matrix");
   cholmod_sparse view = ViewUpper(upper);
   cholmod_common& common = impl_->common;
   cholmod_free_factor(&impl_->factor, &common);
@@ -108,27 +114,31 @@ Status CholmodFactor::analyze(const SparseMatrix& upper, const std::vector<FillR
 
   // Where the DOFs a candidate put last ended up: its trailing size if they fill the last
   // positions of the analysed factor (CHOLMOD's etree postorder keeps a trailing clique last).
-  auto keptTrailing = [n](const cholmod_factor* L, const FillReducingOrdering& c, std::vector<int>& position) {
+  auto keptTrailing = [n](const cholmod_factor* L, const FillReducingOrdering& c,
+                          std::vector<int>& position) {
     const int* perm = static_cast<const int*>(L->Perm);
     position.assign(n, 0);
-    for (int p = 0; p < n; ++p) position[perm[p]] = p;
-    if (c.trailingDofs == 0 || !L->is_super) return 0;
+    for (int p = 0; p < n; ++p)
+      position[perm[p]] = p;
+    if (c.trailingDofs == 0 || !L->is_super)
+      return 0;
     int first = n;
-    for (int k = n - c.trailingDofs; k < n; ++k) first = std::min(first, position[c.permutation[k]]);
+    for (int k = n - c.trailingDofs; k < n; ++k)
+      first = std::min(first, position[c.permutation[k]]);
     return first == n - c.trailingDofs ? c.trailingDofs : 0;
   };
 
-  if (candidates.empty()) {
-    impl_->factor = cholmod_analyze(&view, &common);
-  } else {
+  if (!candidates.empty()) {
     // Only the given ordering, then CHOLMOD's postorder; the cheapest candidate by `cost`.
     common.nmethods = 1;
     common.method[0].ordering = CHOLMOD_GIVEN;
     common.postorder = 1;
     double bestCost = 0.0, bestLnz = 0.0, bestFlops = 0.0;
     for (const FillReducingOrdering& c : candidates) {
-      cholmod_factor* L = cholmod_analyze_p(&view, const_cast<int*>(c.permutation.data()), nullptr, 0, &common);
-      if (!L) continue;
+      cholmod_factor* L =
+          cholmod_analyze_p(&view, const_cast<int*>(c.permutation.data()), nullptr, 0, &common);
+      if (!L)
+        continue;
       std::vector<int> position;
       const int trailing = keptTrailing(L, c, position);
       const double score = cost ? cost(common.lnz, common.fl, trailing) : 0.0;
@@ -146,12 +156,18 @@ Status CholmodFactor::analyze(const SparseMatrix& upper, const std::vector<FillR
     }
     common.lnz = bestLnz; // factorNonzeros() and factorFlops() report the kept candidate
     common.fl = bestFlops;
-    common.nmethods = 0;  // back to CHOLMOD's default choice for later analyses
+    common.nmethods = 0; // back to CHOLMOD's default choice for later analyses
+  }
+  const bool ownChoice = !impl_->factor;
+  if (ownChoice) { // no candidate, or none could be analysed: CHOLMOD's own ordering
+    common.status = CHOLMOD_OK;
+    impl_->factor = cholmod_analyze(&view, &common);
   }
   if (!impl_->factor || common.status < CHOLMOD_OK)
     return Status::Error("CHOLMOD ordering failed (status " + std::to_string(common.status) +
                          "; out of memory?)");
-  if (candidates.empty()) keptTrailing(impl_->factor, FillReducingOrdering{}, impl_->position);
+  if (ownChoice)
+    keptTrailing(impl_->factor, FillReducingOrdering{}, impl_->position);
   return Status::Ok();
 }
 
@@ -233,28 +249,37 @@ CholmodFactor::TrailingWorkspace::~TrailingWorkspace() = default;
 
 Eigen::Map<const Eigen::MatrixXd> CholmodFactor::TrailingWorkspace::permutedSolution() const {
   const cholmod_dense* x = impl_->x;
-  if (!x) return Eigen::Map<const Eigen::MatrixXd>(nullptr, 0, 0);
-  return Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(x->x), x->nrow, impl_->columns);
+  if (!x)
+    return Eigen::Map<const Eigen::MatrixXd>(nullptr, 0, 0);
+  return Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(x->x), x->nrow,
+                                           impl_->columns);
 }
 
-const std::vector<int>& CholmodFactor::eliminationPosition() const { return impl_->position; }
+const std::vector<int>& CholmodFactor::eliminationPosition() const {
+  return impl_->position;
+}
 
 Status CholmodFactor::solveTrailing(const SparseMatrix& b, TrailingWorkspace& workspace) const {
   const cholmod_factor* L = impl_->factor;
-  if (!L || !impl_->numeric) return Status::Error("internal: solve before factorize");
+  if (!L || !impl_->numeric)
+    return Status::Error("internal: solve before factorize");
   const int n = static_cast<int>(L->n), t = impl_->trailing, first = n - t;
-  if (t == 0 || impl_->trailingBlock.rows() != t) return Status::Error("internal: no trailing block");
-  if (b.rows() != n) return Status::Error("internal: right-hand side has the wrong size");
+  if (t == 0 || impl_->trailingBlock.rows() != t)
+    return Status::Error("internal: no trailing block");
+  if (b.rows() != n)
+    return Status::Error("internal: right-hand side has the wrong size");
   TrailingWorkspace::Impl& ws = *workspace.impl_;
   const Eigen::Index m = b.cols();
-  if (ws.rhs.rows() != n || ws.rhs.cols() < m) ws.rhs = Eigen::MatrixXd::Zero(n, m);
+  if (ws.rhs.rows() != n || ws.rhs.cols() < m)
+    ws.rhs = Eigen::MatrixXd::Zero(n, m);
   // Forward: L^-1 P b is zero above the trailing block, which is a dense triangular solve.
   auto tail = ws.rhs.bottomRows(t).leftCols(m);
   tail.setZero();
   for (Eigen::Index c = 0; c < m; ++c)
     for (SparseMatrix::InnerIterator it(b, c); it; ++it) {
       const int p = impl_->position[it.row()];
-      if (p < first) return Status::Error("internal: right-hand side outside the trailing DOFs");
+      if (p < first)
+        return Status::Error("internal: right-hand side outside the trailing DOFs");
       tail(p - first, c) = it.value();
     }
   impl_->trailingBlock.triangularView<Eigen::Lower>().solveInPlace(tail);
@@ -262,22 +287,25 @@ Status CholmodFactor::solveTrailing(const SparseMatrix& b, TrailingWorkspace& wo
   cholmod_dense rhs = ViewDense(ws.rhs);
   rhs.ncol = static_cast<size_t>(m);
   rhs.nzmax = static_cast<size_t>(n) * m;
-  const int ok = cholmod_solve2(CHOLMOD_Lt, const_cast<cholmod_factor*>(L), &rhs, nullptr, &ws.x, nullptr,
-                                &ws.y, &ws.e, &ws.common);
+  const int ok = cholmod_solve2(CHOLMOD_Lt, const_cast<cholmod_factor*>(L), &rhs, nullptr, &ws.x,
+                                nullptr, &ws.y, &ws.e, &ws.common);
   ws.columns = m;
-  if (!ok || !ws.x) return Status::Error("CHOLMOD solve failed (out of memory?)");
+  if (!ok || !ws.x)
+    return Status::Error("CHOLMOD solve failed (out of memory?)");
   return Status::Ok();
 }
 
 Status CholmodFactor::solveTrailing(const SparseMatrix& b, Eigen::MatrixXd& x) const {
   TrailingWorkspace workspace;
   Status status = solveTrailing(b, workspace);
-  if (!status) return status;
+  if (!status)
+    return status;
   const Eigen::Map<const Eigen::MatrixXd> permuted = workspace.permutedSolution();
   const int* perm = static_cast<const int*>(impl_->factor->Perm);
   x.resize(permuted.rows(), permuted.cols());
   for (Eigen::Index c = 0; c < x.cols(); ++c)
-    for (Eigen::Index p = 0; p < x.rows(); ++p) x(perm[p], c) = permuted(p, c);
+    for (Eigen::Index p = 0; p < x.rows(); ++p)
+      x(perm[p], c) = permuted(p, c);
   return Status::Ok();
 }
 

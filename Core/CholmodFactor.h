@@ -8,8 +8,8 @@
 #include <Eigen/Core>
 #include <functional>
 #include <memory>
-#include <vector>
 #include <mutex>
+#include <vector>
 
 struct cholmod_factor_struct;
 struct cholmod_common_struct;
@@ -43,7 +43,8 @@ public:
   // x = A^-1 b for sparse right-hand sides that are non-zero only on the trailing DOFs of the
   // ordering given to analyze(): the forward substitution is a dense triangular solve with the
   // factor's trailing block, so this costs about half of solve(). Safe to call from several threads
-  // at once (private CHOLMOD workspace). Fails if b has a non-zero elsewhere or trailingDofs() is 0.
+  // at once (private CHOLMOD workspace). Fails if b has a non-zero elsewhere or trailingDofs() is
+  // 0.
   Status solveTrailing(const SparseMatrix& b, Eigen::MatrixXd& x) const;
   // DOFs in the factor's trailing block (0 when analyze() had no ordering or the symbolic analysis
   // did not keep them last).

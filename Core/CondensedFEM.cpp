@@ -87,13 +87,16 @@ using RowMajorDense = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eige
 // `initial`, when given, is used as the first solution instead of solving for b.
 Status RefinedSolve(const CondensedSystem& sys, const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
                     bool concurrent, double tolerance, int maxSteps, double& worst, int& steps,
-                    const RowMajorSparse* fullRowMajor = nullptr, const Eigen::MatrixXd* initial = nullptr) {
+                    const RowMajorSparse* fullRowMajor = nullptr,
+                    const Eigen::MatrixXd* initial = nullptr) {
   auto solve = [&](const Eigen::MatrixXd& rhs, Eigen::MatrixXd& out) {
     return concurrent ? sys.factor.solveConcurrently(rhs, out) : sys.factor.solve(rhs, out);
   };
   Status s = Status::Ok();
-  if (initial) x = *initial;
-  else s = solve(b, x);
+  if (initial)
+    x = *initial;
+  else
+    s = solve(b, x);
   if (!s) return s;
   const Eigen::VectorXd norms = b.colwise().norm().transpose();
   steps = 0;
@@ -230,8 +233,13 @@ Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
     TrailingResponseResult fast;
     Status fs = BuildTrailingResponse(
         sys.factor, sys.kff, sys.kfr, keptDofs, largestBlock, cancel,
-        [&progress](double f) { if (progress) progress(0.6 + 0.4 * f, "dense response"); }, fast);
-    if (!fs) return fs;
+        [&progress](double f) {
+          if (progress)
+            progress(0.6 + 0.4 * f, "dense response");
+        },
+        fast);
+    if (!fs)
+      return fs;
     std::ostringstream how;
     how.precision(3);
     if (fast.residualEstimate <= sys.residualTolerance) {
@@ -444,34 +452,41 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
     // ordering can be made.
     const double roiColumns = double(sys->kfr.cols());
     auto estimatedCost = [roiColumns](double nonzeros, double flops, int trailing) {
-      const double solveFlops = trailing > 0 ? 2.0 * nonzeros + double(trailing) * trailing : 4.0 * nonzeros;
+      const double solveFlops =
+          trailing > 0 ? 2.0 * nonzeros + double(trailing) * trailing : 4.0 * nonzeros;
       return flops + roiColumns * solveFlops;
     };
     std::vector<FillReducingOrdering> candidates(1);
     bool settled = false;
     if (sys->kfr.cols() > 0 &&
-        OrderNodesWithTrailing(sys->kff, 3, NodesCoupledTo(sys->kfr, layout.freeNodes(), 3), candidates[0]).ok) {
+        OrderNodesWithTrailing(sys->kff, 3, NodesCoupledTo(sys->kfr, layout.freeNodes(), 3),
+                               candidates[0])
+            .ok) {
       Status as = sys->factor.analyze(sys->kff, candidates, estimatedCost);
-      if (!as) return as;
+      if (!as)
+        return as;
       // Settled without the other ordering when even losing the whole trailing block (t^3/3
       // flops, t^2/2 entries) could not make full solves cheaper: t^3/3 + 3 r t^2 <= 2 r nnz(L).
       const double block = sys->factor.trailingDofs(), r = roiColumns;
-      settled = block > 0 &&
-                block * block * block / 3.0 + 3.0 * r * block * block <= 2.0 * r * sys->factor.factorNonzeros();
+      settled = block > 0 && block * block * block / 3.0 + 3.0 * r * block * block <=
+                                 2.0 * r * sys->factor.factorNonzeros();
     } else {
       candidates.clear();
     }
     if (!settled) {
       FillReducingOrdering plain;
-      if (OrderNodesWithTrailing(sys->kff, 3, {}, plain).ok) candidates.push_back(std::move(plain));
+      if (OrderNodesWithTrailing(sys->kff, 3, {}, plain).ok)
+        candidates.push_back(std::move(plain));
     }
     if (!settled) {
       Status as = sys->factor.analyze(sys->kff, candidates, estimatedCost);
-      if (!as) return as; // (not into `status`: that would drop its warnings)
+      if (!as)
+        return as; // (not into `status`: that would drop its warnings)
     }
-    info.ordering = candidates.empty() ? "CHOLMOD default"
-                    : std::string(candidates.front().method) +
-                          (sys->factor.trailingDofs() > 0 ? ", ROI-coupled DOFs last" : "");
+    info.ordering = candidates.empty()
+                        ? "CHOLMOD default"
+                        : std::string(candidates.front().method) +
+                              (sys->factor.trailingDofs() > 0 ? ", ROI-coupled DOFs last" : "");
     t[Stage::Reordering].ms = clock.lapMs();
     info.factorNonzeros = sys->factor.factorNonzeros();
     report(0.25, "reordering");
@@ -479,8 +494,9 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
   }
   // The method needs only the analysis (the factor's size), so it is chosen before the numeric
   // factorization, which a backend may then do together with the response.
-  sys->method = ChooseMethod(options, double(info.keptDofs), double(info.roiDofs),
-                             info.factorNonzeros, double(sys->factor.trailingDofs()), info.choiceReason);
+  sys->method =
+      ChooseMethod(options, double(info.keptDofs), double(info.roiDofs), info.factorNonzeros,
+                   double(sys->factor.trailingDofs()), info.choiceReason);
   if (freeDofs == 0) sys->method = SolveMethod::CachedFactor;
   info.method = sys->method;
 
@@ -672,21 +688,25 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
   } else {
     Eigen::VectorXd rhs = load;
     Eigen::VectorXd roiLoad; // -K_FR roi: non-zero only on the ROI-coupled (trailing) DOFs
-    if (roi.size() > 0) roiLoad.noalias() = -(sys.kfr * roi);
-    if (roi.size() > 0) rhs += roiLoad;
+    if (roi.size() > 0)
+      roiLoad.noalias() = -(sys.kfr * roi);
+    if (roi.size() > 0)
+      rhs += roiLoad;
     // With the ROI-coupled DOFs ordered last, the ROI part needs only a backward substitution;
     // a load's part is solved in full and reused while the load does not change.
     Eigen::MatrixXd initial;
     if (roi.size() > 0 && sys.factor.trailingDofs() > 0) {
       const SparseMatrix roiRhs = roiLoad.sparseView();
       Status s = sys.factor.solveTrailing(roiRhs, initial);
-      if (!s) return s;
+      if (!s)
+        return s;
       if (hasLoad) {
         std::lock_guard<std::mutex> lock(sys.loadMutex);
         if (sys.lastLoad.size() != load.size() || sys.lastLoad != load) {
           Eigen::MatrixXd x;
           s = sys.factor.solve(load, x);
-          if (!s) return s;
+          if (!s)
+            return s;
           sys.lastLoad = load;
           sys.lastLoadResponse = x.col(0);
         }
