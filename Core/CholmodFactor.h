@@ -69,6 +69,8 @@ public:
   };
   Status solveTrailing(const SparseMatrix& b, TrailingWorkspace& workspace) const;
   const std::vector<int>& eliminationPosition() const; // valid after analyze()
+  // Rows of a matrix in elimination order put back in the original DOF order.
+  Eigen::MatrixXd fromEliminationOrder(const Eigen::Ref<const Eigen::MatrixXd>& permuted) const;
 
   // True after a successful factorize() or markFactorized(); analyze() resets it.
   bool isFactorized() const;

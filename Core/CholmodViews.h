@@ -1,5 +1,6 @@
 #pragma once
-// Non-owning CHOLMOD views of Eigen storage (no copies), shared by Core and the CUDA backend.
+// Non-owning CHOLMOD views of Eigen storage (no copies), shared by Core and the CUDA backend, and
+// the quiet cholmod_common every CHOLMOD caller here starts.
 #include "StiffnessAssembly.h"
 
 #include <Eigen/Core>
@@ -37,5 +38,20 @@ inline cholmod_dense ViewDense(const Eigen::MatrixXd& b) {
   view.dtype = CHOLMOD_DOUBLE;
   return view;
 }
+
+// A cholmod_common for the owner's lifetime that prints nothing and has no error handler: every
+// caller checks return values and status itself and reports through Status. Free what was
+// allocated with it before it goes (members declared after it are destroyed first).
+struct QuietCholmodCommon {
+  cholmod_common common;
+  QuietCholmodCommon() {
+    cholmod_start(&common);
+    common.print = 0;
+    common.error_handler = nullptr;
+  }
+  ~QuietCholmodCommon() { cholmod_finish(&common); }
+  QuietCholmodCommon(const QuietCholmodCommon&) = delete;
+  QuietCholmodCommon& operator=(const QuietCholmodCommon&) = delete;
+};
 
 } // namespace faceplan

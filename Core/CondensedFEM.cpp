@@ -123,6 +123,26 @@ Status RefinedSolve(const CondensedSystem& sys, const Eigen::MatrixXd& b, Eigen:
   return Status::Ok();
 }
 
+// The free DOFs' response to `load` (K_FF^-1 load, refined), solved when the load differs from
+// the last one and reused while it does not. `residual` and `steps` are that solve's (0 if reused).
+Status CachedLoadResponse(const CondensedSystem& sys, const Eigen::VectorXd& load,
+                          Eigen::VectorXd& response, double& residual, int& steps) {
+  std::lock_guard<std::mutex> lock(sys.loadMutex);
+  residual = 0.0;
+  steps = 0;
+  if (sys.lastLoad.size() != load.size() || sys.lastLoad != load) {
+    Eigen::MatrixXd x;
+    Status s = RefinedSolve(sys, load, x, false, sys.residualTolerance, sys.maxRefinementSteps,
+                            residual, steps);
+    if (!s)
+      return s;
+    sys.lastLoad = load;
+    sys.lastLoadResponse = x.col(0);
+  }
+  response = sys.lastLoadResponse;
+  return Status::Ok();
+}
+
 // The caller's node sets extended to the mid-edge nodes of a quadratic mesh. `derived` receives,
 // for each mid-edge ROI node (appended after the caller's movable nodes), its ends' positions in
 // the caller's movable list (-1 for a fixed end).
@@ -176,15 +196,19 @@ double ProbeResponseOperator(const CondensedSystem& sys, ResponseOperator& op, s
 // triangular solve runs at about a third of a dense product's flop rate (scripts/report measured
 // 3.3 against 1.1 GFLOP/s median over its scenes), so its flops are weighted by that ratio.
 constexpr double kSparseSolveFlopWeight = 3.0;
-// A factor solve of an edit is a backward substitution plus the trailing block's forward one when
-// the ROI-coupled DOFs were ordered last (trailingDofs > 0), else both full substitutions.
+// Flops of one solve with the factor for a right-hand side on the ROI-coupled DOFs: a backward
+// substitution plus the trailing block's dense forward one when those DOFs were ordered last
+// (trailingDofs > 0), else both full substitutions.
+double FactorSolveFlops(double factorNonzeros, double trailingDofs) {
+  return trailingDofs > 0 ? 2.0 * factorNonzeros + trailingDofs * trailingDofs
+                          : 4.0 * factorNonzeros;
+}
 SolveMethod ChooseMethod(const PrecomputeOptions& options, double keptDofs, double roiDofs,
                          double factorNonzeros, double trailingDofs, std::string& reason) {
   const double denseBytes = 8.0 * keptDofs * roiDofs;
   const double denseFlops = 2.0 * keptDofs * roiDofs;
-  const double solveFlops =
-      trailingDofs > 0 ? 2.0 * factorNonzeros + trailingDofs * trailingDofs : 4.0 * factorNonzeros;
-  const double factorFlops = solveFlops * kSparseSolveFlopWeight;
+  const double factorFlops =
+      FactorSolveFlops(factorNonzeros, trailingDofs) * kSparseSolveFlopWeight;
   std::ostringstream why;
   why.precision(3);
   if (options.method == SolveMethod::DenseResponse || options.method == SolveMethod::CachedFactor) {
@@ -452,16 +476,16 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
     // ordering can be made.
     const double roiColumns = double(sys->kfr.cols());
     auto estimatedCost = [roiColumns](double nonzeros, double flops, int trailing) {
-      const double solveFlops =
-          trailing > 0 ? 2.0 * nonzeros + double(trailing) * trailing : 4.0 * nonzeros;
-      return flops + roiColumns * solveFlops;
+      return flops + roiColumns * FactorSolveFlops(nonzeros, trailing);
     };
-    std::vector<FillReducingOrdering> candidates(1);
+    std::vector<FillReducingOrdering> candidates;
     bool settled = false;
+    FillReducingOrdering trailingLast;
     if (sys->kfr.cols() > 0 &&
         OrderNodesWithTrailing(sys->kff, 3, NodesCoupledTo(sys->kfr, layout.freeNodes(), 3),
-                               candidates[0])
+                               trailingLast)
             .ok) {
+      candidates.push_back(std::move(trailingLast));
       Status as = sys->factor.analyze(sys->kff, candidates, estimatedCost);
       if (!as)
         return as;
@@ -470,15 +494,13 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
       const double block = sys->factor.trailingDofs(), r = roiColumns;
       settled = block > 0 && block * block * block / 3.0 + 3.0 * r * block * block <=
                                  2.0 * r * sys->factor.factorNonzeros();
-    } else {
-      candidates.clear();
     }
     if (!settled) {
+      // Both candidates analysed together (the trailing one a second time: CholmodFactor keeps
+      // one analysis; this only happens for ROIs large enough to doubt the trailing block).
       FillReducingOrdering plain;
       if (OrderNodesWithTrailing(sys->kff, 3, {}, plain).ok)
         candidates.push_back(std::move(plain));
-    }
-    if (!settled) {
       Status as = sys->factor.analyze(sys->kff, candidates, estimatedCost);
       if (!as)
         return as; // (not into `status`: that would drop its warnings)
@@ -672,26 +694,21 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
     result.relativeResidual = sys.responseResidual;
     result.residualFromPrecompute = true;
     if (hasLoad) {
-      std::lock_guard<std::mutex> lock(sys.loadMutex);
-      if (sys.lastLoad.size() != load.size() || sys.lastLoad != load) {
-        Eigen::MatrixXd x;
-        double residual = 0.0;
-        Status s = RefinedSolve(sys, load, x, false, sys.residualTolerance, sys.maxRefinementSteps,
-                                residual, result.refinementSteps);
-        if (!s) return s;
-        sys.lastLoad = load;
-        sys.lastLoadResponse = x.col(0);
-        result.relativeResidual = std::max(result.relativeResidual, residual);
-      }
-      keptFree += sys.lastLoadResponse.head(keptFree.size());
+      Eigen::VectorXd loadResponse;
+      double residual = 0.0;
+      Status s = CachedLoadResponse(sys, load, loadResponse, residual, result.refinementSteps);
+      if (!s)
+        return s;
+      result.relativeResidual = std::max(result.relativeResidual, residual);
+      keptFree += loadResponse.head(keptFree.size());
     }
   } else {
     Eigen::VectorXd rhs = load;
     Eigen::VectorXd roiLoad; // -K_FR roi: non-zero only on the ROI-coupled (trailing) DOFs
-    if (roi.size() > 0)
+    if (roi.size() > 0) {
       roiLoad.noalias() = -(sys.kfr * roi);
-    if (roi.size() > 0)
       rhs += roiLoad;
+    }
     // With the ROI-coupled DOFs ordered last, the ROI part needs only a backward substitution;
     // a load's part is solved in full and reused while the load does not change.
     Eigen::MatrixXd initial;
@@ -701,16 +718,13 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
       if (!s)
         return s;
       if (hasLoad) {
-        std::lock_guard<std::mutex> lock(sys.loadMutex);
-        if (sys.lastLoad.size() != load.size() || sys.lastLoad != load) {
-          Eigen::MatrixXd x;
-          s = sys.factor.solve(load, x);
-          if (!s)
-            return s;
-          sys.lastLoad = load;
-          sys.lastLoadResponse = x.col(0);
-        }
-        initial.col(0) += sys.lastLoadResponse;
+        Eigen::VectorXd loadResponse;
+        double loadResidual = 0.0;
+        int loadSteps = 0; // the refinement of the whole solution below is what this solve reports
+        s = CachedLoadResponse(sys, load, loadResponse, loadResidual, loadSteps);
+        if (!s)
+          return s;
+        initial.col(0) += loadResponse;
       }
     }
     Eigen::MatrixXd x;

@@ -54,7 +54,8 @@ struct PrecomputeOptions {
   // Compute backend for element stiffness, assembly and the dense per-edit update; null = CPU.
   std::shared_ptr<ComputeBackend> backend;
   // Columns of the response solved per block (bounds the precompute's transient memory).
-  // 128 measured fastest on the 100k face-like scene (the solve's gathered rows stay in cache).
+  // 128: on the 100k face-like scene as fast as or faster than 32-512 in single runs (noisy; the
+  // solve's gathered rows stay in cache), and half the transient memory of 256.
   int responseBlockColumns = 128;
 
   // ---- stability options (all optional; the defaults keep the original behaviour) ----

@@ -1,5 +1,7 @@
 #include "FillReducingOrdering.h"
 
+#include "CholmodViews.h"
+
 #include <cholmod.h>
 #include <string>
 
@@ -62,10 +64,8 @@ Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
   if (leadingNodes > 0) {
     std::vector<int> columnStart, rows;
     NodeGraphUpper(upper, dofsPerNode, compact, leadingNodes, columnStart, rows);
-    cholmod_common common;
-    cholmod_start(&common);
-    common.print = 0;
-    common.error_handler = nullptr;
+    QuietCholmodCommon quiet;
+    cholmod_common& common = quiet.common;
     cholmod_sparse graph{};
     graph.nrow = graph.ncol = static_cast<size_t>(leadingNodes);
     graph.nzmax = rows.size();
@@ -88,11 +88,9 @@ Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
       common.status = CHOLMOD_OK;
       ok = cholmod_amd(&graph, nullptr, 0, nodeOrder.data(), &common);
     }
-    const int status = common.status;
-    cholmod_finish(&common);
     if (!ok)
       return Status::Error("fill-reducing ordering failed (CHOLMOD status " +
-                           std::to_string(status) + ")");
+                           std::to_string(common.status) + ")");
   }
 
   ordering.permutation.clear();

@@ -8,8 +8,10 @@
 // substitution runs over the whole factor (half the flops of a full solve).
 //
 // The rest is ordered by METIS nested dissection of the node graph (each node's DOFs stay
-// together): on the face-like shells it gives a 15-30 % smaller factor than AMD on the DOF graph,
-// and the node graph is 9x smaller to partition. Falls back to AMD if METIS is unavailable.
+// together): with the same trailing nodes, its factor on the face-like shells was 11 % (10k) and
+// 28 % (100k) smaller than constrained AMD's on the DOF graph, and AMD on the node graph doubled
+// the 100k factorization time; the node graph also has 9x fewer edges than the DOF graph to
+// partition. Falls back to AMD if METIS is unavailable.
 #include "Status.h"
 #include "StiffnessAssembly.h"
 

@@ -86,9 +86,7 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   if (!failure)
     return failure;
 
-  Eigen::MatrixXd probeSum(freeDofs, kProbes);
-  for (Eigen::Index dof = 0; dof < freeDofs; ++dof)
-    probeSum.row(dof) = permutedProbe.row(position[dof]);
+  const Eigen::MatrixXd probeSum = factor.fromEliminationOrder(permutedProbe);
   const Eigen::MatrixXd loads = kfr * weights;
   const Eigen::MatrixXd residual = kffUpper.selfadjointView<Eigen::Upper>() * probeSum - loads;
   out.residualEstimate = 0.0;

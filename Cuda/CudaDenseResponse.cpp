@@ -57,21 +57,14 @@ template <class T> bool Upload(DeviceArray& dst, const T* src, size_t count, cud
 // SupernodalCholesky: CHOLMOD on the CPU with the settings of Core's CholmodFactor.
 
 struct SupernodalCholesky::Impl {
-  cholmod_common common;
+  QuietCholmodCommon quiet;
+  cholmod_common& common = quiet.common;
   cholmod_factor* factor = nullptr;
   double analyzeMs = 0.0, factorizeMs = 0.0, downloadMs = 0.0;
   DeviceArray deviceX; // numeric factor on the GPU (factorOnGpu)
   bool hostNumeric = false;
-  Impl() {
-    cholmod_start(&common);
-    common.supernodal = CHOLMOD_SUPERNODAL;
-    common.print = 0;
-    common.error_handler = nullptr;
-  }
-  ~Impl() {
-    cholmod_free_factor(&factor, &common);
-    cholmod_finish(&common);
-  }
+  Impl() { common.supernodal = CHOLMOD_SUPERNODAL; }
+  ~Impl() { cholmod_free_factor(&factor, &common); }
 };
 
 SupernodalCholesky::SupernodalCholesky() : impl_(std::make_unique<Impl>()) {}
