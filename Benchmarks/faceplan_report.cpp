@@ -539,6 +539,30 @@ void Report::runIterative(Scene& s, const FreeSystem& fs, double assembleMs) {
       notRun(s, path, "setup failed: " + st.message);
       continue;
     }
+    // Times `reps` solves from `guess` (a slow one, over 300 ms, only once: keeps the run short).
+    auto timeSolves = [&](double tol, const Eigen::VectorXd* guess, Eigen::VectorXd& x,
+                          CGReport& report, std::vector<double>& ms) {
+      Status solved;
+      for (int k = 0; k < reps; ++k) {
+        const double t0 = NowMs();
+        solved = cg.solve(rhs, tol, guess, x, report);
+        ms.push_back(NowMs() - t0);
+        if (!solved || ms.back() > 300.0)
+          break;
+      }
+      return solved;
+    };
+    // A PCG row's times, iterations, residual and errors from its timed solves.
+    auto fillRow = [&](Row& r, const std::vector<double>& ms, const CGReport& report,
+                       const Eigen::VectorXd& x) {
+      r.precompute = Summarize(setup);
+      r.edit = Summarize(ms);
+      r.iterations = report.iterations;
+      r.converged = report.converged ? 1 : 0;
+      r.residual = report.relativeResidual;
+      const Displacements allU = s.analytic ? AllDisplacement(fs, x, roi) : Displacements();
+      setErrors(s, r, KeptDisplacement(fs, x, roi), s.analytic ? &allU : nullptr);
+    };
     bool stalled = false;
     for (double tol : v.tolerances) {
       Row r;
@@ -556,25 +580,14 @@ void Report::runIterative(Scene& s, const FreeSystem& fs, double assembleMs) {
       std::vector<double> ms;
       Eigen::VectorXd x;
       CGReport report;
-      for (int k = 0; k < reps; ++k) {
-        const double t0 = NowMs();
-        st = cg.solve(rhs, tol, nullptr, x, report);
-        ms.push_back(NowMs() - t0);
-        if (!st || ms.back() > 300.0) break; // slow solves are timed once (keeps the run short)
-      }
+      st = timeSolves(tol, nullptr, x, report, ms);
       if (!st) {
         r.ran = false;
         r.note = "failed: " + st.message;
         add(s, r);
         continue;
       }
-      r.precompute = Summarize(setup);
-      r.edit = Summarize(ms);
-      r.iterations = report.iterations;
-      r.converged = report.converged ? 1 : 0;
-      r.residual = report.relativeResidual;
-      const Displacements allU = s.analytic ? AllDisplacement(fs, x, roi) : Displacements();
-      setErrors(s, r, KeptDisplacement(fs, x, roi), s.analytic ? &allU : nullptr);
+      fillRow(r, ms, report, x);
       r.note = std::to_string(report.iterations) + " iterations" + (report.converged ? "" : ", NOT converged (cap)");
       if (!report.converged) stalled = true;
       add(s, r);
@@ -586,12 +599,7 @@ void Report::runIterative(Scene& s, const FreeSystem& fs, double assembleMs) {
         CGReport report;
         if (!cg.solve(previousRhs, tol, nullptr, guess, report)) continue;
         std::vector<double> ms;
-        for (int k = 0; k < reps; ++k) {
-          const double t0 = NowMs();
-          st = cg.solve(rhs, tol, &guess, x, report);
-          ms.push_back(NowMs() - t0);
-          if (!st || ms.back() > 300.0) break;
-        }
+        st = timeSolves(tol, &guess, x, report, ms);
         if (!st) continue;
         Row r;
         r.path = "PCG IncompleteCholesky warm";
@@ -599,13 +607,7 @@ void Report::runIterative(Scene& s, const FreeSystem& fs, double assembleMs) {
         std::snprintf(buf, sizeof buf, "tol %.0e", tol);
         r.variant = buf;
         r.tolerance = tol;
-        r.precompute = Summarize(setup);
-        r.edit = Summarize(ms);
-        r.iterations = report.iterations;
-        r.converged = report.converged ? 1 : 0;
-        r.residual = report.relativeResidual;
-        const Displacements allU = s.analytic ? AllDisplacement(fs, x, roi) : Displacements();
-        setErrors(s, r, KeptDisplacement(fs, x, roi), s.analytic ? &allU : nullptr);
+        fillRow(r, ms, report, x);
         r.note = std::to_string(report.iterations) + " iterations, started from the previous drag step (edit x 0.95)";
         add(s, r);
       }

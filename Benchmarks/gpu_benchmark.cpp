@@ -10,9 +10,10 @@
 // Benchmarks/VtuReader (no VTK needed), with faceplan_report's node sets; when a file cannot be read
 // a generated shell of similar size stands in (said in the output). The 10k, 100k and 1M cases are
 // Core's MakeFaceLikeScene shells. Without a GPU it still runs the CPU columns (GPU columns empty).
+#include "ComputeBackend.h"
 #include "CondensedFEM.h"
 #include "CondensedSystem.h"
-#include "ComputeBackend.h"
+#include "RelativeDifference.h"
 #include "ShellMeshGenerator.h"
 #include "StageTimings.h"
 #include "StiffnessAssembly.h"
@@ -130,16 +131,6 @@ double Median(std::vector<double> v) {
 
 double NowMs() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-double RelativeMaxDifference(const double* a, const double* b, size_t count) {
-  double diff = 0.0, scale = 0.0;
-  for (size_t i = 0; i < count; ++i) {
-    if (!std::isfinite(a[i])) return std::numeric_limits<double>::infinity();
-    diff = std::max(diff, std::abs(a[i] - b[i]));
-    scale = std::max(scale, std::abs(b[i]));
-  }
-  return scale > 0 ? diff / scale : diff;
 }
 
 // Three tissue bands through the thickness (skin-, fat- and muscle-like), one value per cell.

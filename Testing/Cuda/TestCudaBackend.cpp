@@ -3,11 +3,12 @@
 #include "CudaBackend.h"
 #include "CudaTestMesh.h"
 
+#include "ComputeBackend.h"
 #include "CondensedFEM.h"
 #include "CondensedSystem.h"
 #include "CudaDenseResponse.h"
-#include "ComputeBackend.h"
 #include "ElementStiffness.h"
+#include "RelativeDifference.h"
 #include "ShellMeshGenerator.h"
 #include "StiffnessAssembly.h"
 
@@ -34,17 +35,6 @@ std::shared_ptr<ComputeBackend> Gpu() {
   auto backend = cuda::MakeCudaBackend(error);
   EXPECT_TRUE(backend) << error;
   return backend;
-}
-
-// max |a - b| / max |b| over all entries.
-double RelativeMaxDifference(const double* a, const double* b, size_t count) {
-  double diff = 0.0, scale = 0.0;
-  for (size_t i = 0; i < count; ++i) {
-    if (!std::isfinite(a[i])) return std::numeric_limits<double>::infinity();
-    diff = std::max(diff, std::abs(a[i] - b[i]));
-    scale = std::max(scale, std::abs(b[i]));
-  }
-  return scale > 0 ? diff / scale : diff;
 }
 
 Materials RandomMaterials(Eigen::Index cells, unsigned seed) {
