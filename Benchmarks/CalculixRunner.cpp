@@ -1,6 +1,6 @@
 #include "CalculixRunner.h"
 
-#include "StageTimings.h"
+#include "Common/StageTimings.h"
 
 #include <cstdio>
 #include <cstdlib>

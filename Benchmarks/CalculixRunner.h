@@ -1,7 +1,7 @@
 #pragma once
 // Runs CalculiX (ccx, C3D4, *STATIC) on the same mesh and boundary conditions as a FacePlan
 // solve, as an outside peer, and reads back the kept nodes' displacements.
-#include "CondensedFEM.h"
+#include "CondensedFEM/CondensedFEM.h"
 
 #include <string>
 

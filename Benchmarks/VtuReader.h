@@ -3,7 +3,7 @@
 // "ascii" or "binary", raw or vtkZLibDataCompressor, UInt32 or UInt64 headers, little endian),
 // enough for the report to load tetrahedral meshes and their point arrays. Not a general VTK
 // reader: no appended data, no big-endian files, only VTK_TETRA cells are accepted.
-#include "TetMesh.h"
+#include "Mesh/TetMesh.h"
 
 #include <map>
 #include <string>

@@ -5,8 +5,8 @@
 //                      [--reference-repeats N] [--method Auto|DenseResponse|CachedFactor]
 //                      [--ccx WORKDIR] [--ccx-repeats N] [--json FILE]
 #include "CalculixRunner.h"
-#include "CondensedFEM.h"
-#include "ShellMeshGenerator.h"
+#include "CondensedFEM/CondensedFEM.h"
+#include "Support/ShellMeshGenerator.h"
 
 #include <algorithm>
 #include <cstdio>

@@ -11,16 +11,16 @@
 // over ~3e10 flops of column solves, Eigen's simplicial float Cholesky above 40k tets);
 // --huge: also the 300k-tet shell and the sixth sphere refinement. Scenes by name: shell10k, shell100k,
 // shell300k, sphere1..sphere6, kidney, heart, mandible, face.
-#include "AnalyticHollowSphere.h"
+#include "Support/AnalyticHollowSphere.h"
 #include "CalculixRunner.h"
-#include "CondensedFEM.h"
-#include "CondensedSystem.h"
-#include "ConjugateGradientSolve.h"
-#include "FreeSystem.h"
-#include "MassSpringSolve.h"
-#include "ShellMeshGenerator.h"
-#include "SinglePrecisionCholesky.h"
-#include "TraditionalBandSolve.h"
+#include "CondensedFEM/CondensedFEM.h"
+#include "CondensedFEM/CondensedSystem.h"
+#include "Comparison/ConjugateGradientSolve.h"
+#include "Comparison/FreeSystem.h"
+#include "Comparison/MassSpringSolve.h"
+#include "Support/ShellMeshGenerator.h"
+#include "Comparison/SinglePrecisionCholesky.h"
+#include "Comparison/TraditionalBandSolve.h"
 #include "VtuReader.h"
 
 #ifdef FACEPLAN_REPORT_WITH_CUDA

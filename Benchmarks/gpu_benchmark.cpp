@@ -10,13 +10,13 @@
 // Benchmarks/VtuReader (no VTK needed), with faceplan_report's node sets; when a file cannot be read
 // a generated shell of similar size stands in (said in the output). The 10k, 100k and 1M cases are
 // Core's MakeFaceLikeScene shells. Without a GPU it still runs the CPU columns (GPU columns empty).
-#include "ComputeBackend.h"
-#include "CondensedFEM.h"
-#include "CondensedSystem.h"
-#include "RelativeDifference.h"
-#include "ShellMeshGenerator.h"
-#include "StageTimings.h"
-#include "StiffnessAssembly.h"
+#include "Backend/ComputeBackend.h"
+#include "CondensedFEM/CondensedFEM.h"
+#include "CondensedFEM/CondensedSystem.h"
+#include "Common/RelativeDifference.h"
+#include "Support/ShellMeshGenerator.h"
+#include "Common/StageTimings.h"
+#include "Element/StiffnessAssembly.h"
 #include "VtuReader.h"
 #if FACEPLAN_HAS_CUDA
 #include "CudaBackend.h"

@@ -4,9 +4,9 @@
 #include "CudaDenseResponse.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
-#include "ElementStiffness.h"
-#include "ParallelFor.h"
-#include "StageTimings.h"
+#include "Element/ElementStiffness.h"
+#include "Common/ParallelFor.h"
+#include "Common/StageTimings.h"
 
 #include <algorithm>
 #include <cstdint>

@@ -12,7 +12,7 @@
 //
 // Nothing here throws or aborts: every CUDA/cuBLAS call and kernel launch is checked and a
 // failure comes back as false/null with a message, so the caller can fall back to the CPU.
-#include "ComputeBackend.h"
+#include "Backend/ComputeBackend.h"
 
 #include <cstddef>
 #include <memory>

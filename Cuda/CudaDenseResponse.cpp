@@ -1,11 +1,11 @@
 #include "CudaDenseResponse.h"
 
-#include "CholmodViews.h"
+#include "SparseSolver/CholmodViews.h"
 #include "CudaCheck.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
-#include "ParallelFor.h"
-#include "StageTimings.h"
+#include "Common/ParallelFor.h"
+#include "Common/StageTimings.h"
 
 #include <cholmod.h>
 #include <cusolverDn.h>

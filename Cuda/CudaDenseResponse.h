@@ -13,9 +13,9 @@
 // The numeric factorization runs on the GPU too (FactorAndBuildResponse below, on Core's own
 // CholmodFactor after its CPU analysis; that is what Precompute() uses with the CUDA backend), or
 // on the CPU with CHOLMOD (SupernodalCholesky::factor, for comparisons).
-#include "CholmodFactor.h"
-#include "ComputeBackend.h"
-#include "StiffnessAssembly.h"
+#include "SparseSolver/CholmodFactor.h"
+#include "Backend/ComputeBackend.h"
+#include "Element/StiffnessAssembly.h"
 
 #include <Eigen/Core>
 #include <memory>

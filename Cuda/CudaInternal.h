@@ -1,8 +1,8 @@
 #pragma once
 // Internal pieces shared by the CUDA backend's translation units (not installed, not public).
-#include "ComputeBackend.h"
+#include "Backend/ComputeBackend.h"
 #include "CudaCheck.h"
-#include "ParallelFor.h"
+#include "Common/ParallelFor.h"
 
 #include <cuda_runtime_api.h>
 

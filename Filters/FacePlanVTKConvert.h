@@ -1,6 +1,6 @@
 #pragma once
 // Conversions between VTK data sets and FacePlanCore's plain arrays (private to FacePlan::Filters).
-#include "SurfaceMesh.h"
+#include "Mesh/SurfaceMesh.h"
 
 #include <string>
 

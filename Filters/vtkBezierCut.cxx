@@ -1,6 +1,6 @@
 #include "vtkBezierCut.h"
 
-#include "BezierCut.h"
+#include "BezierCut/BezierCut.h"
 #include "FacePlanVTKConvert.h"
 
 #include <vtkCellArray.h>

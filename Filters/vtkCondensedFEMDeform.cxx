@@ -2,8 +2,8 @@
 
 #include "FacePlanContact.h"
 
-#include "BackgroundPrecompute.h"
-#include "CondensedFEM.h"
+#include "CondensedFEM/BackgroundPrecompute.h"
+#include "CondensedFEM/CondensedFEM.h"
 #ifdef FACEPLAN_HAS_CUDA
 #include "CudaBackend.h"
 #endif

@@ -1,7 +1,7 @@
 #include "vtkROIExtract.h"
 
 #include "FacePlanVTKConvert.h"
-#include "ROIExtract.h"
+#include "ROIExtract/ROIExtract.h"
 
 #include <vtkImplicitFunction.h>
 #include <vtkInformation.h>

@@ -1,7 +1,7 @@
 #pragma once
 // A small perturbed box mesh (Kuhn split: 6 tetrahedra per hexahedron, conforming), positively
 // oriented, for backend agreement tests independent of the shell generator.
-#include "TetMesh.h"
+#include "Mesh/TetMesh.h"
 
 #include <Eigen/Dense>
 #include <random>

@@ -3,14 +3,14 @@
 #include "CudaBackend.h"
 #include "CudaTestMesh.h"
 
-#include "ComputeBackend.h"
-#include "CondensedFEM.h"
-#include "CondensedSystem.h"
+#include "Backend/ComputeBackend.h"
+#include "CondensedFEM/CondensedFEM.h"
+#include "CondensedFEM/CondensedSystem.h"
 #include "CudaDenseResponse.h"
-#include "ElementStiffness.h"
-#include "RelativeDifference.h"
-#include "ShellMeshGenerator.h"
-#include "StiffnessAssembly.h"
+#include "Element/ElementStiffness.h"
+#include "Common/RelativeDifference.h"
+#include "Support/ShellMeshGenerator.h"
+#include "Element/StiffnessAssembly.h"
 
 #include <gtest/gtest.h>
 

@@ -3,9 +3,9 @@
 #include "CudaBackend.h"
 #include "CudaDenseResponse.h"
 
-#include "CondensedFEM.h"
-#include "CondensedSystem.h"
-#include "ShellMeshGenerator.h"
+#include "CondensedFEM/CondensedFEM.h"
+#include "CondensedFEM/CondensedSystem.h"
+#include "Support/ShellMeshGenerator.h"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,151 @@
+#pragma once
+// Bezier cut / fill of a bone surface (no VTK).
+//
+// The operative surface is the translational surface S(u,v) = U(u) + V(v) - P0 over two composite
+// cubic Bezier curves U (3k+1 control points) and V (3m+1 control points) sharing their first
+// control point P0; u and v run over [0,1] across all segments of each curve (segment s of k
+// covers u in [s/k, (s+1)/k]). Its normal is n = dS/du x dS/dv, negated by flipNormal.
+//
+// Side of a vertex x: let (u*,v*) minimise |S(u,v) - x| over [0,1]^2 (grid initialisation, then
+// projected Newton). The vertex "projects inside the patch" when S(u*,v*) is an orthogonal foot
+// point, i.e. x - S(u*,v*) has no tangential component (up to 1e-6 of the surface size plus 1e-4
+// of the distance); vertices whose closest patch point lies on the patch border with a tangential
+// residual project outside and never move. Its signed distance is d = (x - S(u*,v*)) . n^(u*,v*);
+// d > 0 is the side n points to.
+//
+// Cut: ROI vertices that are not ROIBoundary, project inside and have d > 0 move onto S.
+// Fill: the same with d < 0. Every other vertex keeps its coordinates bit for bit.
+//
+// Guarantees on success: the topology is the input's (only coordinates change); every moved vertex
+// lies on S (it is S(u,v) evaluated at its final parameters); no triangle touching a moved vertex
+// is degenerate or flipped, and no pair of triangles intersects that did not intersect before.
+// "Flipped": a triangle with a vertex that did not move must keep the sign of its normal relative
+// to its original normal; a triangle whose vertices all moved lies in S and must face the way the
+// moved region faced (sign of sum over those triangles of original area vector . n), which for a
+// triangle that originally faced n is the same as keeping its normal's sign.
+// Polygons with more than 3 points are checked through a fan triangulation.
+//
+// Where direct projection would fold or collapse triangles, the moved vertices are relaxed
+// tangentially within S (only their (u,v) change, so they stay on S), in this order until the
+// full check passes:
+//  1. local repair on S: untangling (each vertex of a flipped/degenerate triangle, then also its
+//     moved neighbours, moves by a pattern search in (u,v) to maximise the smallest signed size of
+//     its triangles), then harmonic (uniform Tutte) relaxation of neighbourhoods of the bad
+//     triangles that double their ring count each round, each followed by untangling;
+//  2. intermediary surfaces as in the ICAT 2008 paper: at step t = s/T (s = 1..T) vertex i sits at
+//     (1-t) x_i + t S(u_i,v_i); after each step the vertices near triangles that flipped relative to
+//     the previous step, degenerated or became badly squashed are relaxed harmonically, and at
+//     t = 1 the full check (flips and new intersections, the latter through a uniform spatial
+//     hash over the moved neighbourhood) must pass. Schedules with more steps are tried in turn.
+// If all fail, an error is returned (naming ROIBoundary vertices that lie beyond the surface, the
+// usual cause), never a bad mesh.
+#include "Common/Status.h"
+#include "Mesh/SurfaceMesh.h"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace faceplan {
+
+enum class CutOperation { Cut = 0, Fill = 1 };
+
+struct SurfaceProjection {
+  double u = 0, v = 0;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // S(u,v)
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero(); // unit normal (flip applied)
+  double signedDistance = 0;                        // (x - S(u,v)) . normal
+  bool inside = false;                              // orthogonal foot point within [0,1]^2
+};
+
+class BezierSurface {
+public:
+  // Validates the control points; the error names the problem:
+  //  "invalid control points" (count not 3k+1, non-finite), "first control points not shared",
+  //  "degenerate" (coincident consecutive control points, zero-area surface, Su x Sv vanishing),
+  //  "self-intersecting" (sampled normals reversing, or sampled patch triangles crossing).
+  static Status Create(const std::vector<Eigen::Vector3d>& curveU,
+                       const std::vector<Eigen::Vector3d>& curveV, bool flipNormal,
+                       BezierSurface& out);
+
+  Eigen::Vector3d Evaluate(double u, double v) const;
+  // S and its derivatives (Suv = 0 for a translational surface).
+  void Derivatives(double u, double v, Eigen::Vector3d& S, Eigen::Vector3d& Su, Eigen::Vector3d& Sv,
+                   Eigen::Vector3d& Suu, Eigen::Vector3d& Svv) const;
+  Eigen::Vector3d UnitNormal(double u, double v) const; // flip applied
+  // Closest point of the patch to x (grid initialisation + projected Newton).
+  SurfaceProjection Project(const Eigen::Vector3d& x) const;
+  // The same, starting Newton from (u0,v0) instead of the grid.
+  SurfaceProjection ProjectFrom(const Eigen::Vector3d& x, double u0, double v0) const;
+  // Triangles over a regular grid with `perSegment` intervals per Bezier segment, oriented along
+  // the (flipped) normal. uv receives the parameters of each point.
+  void Tessellate(int perSegment, SurfaceMesh& out, std::vector<Eigen::Vector2d>* uv = nullptr) const;
+
+  int SegmentsU() const { return int(U_.size() - 1) / 3; }
+  int SegmentsV() const { return int(V_.size() - 1) / 3; }
+  double Size() const { return size_; } // diagonal of the control points' bounding box
+
+private:
+  struct CurveEval {
+    Eigen::Vector3d p, d1, d2;
+  };
+  static CurveEval EvalCurve(const std::vector<Eigen::Vector3d>& P, double u);
+  static CurveEval EvalSegment(const std::vector<Eigen::Vector3d>& P, int seg, double t);
+  SurfaceProjection Finish(const Eigen::Vector3d& x, double u, double v) const;
+  SurfaceProjection Newton(const Eigen::Vector3d& x, double u, double v) const;
+
+  std::vector<Eigen::Vector3d> U_, V_;
+  Eigen::Vector3d P0_ = Eigen::Vector3d::Zero();
+  bool flip_ = false;
+  double size_ = 0;
+  // Initialisation grid: samples of U and V.
+  std::vector<double> gridU_, gridV_;
+  std::vector<Eigen::Vector3d> gridUP_, gridVP_;
+};
+
+struct BezierCutOptions {
+  CutOperation operation = CutOperation::Cut;
+  bool flipNormal = false;
+  int displayResolution = 16;     // tessellation intervals per Bezier segment (output port 1)
+  bool localRepair = true;                  // step 1 of the fallback (off: intermediary surfaces only)
+  std::vector<int> stepSchedules = {8, 32}; // numbers of intermediary surfaces tried in turn
+  int maxRelaxIterations = 24;    // relaxation rounds per step (the region doubles its rings each round)
+};
+
+struct BezierCutResult {
+  SurfacePoints points;       // n x 3: the new coordinates
+  SurfacePoints displacement; // n x 3: points - input points (exactly zero where unmoved)
+  std::vector<std::uint8_t> moved;
+  std::vector<Eigen::Vector2d> parameters; // (u,v) of each moved vertex (others: 0)
+  std::int64_t numMoved = 0;
+  std::int64_t numInsidePatch = 0;  // ROI vertices projecting inside the patch
+  int intermediarySteps = 0;        // 0: direct projection was valid; 1: local repair on S;
+                                    // T > 1: mapped through T intermediary surfaces
+  double maxDistanceToSurface = 0;  // max over moved vertices of |x - S(u,v)| (should be ~1e-15)
+  SurfaceMesh operativeSurface;     // triangles of S for display
+  std::string mappingNote;           // why intermediary surfaces were needed (informational)
+  std::vector<std::string> warnings; // e.g. nothing moved
+};
+
+// mesh: the bone surface; roiMask / roiBoundary: one entry per point (see ROIExtract.h).
+// On failure `result` is left empty and the message says which control point/surface problem or
+// mapping problem occurred.
+Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMask,
+                 const std::vector<std::uint8_t>& roiBoundary,
+                 const std::vector<Eigen::Vector3d>& curveU,
+                 const std::vector<Eigen::Vector3d>& curveV, const BezierCutOptions& options,
+                 BezierCutResult& result);
+
+// Mesh checks used by the cut, exposed for tests: triangles (fan triangulation of the cells) that
+// intersect in `after` but not in `before` (pairs sharing an edge are skipped; pairs sharing one
+// vertex are tested on their other edges). Only triangles with a point flagged in `active` are
+// tested (against all triangles near them).
+std::int64_t CountNewIntersections(const SurfaceMesh& cells, const SurfacePoints& before,
+                                   const SurfacePoints& after,
+                                   const std::vector<std::uint8_t>& active,
+                                   std::int64_t* firstTriangle = nullptr);
+
+} // namespace faceplan

@@ -1,0 +1,70 @@
+#include "CondensedFEM/BackgroundPrecompute.h"
+
+namespace faceplan {
+
+BackgroundPrecompute::~BackgroundPrecompute() {
+  cancel();
+  joinWorker();
+}
+
+void BackgroundPrecompute::joinWorker() {
+  if (worker_.joinable()) worker_.join();
+}
+
+void BackgroundPrecompute::start(PrecomputeRequest request, ProgressCallback progress) {
+  cancel();
+  // The old worker sees its cancel flag at its next stage boundary; waiting for it keeps at most
+  // one precompute (and its memory) alive.
+  joinWorker();
+  auto flag = std::make_shared<std::atomic<bool>>(false);
+  std::uint64_t generation;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    generation = ++generation_;
+    cancelFlag_ = flag;
+    finished_ = false;
+    system_.reset();
+  }
+  worker_ = std::thread([this, flag, generation, request = std::move(request), progress] {
+    std::shared_ptr<const CondensedSystem> system;
+    Status status = Precompute(request, system, flag.get(), progress);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (generation != generation_) return; // superseded: never publish a stale result
+    status_ = status;
+    system_ = status ? system : nullptr;
+    finished_ = true;
+    done_.notify_all();
+  });
+}
+
+Status BackgroundPrecompute::wait(std::shared_ptr<const CondensedSystem>& system) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  done_.wait(lock, [this] { return finished_; });
+  system = system_;
+  return status_;
+}
+
+bool BackgroundPrecompute::ready() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return finished_;
+}
+
+void BackgroundPrecompute::cancel() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (cancelFlag_) cancelFlag_->store(true);
+  if (!finished_) {
+    // Whoever waits gets "cancelled" unless a new start() supersedes this request.
+    ++generation_;
+    status_ = Status::Error("cancelled");
+    system_.reset();
+    finished_ = true;
+    done_.notify_all();
+  }
+}
+
+std::uint64_t BackgroundPrecompute::generation() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return generation_;
+}
+
+} // namespace faceplan

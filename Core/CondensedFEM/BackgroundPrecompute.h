@@ -1,0 +1,44 @@
+#pragma once
+// Runs Precompute on a worker thread as soon as its inputs are known. A new request cancels the
+// running one; wait() returns the system for the latest request only, so no stale result escapes.
+#include "CondensedFEM/CondensedFEM.h"
+
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+namespace faceplan {
+
+class BackgroundPrecompute {
+public:
+  BackgroundPrecompute() = default;
+  ~BackgroundPrecompute();
+  BackgroundPrecompute(const BackgroundPrecompute&) = delete;
+  BackgroundPrecompute& operator=(const BackgroundPrecompute&) = delete;
+
+  // Starts (or restarts) the precompute for `request`; returns at once.
+  void start(PrecomputeRequest request, ProgressCallback progress = {});
+  // Blocks until the latest request's precompute is done.
+  Status wait(std::shared_ptr<const CondensedSystem>& system);
+  // True once the latest request finished (successfully or not).
+  bool ready() const;
+  // Cancels the running precompute (wait() then reports "cancelled").
+  void cancel();
+  std::uint64_t generation() const;
+
+private:
+  void joinWorker();
+
+  mutable std::mutex mutex_;
+  std::condition_variable done_;
+  std::thread worker_;
+  std::shared_ptr<std::atomic<bool>> cancelFlag_;
+  std::uint64_t generation_ = 0;
+  bool finished_ = true;
+  Status status_ = Status::Error("no precompute was started");
+  std::shared_ptr<const CondensedSystem> system_;
+};
+
+} // namespace faceplan

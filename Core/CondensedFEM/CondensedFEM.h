@@ -1,0 +1,160 @@
+#pragma once
+// Linear static FEM on tetrahedra with interior condensation, split libigl-style into a precompute
+// (mesh, materials, node sets) and a solve (prescribed ROI displacements and loads).
+//
+// Node classes: constrained (tied to bone), of which the `movable` subset (the ROI) receives
+// prescribed displacements and the rest stay at zero; kept (the caller needs their displacement,
+// typically the skin); interior (everything else, condensed out). Because only ROI DOFs ever carry
+// prescribed values, an edit needs nothing but the response of the kept DOFs to the ROI DOFs.
+#include "Backend/ComputeBackend.h"
+#include "Element/QuadraticTet.h"
+#include "Common/StageTimings.h"
+#include "Common/Status.h"
+#include "Mesh/NodeSets.h"
+#include "Mesh/TetMesh.h"
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace faceplan {
+
+enum class SolveMethod {
+  Auto,           // pick the cheapest exact method from the sizes (see ChooseMethod)
+  DenseResponse,  // precompute kept x ROI response; an edit is one matrix-vector product
+  CachedFactor,   // keep the sparse Cholesky factor of the free block; an edit is one solve
+  FullReference   // no condensation, no cache: assemble and factor everything on every solve
+};
+const char* MethodName(SolveMethod method);
+
+// Element type. Linear 4-node tetrahedra lock (are too stiff) as the Poisson ratio approaches 0.5;
+// Quadratic converts the caller's linear mesh to 10-node tetrahedra internally (mid-edge nodes
+// follow their edge's end nodes into the node sets: constrained when both ends are, with the mean
+// of the ends' prescribed values; movable when both ends are constrained and one is movable;
+// otherwise interior) and reports results at the original corner nodes, so inputs and outputs keep
+// the linear mesh's numbering. See docs/STABILITY.md for when to use it and its cost.
+// QuadraticNodalPressure: the same 10-node cells, but the volumetric (lambda) term uses a
+// continuous pressure on the corner nodes with a lumped pressure mass (P2-P1, NodalPressure.h):
+// exact and symmetric, its error does not grow as nu -> 0.5, but its wider stencil makes the
+// factor ~6x larger and the precompute ~10x slower than Quadratic's.
+enum class ElementOrder { Linear, Quadratic, QuadraticNodalPressure };
+const char* ElementOrderName(ElementOrder order);
+
+struct PrecomputeOptions {
+  SolveMethod method = SolveMethod::Auto;
+  // Largest dense response Auto may build, in bytes.
+  double denseResponseBudgetBytes = 2.0e9;
+  // Compute backend for element stiffness, assembly and the dense per-edit update; null = CPU.
+  std::shared_ptr<ComputeBackend> backend;
+  // Columns of the response solved per block (bounds the precompute's transient memory).
+  // 128: on the 100k face-like scene as fast as or faster than 32-512 in single runs (noisy; the
+  // solve's gathered rows stay in cache), and half the transient memory of 256.
+  int responseBlockColumns = 128;
+
+  // ---- stability options (all optional; the defaults keep the original behaviour) ----
+  ElementOrder elementOrder = ElementOrder::Linear;
+  // Quadratic only: places the mid-edge node of a boundary edge (curved boundaries); empty keeps
+  // the straight midpoint. Called during the precompute, on the calling thread.
+  MidEdgeProjection midEdgeProjection;
+  // Quadratic only: integrate the volumetric term with the cell's mean dilatation (P2-P0 mixed
+  // element, exact and symmetric; see Tet10Stiffness). Off gives the plain fully integrated TET10,
+  // which still locks noticeably for nu >= 0.499.
+  bool quadraticMeanDilatation = true;
+  // Cells with mean-ratio quality below this give a warning (count and worst quality); 0 disables.
+  double sliverQualityThreshold = 0.02;
+  // Largest relative residual a solve accepts before it refines the solution in double precision
+  // (iterative refinement with the cached factor, up to maxRefinementSteps extra solves).
+  double residualTolerance = 1e-10;
+  int maxRefinementSteps = 3;
+  // A backend's per-edit response operator (which may compute in single precision) is probed
+  // against the double response after the precompute; when its relative deviation exceeds this,
+  // edits are redone in double on the CPU and the diagnostics say so.
+  double responseTolerance = 1e-9;
+  // Strain above which a solve warns that linear FEM is outside its range (0 disables the check,
+  // which also skips the inverted-cell check).
+  double strainWarningLimit = 0.1;
+};
+
+struct SolveInput {
+  Displacements movableDisplacement; // |movable| x 3, in NodeSets::movable order
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero(); // body load density * gravity, if non-zero
+  Displacements nodalLoads;          // n x 3 or empty
+  bool recoverInterior = false;      // also return every node's displacement
+};
+
+struct SolveResult {
+  Displacements keptDisplacement; // |kept| x 3, in NodeSets::kept order
+  Displacements allDisplacement;  // n x 3 when recoverInterior, else empty
+  // ||K_FF u_F - f_F|| / ||f_F||. For a kept-only DenseResponse solve it is the precompute's figure
+  // for the response (SystemInfo::responsePath says which): an estimate from random combinations
+  // of its columns, or the largest relative residual of its columns when it needed refinement.
+  double relativeResidual = 0.0;
+  bool residualFromPrecompute = false; // relativeResidual is the precompute's, not this solve's
+  SolveMethod method = SolveMethod::FullReference;
+  std::string backend;
+  StageTimings timings; // precompute stages marked reused, plus this solve's own stages
+
+  // ---- diagnostics added for stability (additive) ----
+  double conditionEstimate = 0.0; // 1 / CHOLMOD rcond of the free block (a cheap lower estimate)
+  int refinementSteps = 0;        // double-precision refinement steps this solve needed
+  bool redoneInDouble = false;    // a lower-precision response missed the tolerance; done in double
+  std::string precisionNote;      // how the per-edit product was computed when not plain double
+  double largestStrain = 0.0;     // over the cells the solve could check (see CheckDeformation)
+  long long invertedCells = 0;    // cells inverted in the deformed result
+  ElementOrder elementOrder = ElementOrder::Linear;
+  std::vector<std::string> warnings; // the same as the returned Status's warnings
+};
+
+// May be called from several worker threads at once (make it thread-safe, e.g. an atomic store).
+using ProgressCallback = std::function<void(double fraction, const char* what)>;
+
+// Everything the precompute produced. Immutable once built, so solves may share it across threads.
+class CondensedSystem;
+
+struct PrecomputeRequest {
+  TetMesh mesh;
+  Materials materials;
+  NodeSets sets;
+  PrecomputeOptions options;
+};
+
+// Builds the cached system. `cancel` is polled between stages and response blocks; a cancelled
+// precompute returns an error status "cancelled".
+Status Precompute(const PrecomputeRequest& request, std::shared_ptr<const CondensedSystem>& system,
+                  const std::atomic<bool>* cancel = nullptr, const ProgressCallback& progress = {});
+
+// Solves for one set of prescribed values and loads with the cached system.
+Status Solve(const CondensedSystem& system, const SolveInput& input, SolveResult& result);
+
+// The paper's "traditional FEM": no condensation and no cache, the whole free system is assembled,
+// factored and solved from scratch. Used for verification and comparison.
+Status SolveFullReference(const PrecomputeRequest& request, const SolveInput& input,
+                          SolveResult& result);
+
+// What a precompute chose and how big it is (for reports and the ParaView stage table).
+struct SystemInfo {
+  SolveMethod method = SolveMethod::Auto;
+  std::string backend;
+  long long freeDofs = 0, keptDofs = 0, roiDofs = 0, interiorDofs = 0;
+  double factorNonzeros = 0.0;
+  double responseBytes = 0.0;
+  std::string choiceReason;
+  std::string ordering;     // fill-reducing ordering of the free block ("METIS", "AMD", ...)
+  std::string responsePath; // how the dense response was computed and checked (DenseResponse)
+  StageTimings precomputeTimings;
+
+  // ---- diagnostics added for stability (additive) ----
+  double conditionEstimate = 0.0;  // 1 / CHOLMOD rcond of the free block (0 when there is none)
+  ElementOrder elementOrder = ElementOrder::Linear;
+  long long solverNodes = 0;       // nodes of the solved mesh (corners + mid-edge nodes if quadratic)
+  long long sliverCells = 0;       // cells below sliverQualityThreshold
+  double worstQuality = 1.0;       // smallest mean-ratio quality
+  double responseProbeError = 0.0; // relative deviation of the backend's response operator
+  bool responseRedoneInDouble = false;
+  std::vector<std::string> warnings; // the precompute's warnings
+};
+SystemInfo Describe(const CondensedSystem& system);
+
+} // namespace faceplan

@@ -1,0 +1,51 @@
+#pragma once
+// Internal layout of a precomputed system (not part of the public interface; shared by
+// CondensedFEM.cpp and the report tools that need the assembled blocks).
+#include "SparseSolver/CholmodFactor.h"
+#include "CondensedFEM/CondensedFEM.h"
+#include "CondensedFEM/NodeLayout.h"
+
+#include <array>
+#include <mutex>
+
+namespace faceplan {
+
+class CondensedSystem {
+public:
+  SolveMethod method = SolveMethod::CachedFactor;
+  std::string backendName;
+  Eigen::Index numMeshNodes = 0;
+  NodeLayout layout;
+  std::vector<int> kept; // NodeSets::kept as given
+
+  SparseMatrix kff; // upper triangle, free x free
+  SparseMatrix kfr; // free x ROI
+  CholmodFactor factor;
+
+  Eigen::MatrixXd response; // kept-free DOFs x ROI DOFs (DenseResponse)
+  std::unique_ptr<ResponseOperator> responseOperator;
+  double responseResidual = 0.0;
+
+  Eigen::VectorXd nodeMass; // lumped rho*V/4 per free node, for gravity
+  SystemInfo info;
+
+  // ---- stability additions ----
+  // Quadratic elements: the caller's movable list is followed by mid-edge ROI nodes, whose value
+  // is the mean of their two ends, given as indices into the caller's movable list (-1: fixed end).
+  std::vector<std::array<int, 2>> derivedMovable;
+  Eigen::Index numOutputNodes = 0; // the caller's node count (corner nodes)
+  TetMesh cornerMesh;              // the caller's linear mesh, for the deformation check
+  std::vector<int> movableNodes;   // NodeSets::movable as given
+  std::vector<int> checkableCells; // cells whose corners are all kept or constrained
+  double residualTolerance = 1e-10;
+  int maxRefinementSteps = 3;
+  double strainWarningLimit = 0.1;
+  std::string precisionNote;       // set when the response operator is not plain double
+  bool responseRedoneInDouble = false;
+
+  // Response of the free DOFs to the last load vector, reused while loads do not change.
+  mutable std::mutex loadMutex;
+  mutable Eigen::VectorXd lastLoad, lastLoadResponse;
+};
+
+} // namespace faceplan

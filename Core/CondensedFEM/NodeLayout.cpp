@@ -1,0 +1,34 @@
+#include "CondensedFEM/NodeLayout.h"
+
+namespace faceplan {
+
+NodeLayout MakeLayout(const std::vector<char>& used, const NodeSets& sets) {
+  const Eigen::Index n = static_cast<Eigen::Index>(used.size());
+  std::vector<char> constrained(n, 0), kept(n, 0);
+  for (int i : sets.constrained) constrained[i] = 1;
+  for (int i : sets.kept) kept[i] = 1;
+
+  NodeLayout layout;
+  layout.dofNode.assign(n, -1);
+  auto place = [&](int node) {
+    layout.dofNode[node] = static_cast<int>(layout.meshNode.size());
+    layout.meshNode.push_back(node);
+  };
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (used[i] && !constrained[i] && kept[i]) place(static_cast<int>(i));
+  layout.keptFree = static_cast<int>(layout.meshNode.size());
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (used[i] && !constrained[i] && !kept[i]) place(static_cast<int>(i));
+  layout.interior = static_cast<int>(layout.meshNode.size()) - layout.keptFree;
+  layout.roiPosition.assign(sets.movable.size(), -1);
+  for (size_t k = 0; k < sets.movable.size(); ++k) {
+    const int node = sets.movable[k];
+    if (!used[node]) continue;
+    if (layout.dofNode[node] < 0) place(node); // a repeated id keeps its first position
+    layout.roiPosition[k] = layout.dofNode[node] - layout.freeNodes();
+  }
+  layout.roi = static_cast<int>(layout.meshNode.size()) - layout.freeNodes();
+  return layout;
+}
+
+} // namespace faceplan

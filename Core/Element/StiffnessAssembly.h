@@ -1,0 +1,37 @@
+#pragma once
+// Sparse symmetric assembly: the pattern and a gather map are built once per mesh and DOF
+// numbering; assembling new element values into it is then a pure gather (no atomics, no search),
+// which both the CPU and the CUDA backend run.
+#include "Mesh/TetMesh.h"
+
+#include <Eigen/SparseCore>
+#include <vector>
+
+namespace faceplan {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+struct AssemblyPattern {
+  // Upper triangle of the global stiffness in the numbering dofOfNode gave (3 DOFs per node),
+  // column-compressed, rows sorted; values are zero until Assemble fills them.
+  SparseMatrix upper;
+  // For nonzero k of `upper`, its contributions are packedIndex[gatherStart[k] .. gatherStart[k+1])
+  // where each packed index is cell * 78 + (position in the packed upper triangle of Ke).
+  std::vector<int> gatherStart;
+  std::vector<int> packedIndex; // int: up to 27M tetrahedra (checked when built)
+};
+
+// dofNode[i] is the new index of node i (its DOFs are 3*dofNode[i] + c); -1 drops the node.
+// Pass an identity to keep the mesh's own numbering.
+AssemblyPattern BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode,
+                                     int numDofNodes);
+
+// Builds gatherStart/packedIndex from the target nonzero of every packed element entry (-1 for
+// none), by a counting sort: each gather list holds its packed indices in increasing order.
+// pattern.upper must already hold the final structure. Shared by the 4- and 10-node assemblies.
+void FinishGatherMap(const std::vector<int>& targetOf, AssemblyPattern& pattern);
+
+// upper.valuePtr()[k] = sum of packed[packedIndex[...]] over its gather range.
+void AssembleFromPacked(const std::vector<double>& packed, AssemblyPattern& pattern);
+
+} // namespace faceplan

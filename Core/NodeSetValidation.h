@@ -1,9 +1,0 @@
-#pragma once
-#include "CondensedFEM.h"
-
-namespace faceplan {
-
-// Node ids in range, at least one constrained node, ROI (movable) nodes all constrained.
-Status ValidateNodeSets(const TetMesh& mesh, const NodeSets& sets);
-
-} // namespace faceplan

@@ -1,0 +1,98 @@
+#pragma once
+// RAII wrapper of a CHOLMOD supernodal Cholesky factor of a symmetric positive definite matrix
+// given by its upper triangle. Solves are serialized (a cholmod_common is not thread-safe).
+#include "SparseSolver/FillReducingOrdering.h"
+#include "Common/Status.h"
+#include "Element/StiffnessAssembly.h"
+
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+struct cholmod_factor_struct;
+struct cholmod_common_struct;
+
+namespace faceplan {
+
+class CholmodFactor {
+public:
+  CholmodFactor();
+  ~CholmodFactor();
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+
+  // Fill-reducing ordering and symbolic factorization (the "reordering" stage): CHOLMOD's own
+  // choice, or the given ordering (see FillReducingOrdering.h), whose trailing DOFs then allow
+  // solveTrailing().
+  Status analyze(const SparseMatrix& upper, const FillReducingOrdering* ordering = nullptr);
+  // The same with several candidate orderings: each is analysed symbolically and the one with the
+  // lowest cost(factor non-zeros, factorization flops, DOFs kept in the trailing block) is kept.
+  using OrderingCost = std::function<double(double nonzeros, double flops, int trailingDofs)>;
+  Status analyze(const SparseMatrix& upper, const std::vector<FillReducingOrdering>& candidates,
+                 const OrderingCost& cost);
+  // Numeric factorization; fails with a message if the matrix is not positive definite.
+  Status factorize(const SparseMatrix& upper);
+  // x = A^-1 b for one or many columns.
+  Status solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
+  // The same with a private CHOLMOD workspace, so several threads may solve at once (the factor
+  // is only read). Used for the many right-hand sides of the dense response.
+  Status solveConcurrently(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
+
+  // x = A^-1 b for sparse right-hand sides that are non-zero only on the trailing DOFs of the
+  // ordering given to analyze(): the forward substitution is a dense triangular solve with the
+  // factor's trailing block, so this costs about half of solve(). Safe to call from several threads
+  // at once (private CHOLMOD workspace). Fails if b has a non-zero elsewhere or trailingDofs() is
+  // 0.
+  Status solveTrailing(const SparseMatrix& b, Eigen::MatrixXd& x) const;
+  // DOFs in the factor's trailing block (0 when analyze() had no ordering or the symbolic analysis
+  // did not keep them last).
+  int trailingDofs() const;
+
+  // The same for many blocks of columns on one thread: the workspace keeps CHOLMOD's buffers
+  // between calls (no allocation per block) and the solution stays in elimination order, where
+  // row eliminationPosition()[dof] holds `dof` (so a caller copies out only the rows it needs).
+  class TrailingWorkspace {
+  public:
+    TrailingWorkspace();
+    ~TrailingWorkspace();
+    TrailingWorkspace(const TrailingWorkspace&) = delete;
+    TrailingWorkspace& operator=(const TrailingWorkspace&) = delete;
+    // The last solution, n x (columns of its b), in elimination order.
+    Eigen::Map<const Eigen::MatrixXd> permutedSolution() const;
+
+  private:
+    friend class CholmodFactor;
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+  };
+  Status solveTrailing(const SparseMatrix& b, TrailingWorkspace& workspace) const;
+  const std::vector<int>& eliminationPosition() const; // valid after analyze()
+  // Rows of a matrix in elimination order put back in the original DOF order.
+  Eigen::MatrixXd fromEliminationOrder(const Eigen::Ref<const Eigen::MatrixXd>& permuted) const;
+
+  // True after a successful factorize() or markFactorized(); analyze() resets it.
+  bool isFactorized() const;
+
+  // For a backend that computes the numeric factorization itself (Cuda/, through
+  // ComputeBackend::factorAndBuildResponse): the CHOLMOD factor after analyze() (supernodal, 32-bit
+  // indices; symbolic until factorized) and the cholmod_common it belongs to, for CHOLMOD calls on
+  // it such as cholmod_change_factor. Null before analyze(). Not for use concurrently with solves.
+  cholmod_factor_struct* cholmodFactor();
+  cholmod_common_struct* cholmodCommon();
+  // The caller has written a numeric LL^T factor of the analysed matrix into cholmodFactor()
+  // (CHOLMOD's own supernodal layout): solves may use it. Fails if the factor is not numeric.
+  Status markFactorized();
+
+  double factorNonzeros() const;
+  double factorFlops() const; // of the numeric factorization, from the last analyze()
+  // CHOLMOD's cheap reciprocal condition estimate, (min diag L / max diag L)^2.
+  double reciprocalConditionEstimate() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+} // namespace faceplan

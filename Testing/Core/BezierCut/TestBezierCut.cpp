@@ -1,0 +1,421 @@
+// BezierCut contract tests: moved vertices on S, the others untouched bit for bit, topology
+// unchanged, no flipped / degenerate / newly intersecting triangles, clear errors for bad curves.
+#include "BezierCut/BezierCut.h"
+#include "Support/FaceplanTestMeshes.h"
+#include "ROIExtract/ROIExtract.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <functional>
+#include <random>
+
+using namespace faceplan;
+using Eigen::Vector3d;
+using Curve = std::vector<Vector3d>;
+
+namespace {
+
+// Independent evaluation (de Casteljau) of a composite cubic curve at global parameter u.
+Vector3d DeCasteljau(const Curve& P, double u) {
+  const int k = int(P.size() - 1) / 3;
+  int s = std::min(int(u * k), k - 1);
+  double t = u * k - s;
+  Vector3d q[4] = {P[3 * s], P[3 * s + 1], P[3 * s + 2], P[3 * s + 3]};
+  for (int r = 3; r > 0; --r)
+    for (int i = 0; i < r; ++i) q[i] = (1 - t) * q[i] + t * q[i + 1];
+  return q[0];
+}
+Vector3d RefSurface(const Curve& U, const Curve& V, double u, double v) {
+  return DeCasteljau(U, u) + DeCasteljau(V, v) - U[0];
+}
+
+Curve Line(const Vector3d& a, const Vector3d& b, int segments = 1) {
+  Curve c;
+  for (int i = 0; i <= 3 * segments; ++i) c.push_back(a + (b - a) * (double(i) / (3 * segments)));
+  return c;
+}
+
+Vector3d Row(const SurfacePoints& P, Eigen::Index i) { return P.row(i).transpose(); }
+Vector3d AreaVec(const SurfacePoints& P, const std::int64_t* t) {
+  return 0.5 * (Row(P, t[1]) - Row(P, t[0])).cross(Row(P, t[2]) - Row(P, t[0]));
+}
+
+// Moller-Trumbore: does the open segment pq cross the interior of triangle abc?
+bool SegTri(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  const Vector3d d = q - p, e1 = b - a, e2 = c - a, h = d.cross(e2);
+  const double det = e1.dot(h);
+  if (std::abs(det) < 1e-14 * e1.norm() * e2.norm() * d.norm()) return false;
+  const Vector3d s = p - a;
+  const double f = 1.0 / det, u = f * s.dot(h);
+  if (u <= 1e-9 || u >= 1 - 1e-9) return false;
+  const Vector3d qq = s.cross(e1);
+  const double v = f * d.dot(qq);
+  if (v <= 1e-9 || u + v >= 1 - 1e-9) return false;
+  const double t = f * e2.dot(qq);
+  return t > 1e-9 && t < 1 - 1e-9;
+}
+
+struct ContractReport {
+  std::int64_t flipped = 0, degenerate = 0, intersecting = 0, unmovedChanged = 0;
+  double maxOffSurface = 0;
+};
+
+// `expectedNormal` (if nonzero): triangles whose vertices all moved must face it.
+ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, const Curve& U, const Curve& V,
+                             const Vector3d& expectedNormal) {
+  ContractReport c;
+  const Eigen::Index n = m.numPoints();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!r.moved[i]) {
+      if (std::memcmp(&m.points(i, 0), &r.points(i, 0), 3 * sizeof(double)) != 0 ||
+          r.displacement.row(i).squaredNorm() != 0.0)
+        ++c.unmovedChanged;
+    } else {
+      const auto& uv = r.parameters[i];
+      EXPECT_TRUE(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1);
+      c.maxOffSurface = std::max(c.maxOffSurface, (Row(r.points, i) - RefSurface(U, V, uv.x(), uv.y())).norm());
+      EXPECT_LT((Row(r.points, i) - Row(m.points, i) - Row(r.displacement, i)).norm(), 1e-12);
+    }
+  }
+  std::vector<const std::int64_t*> tris, touched;
+  for (std::int64_t t = 0; t < m.numCells(); ++t) {
+    const std::int64_t* ids = m.cell(t);
+    tris.push_back(ids);
+    const int mv = r.moved[ids[0]] + r.moved[ids[1]] + r.moved[ids[2]];
+    if (mv == 0) continue;
+    touched.push_back(ids);
+    const Vector3d a0 = AreaVec(m.points, ids), a1 = AreaVec(r.points, ids);
+    if (a1.norm() <= 1e-8 * a0.norm()) {
+      ++c.degenerate;
+      continue;
+    }
+    if (mv == 3 && expectedNormal.squaredNorm() > 0) {
+      if (a1.dot(expectedNormal) <= 0) ++c.flipped;
+      if (a0.dot(expectedNormal) > 0 && a1.dot(a0) <= 0) ++c.flipped;
+    } else if (a1.dot(a0) <= 0) {
+      ++c.flipped;
+    }
+  }
+  // Brute force: triangles touching moved vertices against all triangles sharing no vertex.
+  for (const std::int64_t* a : touched)
+    for (const std::int64_t* b : tris) {
+      if (a == b) continue;
+      bool share = false;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) share |= a[i] == b[j];
+      if (share) continue;
+      bool hit = false;
+      for (int e = 0; e < 3 && !hit; ++e) {
+        hit |= SegTri(Row(r.points, a[e]), Row(r.points, a[(e + 1) % 3]), Row(r.points, b[0]), Row(r.points, b[1]),
+                      Row(r.points, b[2]));
+        hit |= SegTri(Row(r.points, b[e]), Row(r.points, b[(e + 1) % 3]), Row(r.points, a[0]), Row(r.points, a[1]),
+                      Row(r.points, a[2]));
+      }
+      c.intersecting += hit;
+    }
+  return c;
+}
+
+ROIResult RoiWhere(const SurfaceMesh& m, const std::function<bool(const Vector3d&)>& pred) {
+  std::vector<std::uint8_t> sel(m.numPoints());
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i) sel[i] = pred(Row(m.points, i));
+  ROIResult r;
+  EXPECT_TRUE(ComputeROI(m, sel, r).ok);
+  return r;
+}
+
+} // namespace
+
+// ---------------------------------------------------------------- the surface itself
+
+TEST(BezierSurface, EvaluationMatchesDeCasteljauAndDerivatives) {
+  Curve U = {{0, 0, 0}, {1, 0, 0.5}, {2, 0, 0.5}, {3, 0, 0}, {4, 0, -0.5}, {5, 0.2, -0.5}, {6, 0.3, 0}};
+  Curve V = {{0, 0, 0}, {0, 1, 0.2}, {0.1, 2, 0.2}, {0, 3, 0}};
+  BezierSurface S;
+  Status s = BezierSurface::Create(U, V, false, S);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(S.SegmentsU(), 2);
+  EXPECT_EQ(S.SegmentsV(), 1);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> uni(0.01, 0.99);
+  for (int k = 0; k < 50; ++k) {
+    const double u = uni(rng), v = uni(rng);
+    EXPECT_LT((S.Evaluate(u, v) - RefSurface(U, V, u, v)).norm(), 1e-12);
+    Vector3d P, Su, Sv, Suu, Svv;
+    S.Derivatives(u, v, P, Su, Sv, Suu, Svv);
+    const double h = 1e-6;
+    if (std::abs(u - 0.5) > 2 * h) { // not across the joint
+      EXPECT_LT((Su - (RefSurface(U, V, u + h, v) - RefSurface(U, V, u - h, v)) / (2 * h)).norm(), 1e-5);
+    }
+    EXPECT_LT((Sv - (RefSurface(U, V, u, v + h) - RefSurface(U, V, u, v - h)) / (2 * h)).norm(), 1e-5);
+    EXPECT_NEAR(S.UnitNormal(u, v).dot(Su.cross(Sv).normalized()), 1.0, 1e-12);
+  }
+  EXPECT_LT((S.Evaluate(0, 0) - U[0]).norm(), 1e-15);
+  EXPECT_LT((S.Evaluate(1, 0) - U.back()).norm(), 1e-12);
+  EXPECT_LT((S.Evaluate(0, 1) - V.back()).norm(), 1e-12);
+  BezierSurface F;
+  ASSERT_TRUE(BezierSurface::Create(U, V, true, F).ok);
+  EXPECT_NEAR(F.UnitNormal(0.3, 0.3).dot(S.UnitNormal(0.3, 0.3)), -1.0, 1e-12);
+}
+
+TEST(BezierSurface, ProjectionIsClosestPoint) {
+  Curve U = {{-1, -1, 0}, {-0.3, -1, 0.6}, {0.3, -1, 0.6}, {1, -1, 0}};
+  Curve V = {{-1, -1, 0}, {-1, -0.3, 0.3}, {-1, 0.3, -0.3}, {-1, 1, 0}};
+  BezierSurface S;
+  ASSERT_TRUE(BezierSurface::Create(U, V, false, S).ok);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> xy(-0.8, 0.8), z(-0.5, 0.9);
+  for (int k = 0; k < 40; ++k) {
+    const Vector3d x(xy(rng), xy(rng), z(rng));
+    const SurfaceProjection p = S.Project(x);
+    double best = 1e300;
+    for (int i = 0; i <= 300; ++i)
+      for (int j = 0; j <= 300; ++j) best = std::min(best, (RefSurface(U, V, i / 300.0, j / 300.0) - x).norm());
+    const double d = (p.point - x).norm();
+    EXPECT_LE(d, best + 1e-9) << "not the closest point for " << x.transpose();
+    if (p.inside) {
+      EXPECT_NEAR(std::abs(p.signedDistance), d, 1e-9); // orthogonal foot point
+    }
+  }
+  // A point beyond the u = 1 border projects outside the patch.
+  EXPECT_FALSE(S.Project(Vector3d(3, 0, 0)).inside);
+  EXPECT_TRUE(S.Project(Vector3d(0, 0, 2)).inside);
+  EXPECT_GT(S.Project(Vector3d(0, 0, 2)).signedDistance, 0); // n = Su x Sv points to +z here
+}
+
+TEST(BezierSurface, TessellationFollowsNormal) {
+  Curve U = Line({0, 0, 0}, {2, 0, 0}, 2), V = Line({0, 0, 0}, {0, 1, 0});
+  for (bool flip : {false, true}) {
+    BezierSurface S;
+    ASSERT_TRUE(BezierSurface::Create(U, V, flip, S).ok);
+    SurfaceMesh t;
+    S.Tessellate(5, t);
+    EXPECT_EQ(t.numPoints(), (2 * 5 + 1) * (5 + 1));
+    EXPECT_EQ(t.numCells(), 2 * 2 * 5 * 5);
+    for (std::int64_t c = 0; c < t.numCells(); ++c)
+      EXPECT_GT(AreaVec(t.points, t.cell(c)).z() * (flip ? -1 : 1), 0);
+  }
+}
+
+// ---------------------------------------------------------------- errors
+
+TEST(BezierSurface, IllDefinedControlPointsAreNamed) {
+  BezierSurface S;
+  const Curve U = Line({0, 0, 0}, {1, 0, 0}), V = Line({0, 0, 0}, {0, 1, 0});
+  struct Case {
+    Curve u, v;
+    const char* expect;
+  };
+  Curve wrongCount = U;
+  wrongCount.push_back({2, 0, 0});
+  Curve notShared = V;
+  notShared[0] = {0, 0, 0.1};
+  Curve coincident = U;
+  coincident[2] = coincident[1];
+  Curve parallel = Line({0, 0, 0}, {0.5, 0, 0});
+  Curve loop = {{0, 0, 0}, {2, 1.5, 0}, {-1, 1.5, 0}, {1, 0, 0}};   // a loop: crosses itself
+  Curve fold = {{0, 0, 0}, {2, 0, 0}, {2, 0.3, 0}, {0, -0.1, 0}};   // turns back across itself
+  Curve cusp = {{0, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 0}};        // tangent vanishes
+  Curve allSame(4, Vector3d(1, 1, 1));
+  Curve nan = U;
+  nan[3].x() = std::nan("");
+  std::vector<Case> cases = {
+      {wrongCount, V, "3k+1"},
+      {U, notShared, "first control points not shared"},
+      {coincident, V, "degenerate"},
+      {U, parallel, "degenerate"},
+      {loop, Line({0, 0, 0}, {0, 0, 1}), "self-intersecting"},
+      {fold, Line({0, 0, 0}, {0, 0, 1}), "self-intersecting"},
+      {cusp, Line({0, 0, 0}, {0, 0, 1}), "degenerate"},
+      {allSame, allSame, "degenerate"},
+      {nan, V, "not finite"},
+  };
+  for (const Case& c : cases) {
+    Status s = BezierSurface::Create(c.u, c.v, false, S);
+    EXPECT_FALSE(s.ok) << c.expect;
+    EXPECT_NE(s.message.find(c.expect), std::string::npos) << "expected '" << c.expect << "' in: " << s.message;
+  }
+  EXPECT_TRUE(BezierSurface::Create(U, V, false, S).ok);
+}
+
+TEST(BezierCut, ErrorsGiveEmptyResult) {
+  SurfaceMesh m = testmesh::Icosphere(2);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.3; });
+  BezierCutResult r;
+  // Far away patch: no ROI vertex projects inside it.
+  Curve U = Line({10, 10, 0.7}, {11, 10, 0.7}), V = Line({10, 10, 0.7}, {10, 11, 0.7});
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, {}, r);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("not meeting the ROI"), std::string::npos) << s.message;
+  EXPECT_EQ(r.points.rows(), 0);
+  // Bad curve is reported through the cut as well.
+  Curve V2 = Line({0, 0, 1}, {0, 1, 1});
+  s = BezierCut(m, roi.mask, roi.boundary, Line({0, 0, 0}, {1, 0, 0}), V2, {}, r);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("first control points not shared"), std::string::npos) << s.message;
+  // Wrong array sizes, empty ROI.
+  s = BezierCut(m, {1, 1}, roi.boundary, U, V, {}, r);
+  EXPECT_FALSE(s.ok);
+  s = BezierCut(m, std::vector<std::uint8_t>(m.numPoints(), 0), roi.boundary, U, V, {}, r);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("ROI is empty"), std::string::npos) << s.message;
+}
+
+// ---------------------------------------------------------------- cut and fill
+
+TEST(BezierCut, PlaneCutOfSphereCap) {
+  SurfaceMesh m = testmesh::Icosphere(4);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.3; });
+  const double h = 0.7;
+  Curve U = Line({-1.5, -1.5, h}, {1.5, -1.5, h}), V = Line({-1.5, -1.5, h}, {-1.5, 1.5, h});
+  BezierCutResult r;
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, {}, r);
+  ASSERT_TRUE(s.ok) << s.message;
+  // Exactly the ROI interior vertices above the plane move.
+  std::int64_t expected = 0;
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i) {
+    const bool shouldMove = roi.mask[i] && !roi.boundary[i] && m.points(i, 2) > h;
+    EXPECT_EQ(bool(r.moved[i]), shouldMove) << "vertex " << i;
+    expected += shouldMove;
+    if (r.moved[i]) {
+      EXPECT_NEAR(r.points(i, 2), h, 1e-12);
+    }
+  }
+  EXPECT_GT(expected, 100);
+  EXPECT_EQ(r.numMoved, expected);
+  ContractReport c = CheckContract(m, r, U, V, Vector3d(0, 0, 1));
+  EXPECT_EQ(c.unmovedChanged, 0);
+  EXPECT_EQ(c.flipped, 0);
+  EXPECT_EQ(c.degenerate, 0);
+  EXPECT_EQ(c.intersecting, 0);
+  EXPECT_LT(c.maxOffSurface, 1e-12);
+  EXPECT_LE(r.maxDistanceToSurface, 1e-12);
+  EXPECT_EQ(r.operativeSurface.numPoints(), 17 * 17);
+  // No new intersections by Core's own check either.
+  EXPECT_EQ(CountNewIntersections(m, m.points, r.points, r.moved), 0);
+}
+
+TEST(BezierCut, FlipNormalCutsTheOtherSide) {
+  SurfaceMesh m = testmesh::Icosphere(3);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.3; });
+  Curve U = Line({-1.5, -1.5, 0.7}, {1.5, -1.5, 0.7}), V = Line({-1.5, -1.5, 0.7}, {-1.5, 1.5, 0.7});
+  BezierCutOptions o;
+  o.flipNormal = true; // normal -z: the ROI band between the boundary and z = 0.7 is cut
+  BezierCutResult r;
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, o, r);
+  if (s.ok) {
+    for (Eigen::Index i = 0; i < m.numPoints(); ++i)
+      if (r.moved[i]) {
+        EXPECT_LT(m.points(i, 2), 0.7);
+      }
+    ContractReport c = CheckContract(m, r, U, V, Vector3d::Zero());
+    EXPECT_EQ(c.flipped + c.degenerate + c.intersecting + c.unmovedChanged, 0);
+  } else {
+    // Folding the band onto the plane may be impossible; then the error must say so.
+    EXPECT_NE(s.message.find("without folding"), std::string::npos) << s.message;
+  }
+}
+
+TEST(BezierCut, FillRaisesSphereCap) {
+  SurfaceMesh m = testmesh::Icosphere(4);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.6; });
+  const double h = 0.95;
+  Curve U = Line({-1.5, -1.5, h}, {1.5, -1.5, h}), V = Line({-1.5, -1.5, h}, {-1.5, 1.5, h});
+  BezierCutOptions o;
+  o.operation = CutOperation::Fill;
+  BezierCutResult r;
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, o, r);
+  ASSERT_TRUE(s.ok) << s.message;
+  std::int64_t expected = 0;
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i) {
+    const bool shouldMove = roi.mask[i] && !roi.boundary[i] && m.points(i, 2) < h;
+    EXPECT_EQ(bool(r.moved[i]), shouldMove) << "vertex " << i;
+    expected += shouldMove;
+  }
+  EXPECT_GT(expected, 20);
+  ContractReport c = CheckContract(m, r, U, V, Vector3d(0, 0, 1));
+  EXPECT_EQ(c.unmovedChanged, 0);
+  EXPECT_EQ(c.flipped, 0);
+  EXPECT_EQ(c.degenerate, 0);
+  EXPECT_EQ(c.intersecting, 0);
+  EXPECT_LT(c.maxOffSurface, 1e-12);
+}
+
+TEST(BezierCut, CurvedCompositeSurface) {
+  SurfaceMesh m = testmesh::Icosphere(4);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.2; });
+  // An arch in x (one segment) swept along a gently bent two-segment line in y.
+  Curve U = {{-1.5, -1.5, 0.4}, {-0.5, -1.5, 0.9}, {0.5, -1.5, 0.9}, {1.5, -1.5, 0.4}};
+  Curve V = {{-1.5, -1.5, 0.4}, {-1.5, -1, 0.4}, {-1.5, -0.5, 0.45}, {-1.5, 0, 0.45},
+             {-1.5, 0.5, 0.45}, {-1.5, 1, 0.4}, {-1.5, 1.5, 0.4}};
+  BezierCutResult r;
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, {}, r);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_GT(r.numMoved, 50);
+  ContractReport c = CheckContract(m, r, U, V, Vector3d::Zero());
+  EXPECT_EQ(c.unmovedChanged, 0);
+  EXPECT_EQ(c.flipped, 0);
+  EXPECT_EQ(c.degenerate, 0);
+  EXPECT_EQ(c.intersecting, 0);
+  EXPECT_LT(c.maxOffSurface, 1e-10);
+  // Moved vertices were on the normal side: the surface is below them.
+  BezierSurface S;
+  ASSERT_TRUE(BezierSurface::Create(U, V, false, S).ok);
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i)
+    if (r.moved[i]) {
+      EXPECT_GT(S.Project(Row(m.points, i)).signedDistance, 0);
+    }
+}
+
+TEST(BezierCut, SlabNeedsTangentialRelaxation) {
+  // A thin plate cut across: direct projection collapses its side walls onto lines.
+  SurfaceMesh m = testmesh::Box({-0.15, -0.6, -1}, {0.15, 0.6, 1}, 0.05);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.01; });
+  const double h = 0.52;
+  Curve U = Line({-1, -1, h}, {1, -1, h}), V = Line({-1, -1, h}, {-1, 1, h});
+  BezierCutResult r;
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, {}, r);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_GT(r.intermediarySteps, 0);
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i)
+    EXPECT_EQ(bool(r.moved[i]), roi.mask[i] && !roi.boundary[i] && m.points(i, 2) > h);
+  ContractReport c = CheckContract(m, r, U, V, Vector3d(0, 0, 1));
+  EXPECT_EQ(c.unmovedChanged, 0);
+  EXPECT_EQ(c.flipped, 0);
+  EXPECT_EQ(c.degenerate, 0);
+  EXPECT_EQ(c.intersecting, 0);
+  EXPECT_LT(c.maxOffSurface, 1e-12);
+}
+
+TEST(BezierCut, SlabThroughIntermediarySurfacesOnly) {
+  // The same plate with the local repair switched off: the paper's intermediary surfaces alone.
+  SurfaceMesh m = testmesh::Box({-0.15, -0.6, -1}, {0.15, 0.6, 1}, 0.05);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.01; });
+  const double h = 0.52;
+  Curve U = Line({-1, -1, h}, {1, -1, h}), V = Line({-1, -1, h}, {-1, 1, h});
+  BezierCutOptions o;
+  o.localRepair = false;
+  BezierCutResult r;
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, o, r);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_GT(r.intermediarySteps, 1);
+  ContractReport c = CheckContract(m, r, U, V, Vector3d(0, 0, 1));
+  EXPECT_EQ(c.unmovedChanged, 0);
+  EXPECT_EQ(c.flipped, 0);
+  EXPECT_EQ(c.degenerate, 0);
+  EXPECT_EQ(c.intersecting, 0);
+  EXPECT_LT(c.maxOffSurface, 1e-12);
+}
+
+TEST(BezierCut, NothingOnTheSideMovesNothing) {
+  SurfaceMesh m = testmesh::Icosphere(2);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.3; });
+  Curve U = Line({-1.5, -1.5, 1.2}, {1.5, -1.5, 1.2}), V = Line({-1.5, -1.5, 1.2}, {-1.5, 1.5, 1.2});
+  BezierCutResult r;
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, {}, r);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(r.numMoved, 0);
+  EXPECT_FALSE(r.warnings.empty());
+  EXPECT_EQ(std::memcmp(r.points.data(), m.points.data(), sizeof(double) * 3 * m.numPoints()), 0);
+}

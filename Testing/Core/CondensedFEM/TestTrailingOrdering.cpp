@@ -1,0 +1,181 @@
+// The ROI-coupled-last ordering (Core/FillReducingOrdering), the trailing solve it enables
+// (CholmodFactor::solveTrailing) and the dense response built from it (Core/TrailingResponse),
+// including the choice against the plain ordering and the fallback to refined full solves.
+#include "CondensedFEM/CondensedSystem.h"
+#include "Support/FEMTestScenes.h"
+#include "SparseSolver/FillReducingOrdering.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+using namespace faceplan;
+using namespace faceplan::testing;
+
+namespace {
+
+std::shared_ptr<const CondensedSystem> PrecomputeOrFail(const PrecomputeRequest& request) {
+  std::shared_ptr<const CondensedSystem> system;
+  const Status s = Precompute(request, system);
+  EXPECT_TRUE(s.ok) << s.message;
+  return system;
+}
+
+// A request whose ROI is the whole inner surface: the ROI-coupled nodes are a whole node layer.
+PrecomputeRequest WholeSurfaceRoiRequest(int subdivisions, int layers) {
+  PrecomputeRequest request = ShellRequest(subdivisions, layers);
+  request.sets.movable = request.sets.constrained;
+  return request;
+}
+
+void ExpectAgreesWithReference(const PrecomputeRequest& request, const CondensedSystem& system) {
+  SolveInput input;
+  input.movableDisplacement = SmoothRoiField(request);
+  SolveResult condensed, reference;
+  ASSERT_TRUE(Solve(system, input, condensed).ok);
+  ASSERT_TRUE(SolveFullReference(request, input, reference).ok);
+  EXPECT_LT(RelativeMaxError(condensed.keptDisplacement, reference.keptDisplacement), 1e-10);
+}
+
+} // namespace
+
+TEST(FillReducingOrdering, PutsMarkedNodesLastAndKeepsNodesTogether) {
+  const PrecomputeRequest request = ShellRequest(4, 3);
+  const auto system = PrecomputeOrFail(request);
+  ASSERT_TRUE(system);
+  const int nodes = system->layout.freeNodes(), n = 3 * nodes;
+  const std::vector<char> coupled = NodesCoupledTo(system->kfr, nodes, 3);
+  int marked = 0;
+  for (char c : coupled)
+    marked += c;
+  ASSERT_GT(marked, 0);
+  ASSERT_LT(marked, nodes);
+
+  FillReducingOrdering ordering;
+  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, coupled, ordering).ok);
+  ASSERT_EQ(static_cast<int>(ordering.permutation.size()), n);
+  EXPECT_EQ(ordering.trailingDofs, 3 * marked);
+  std::vector<int> seen(n, 0);
+  for (int dof : ordering.permutation) {
+    ASSERT_GE(dof, 0);
+    ASSERT_LT(dof, n);
+    ++seen[dof];
+  }
+  for (int count : seen)
+    EXPECT_EQ(count, 1);           // a permutation
+  for (int p = 0; p < n; p += 3) { // each node's three DOFs together, in order
+    EXPECT_EQ(ordering.permutation[p] % 3, 0);
+    EXPECT_EQ(ordering.permutation[p + 1], ordering.permutation[p] + 1);
+    EXPECT_EQ(ordering.permutation[p + 2], ordering.permutation[p] + 2);
+    const bool last = p >= n - ordering.trailingDofs;
+    EXPECT_EQ(static_cast<bool>(coupled[ordering.permutation[p] / 3]), last) << "position " << p;
+  }
+}
+
+TEST(FillReducingOrdering, RejectsMarksOfTheWrongSize) {
+  const auto system = PrecomputeOrFail(ShellRequest(3, 2));
+  ASSERT_TRUE(system);
+  FillReducingOrdering ordering;
+  const Status s = OrderNodesWithTrailing(system->kff, 3, std::vector<char>(5, 1), ordering);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("do not match"), std::string::npos) << s.message;
+}
+
+TEST(CholmodFactor, TrailingSolveEqualsFullSolve) {
+  const auto system = PrecomputeOrFail(ShellRequest(4, 3));
+  ASSERT_TRUE(system);
+  const int nodes = system->layout.freeNodes();
+  FillReducingOrdering ordering;
+  ASSERT_TRUE(
+      OrderNodesWithTrailing(system->kff, 3, NodesCoupledTo(system->kfr, nodes, 3), ordering).ok);
+  CholmodFactor factor;
+  ASSERT_TRUE(factor.analyze(system->kff, &ordering).ok);
+  EXPECT_EQ(factor.trailingDofs(), ordering.trailingDofs);
+  ASSERT_TRUE(factor.factorize(system->kff).ok);
+
+  const SparseMatrix b = system->kfr.leftCols(std::min<Eigen::Index>(7, system->kfr.cols()));
+  Eigen::MatrixXd trailing, full;
+  ASSERT_TRUE(factor.solveTrailing(b, trailing).ok);
+  ASSERT_TRUE(factor.solve(Eigen::MatrixXd(b), full).ok);
+  EXPECT_LT((trailing - full).cwiseAbs().maxCoeff() / full.cwiseAbs().maxCoeff(), 1e-12);
+
+  // A right-hand side with a non-zero outside the trailing DOFs is refused, not mis-solved.
+  SparseMatrix outside(system->kff.rows(), 1);
+  outside.insert(ordering.permutation.front(), 0) = 1.0;
+  outside.makeCompressed();
+  const Status s = factor.solveTrailing(outside, trailing);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("outside the trailing"), std::string::npos) << s.message;
+}
+
+TEST(CholmodFactor, WithoutATrailingOrderingTheTrailingSolveIsRefused) {
+  const auto system = PrecomputeOrFail(ShellRequest(3, 2));
+  ASSERT_TRUE(system);
+  CholmodFactor factor;
+  ASSERT_TRUE(factor.analyze(system->kff).ok);
+  ASSERT_TRUE(factor.factorize(system->kff).ok);
+  EXPECT_EQ(factor.trailingDofs(), 0);
+  Eigen::MatrixXd x;
+  EXPECT_FALSE(factor.solveTrailing(system->kfr, x).ok);
+}
+
+TEST(TrailingResponse, SmallRoiUsesTheTrailingBlock) {
+  PrecomputeRequest request = ShellRequest(6, 3);
+  request.options.method = SolveMethod::DenseResponse;
+  const auto system = PrecomputeOrFail(request);
+  ASSERT_TRUE(system);
+  const SystemInfo info = Describe(*system);
+  EXPECT_NE(info.ordering.find("ROI-coupled DOFs last"), std::string::npos) << info.ordering;
+  EXPECT_NE(info.responsePath.find("backward substitutions"), std::string::npos)
+      << info.responsePath;
+  EXPECT_LE(system->responseResidual, 1e-12);
+  ExpectAgreesWithReference(request, *system);
+}
+
+// With the ROI on the whole inner surface the ROI-coupled nodes are a whole node layer; as a
+// dense trailing block they would cost more than they save, so the plain ordering is kept.
+TEST(TrailingResponse, LargeRoiKeepsThePlainOrdering) {
+  PrecomputeRequest request = WholeSurfaceRoiRequest(6, 2);
+  request.options.method = SolveMethod::DenseResponse;
+  const auto system = PrecomputeOrFail(request);
+  ASSERT_TRUE(system);
+  const SystemInfo info = Describe(*system);
+  EXPECT_EQ(info.ordering.find("ROI-coupled"), std::string::npos) << info.ordering;
+  EXPECT_NE(info.responsePath.find("full solves"), std::string::npos) << info.responsePath;
+  ExpectAgreesWithReference(request, *system);
+}
+
+// When the probe estimate misses the tolerance the response is redone with full solves, a
+// residual per column and refinement (here forced with a tolerance below rounding).
+TEST(TrailingResponse, MissedEstimateFallsBackToRefinedFullSolves) {
+  PrecomputeRequest request = ShellRequest(5, 2);
+  request.options.method = SolveMethod::DenseResponse;
+  request.options.residualTolerance = 1e-20;
+  request.options.maxRefinementSteps = 1;
+  const auto system = PrecomputeOrFail(request);
+  ASSERT_TRUE(system);
+  const SystemInfo info = Describe(*system);
+  EXPECT_NE(info.responsePath.find("full solves with per-column residuals"), std::string::npos)
+      << info.responsePath;
+  EXPECT_NE(info.responsePath.find("missed"), std::string::npos) << info.responsePath;
+  ExpectAgreesWithReference(request, *system);
+}
+
+TEST(TrailingResponse, CachedFactorEditsWithLoadsMatchTheReference) {
+  PrecomputeRequest request = ShellRequest(5, 3);
+  request.options.method = SolveMethod::CachedFactor;
+  const auto system = PrecomputeOrFail(request);
+  ASSERT_TRUE(system);
+  ASSERT_GT(system->factor.trailingDofs(), 0);
+  SolveInput input;
+  input.movableDisplacement = SmoothRoiField(request);
+  input.gravity = Eigen::Vector3d(0.0, 0.0, -9810.0);
+  for (int edit = 0; edit < 2; ++edit) { // the second edit reuses the load's response
+    input.movableDisplacement *= 0.5;
+    SolveResult condensed, reference;
+    ASSERT_TRUE(Solve(*system, input, condensed).ok);
+    ASSERT_TRUE(SolveFullReference(request, input, reference).ok);
+    EXPECT_LT(condensed.relativeResidual, 1e-12);
+    EXPECT_LT(RelativeMaxError(condensed.keptDisplacement, reference.keptDisplacement), 1e-10);
+  }
+}
