@@ -31,16 +31,29 @@
 
 #include <memory>
 
+namespace faceplan {
+namespace fem_filter {
+struct Settings;
+}
+} // namespace faceplan
+
 class FACEPLANFILTERS_EXPORT vtkCondensedFEMDeform : public vtkUnstructuredGridAlgorithm {
 public:
   static vtkCondensedFEMDeform* New();
   vtkTypeMacro(vtkCondensedFEMDeform, vtkUnstructuredGridAlgorithm);
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
+  // The values of Core's SolveMethod and ElementOrder. Out-of-range values are kept as set and
+  // rejected with an error by RequestData (pvpython bypasses the GUI's domains).
   enum OutputModes { VOLUME = 0, SURFACE = 1 };
   enum Backends { BACKEND_AUTO = 0, BACKEND_CPU = 1, BACKEND_CUDA = 2 };
-  enum Methods { METHOD_AUTO = 0, METHOD_CONDENSED = 1, METHOD_FULL_REFERENCE = 2 };
-  enum ElementOrders { LINEAR_ELEMENTS = 1, QUADRATIC_ELEMENTS = 2, QUADRATIC_NODAL_PRESSURE = 3 };
+  enum Methods {
+    METHOD_AUTO = 0,
+    METHOD_DENSE_RESPONSE = 1,
+    METHOD_CACHED_FACTOR = 2,
+    METHOD_FULL_REFERENCE = 3
+  };
+  enum ElementOrders { LINEAR_ELEMENTS = 0, QUADRATIC_ELEMENTS = 1, QUADRATIC_NODAL_PRESSURE = 2 };
 
   /// Connects the bone surface (port 1).
   void SetBoneConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
@@ -81,22 +94,23 @@ public:
   vtkGetVector3Macro(Gravity, double);
   ///@}
 
-  vtkSetClampMacro(OutputMode, int, VOLUME, SURFACE);
+  ///@{
+  /// Output (VOLUME or SURFACE), Backend (Auto, CPU, CUDA), Method (Auto, DenseResponse,
+  /// CachedFactor, FullReference): see Plugin/CondensedFEMDeform.xml.
+  vtkSetMacro(OutputMode, int);
   vtkGetMacro(OutputMode, int);
-  vtkSetClampMacro(Backend, int, BACKEND_AUTO, BACKEND_CUDA);
+  vtkSetMacro(Backend, int);
   vtkGetMacro(Backend, int);
-  vtkSetClampMacro(Method, int, METHOD_AUTO, METHOD_FULL_REFERENCE);
+  vtkSetMacro(Method, int);
   vtkGetMacro(Method, int);
+  ///@}
 
   ///@{
-  /// Element order: LINEAR_ELEMENTS (1, 4-node tetrahedra, the default) or QUADRATIC_ELEMENTS (2):
-  /// Core converts the tissue to 10-node tetrahedra with mean dilatation, which do not lock for
-  /// nearly incompressible tissue (Poisson ratio >= 0.49); outputs stay at the input's points.
-  /// QUADRATIC_NODAL_PRESSURE (3): 10-node tetrahedra with a continuous nodal pressure (P2-P1,
-  /// lumped pressure mass): its error does not grow with the Poisson ratio at all, at several
-  /// times the memory and precompute time of QUADRATIC_ELEMENTS (docs/STABILITY.md).
-  /// FullReference is linear only (a quadratic request then runs linear, with a warning).
-  vtkSetClampMacro(ElementOrder, int, LINEAR_ELEMENTS, QUADRATIC_NODAL_PRESSURE);
+  /// Element order: LINEAR_ELEMENTS (0, 4-node tetrahedra, the default), QUADRATIC_ELEMENTS (1,
+  /// 10-node tetrahedra with mean dilatation, locking-free for nearly incompressible tissue) or
+  /// QUADRATIC_NODAL_PRESSURE (2, 10-node tetrahedra with a continuous nodal pressure). Outputs
+  /// stay at the input's points. FullReference is linear only (docs/STABILITY.md).
+  vtkSetMacro(ElementOrder, int);
   vtkGetMacro(ElementOrder, int);
   ///@}
 
@@ -107,7 +121,7 @@ public:
   ///@}
 
   /// Number of precomputes (factorizations) this filter has started; for tests and the GUI.
-  vtkGetMacro(PrecomputeCount, int);
+  int GetPrecomputeCount();
 
 protected:
   vtkCondensedFEMDeform();
@@ -129,11 +143,12 @@ protected:
   int Method = METHOD_AUTO;
   bool Verify = false;
   int ElementOrder = LINEAR_ELEMENTS;
-  int PrecomputeCount = 0;
 
 private:
   vtkCondensedFEMDeform(const vtkCondensedFEMDeform&) = delete;
   void operator=(const vtkCondensedFEMDeform&) = delete;
+
+  faceplan::fem_filter::Settings CurrentSettings() const;
 
   struct Cache;
   std::unique_ptr<Cache> State;

@@ -40,6 +40,8 @@ private:
 
 } // namespace
 
-std::shared_ptr<ComputeBackend> MakeFloatCpuBackend() { return std::make_shared<FloatCpuBackend>(); }
+std::shared_ptr<ComputeBackend> MakeFloatCpuBackend() {
+  return std::make_shared<FloatCpuBackend>();
+}
 
 } // namespace faceplan

@@ -1,0 +1,48 @@
+#include "CondensedFEM/RequestIdentity.h"
+
+namespace faceplan {
+
+namespace {
+
+// The sizes the comparisons below were written for (x86-64, libstdc++). A new field changes them:
+// extend the comparison, then the number.
+static_assert(sizeof(NodeSets) == 3 * sizeof(std::vector<int>),
+              "SameRequest must compare every NodeSets field");
+static_assert(sizeof(Materials) == 3 * sizeof(Eigen::VectorXd),
+              "SameRequest must compare every Materials field");
+static_assert(sizeof(TetMesh) == sizeof(Points) + sizeof(Tets),
+              "SameRequest must compare every TetMesh field");
+static_assert(sizeof(PrecomputeOptions) == 120,
+              "SameOptions must compare every PrecomputeOptions field");
+
+template <class Matrix> bool SameMatrix(const Matrix& a, const Matrix& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() && a == b;
+}
+
+} // namespace
+
+bool SameOptions(const PrecomputeOptions& a, const PrecomputeOptions& b) {
+  // A mid-edge projection is a function: two of them cannot be compared, so a request that sets one
+  // never matches (it is always precomputed afresh).
+  if (a.midEdgeProjection || b.midEdgeProjection)
+    return false;
+  return a.method == b.method && a.denseResponseBudgetBytes == b.denseResponseBudgetBytes &&
+         a.backend == b.backend && a.responseBlockColumns == b.responseBlockColumns &&
+         a.elementOrder == b.elementOrder &&
+         a.quadraticMeanDilatation == b.quadraticMeanDilatation &&
+         a.sliverQualityThreshold == b.sliverQualityThreshold &&
+         a.residualTolerance == b.residualTolerance &&
+         a.maxRefinementSteps == b.maxRefinementSteps &&
+         a.responseTolerance == b.responseTolerance && a.strainWarningLimit == b.strainWarningLimit;
+}
+
+bool SameRequest(const PrecomputeRequest& a, const PrecomputeRequest& b) {
+  return SameMatrix(a.mesh.points, b.mesh.points) && SameMatrix(a.mesh.tets, b.mesh.tets) &&
+         SameMatrix(a.materials.youngsModulus, b.materials.youngsModulus) &&
+         SameMatrix(a.materials.poissonRatio, b.materials.poissonRatio) &&
+         SameMatrix(a.materials.density, b.materials.density) &&
+         a.sets.constrained == b.sets.constrained && a.sets.movable == b.sets.movable &&
+         a.sets.kept == b.sets.kept && SameOptions(a.options, b.options);
+}
+
+} // namespace faceplan

@@ -1,0 +1,32 @@
+#pragma once
+// The CondensedFEMDeform properties as one value, passed to the filter's steps (validate, convert,
+// contact, solve, output) so each step sees exactly what it uses. Private to FacePlan::Filters.
+
+namespace faceplan {
+namespace fem_filter {
+
+enum class OutputMode { Volume = 0, Surface = 1 };
+enum class BackendChoice { Auto = 0, CPU = 1, CUDA = 2 };
+// The same values as Core's SolveMethod and ElementOrder.
+enum class MethodChoice { Auto = 0, DenseResponse = 1, CachedFactor = 2, FullReference = 3 };
+enum class ElementOrderChoice { Linear = 0, Quadratic = 1, QuadraticNodalPressure = 2 };
+
+struct Settings {
+  double youngsModulus = 15000.0; // Pa
+  double poissonRatio = 0.45;
+  bool useCellMaterials = true;
+  double lengthUnit = 0.001; // metres per mesh unit
+  double contactDistance = 1.0;
+  bool useGravity = false;
+  double density = 1100.0; // kg/m^3
+  double gravity[3] = {0.0, 0.0, -9.81};
+  int outputMode = 0, backend = 0, method = 0, elementOrder = 0; // as set, validated before use
+  bool verify = false;
+
+  OutputMode output() const { return static_cast<OutputMode>(outputMode); }
+  MethodChoice methodChoice() const { return static_cast<MethodChoice>(method); }
+  bool fullReference() const { return methodChoice() == MethodChoice::FullReference; }
+};
+
+} // namespace fem_filter
+} // namespace faceplan

@@ -1,0 +1,126 @@
+#include "CondensedFEMDeformSolver.h"
+
+#include "CondensedFEM/RequestIdentity.h"
+#include "CondensedFEM/Verify.h"
+#ifdef FACEPLAN_HAS_CUDA
+#include "CudaBackend.h"
+#endif
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <thread>
+
+namespace faceplan {
+namespace fem_filter {
+
+void ApplyMethodAndOrder(const Settings& settings, PrecomputeOptions& options) {
+  switch (settings.methodChoice()) {
+  case MethodChoice::DenseResponse:
+    options.method = SolveMethod::DenseResponse;
+    break;
+  case MethodChoice::CachedFactor:
+    options.method = SolveMethod::CachedFactor;
+    break;
+  default:
+    options.method = SolveMethod::Auto;
+    break;
+  }
+  switch (static_cast<ElementOrderChoice>(settings.elementOrder)) {
+  case ElementOrderChoice::Quadratic:
+    options.elementOrder = ElementOrder::Quadratic;
+    break;
+  case ElementOrderChoice::QuadraticNodalPressure:
+    options.elementOrder = ElementOrder::QuadraticNodalPressure;
+    break;
+  default:
+    options.elementOrder = ElementOrder::Linear;
+    break;
+  }
+}
+
+void Solver::chooseBackend(const Settings& settings, PrecomputeRequest& request,
+                           std::vector<std::string>& notes) {
+  if (static_cast<BackendChoice>(settings.backend) == BackendChoice::CPU)
+    return;
+  if (!cudaProbed_) {
+    cudaProbed_ = true;
+#ifdef FACEPLAN_HAS_CUDA
+    std::string error;
+    cudaBackend_ = cuda::MakeCudaBackend(error);
+    if (!cudaBackend_)
+      cudaUnavailable_ = error;
+#else
+    cudaUnavailable_ = "this build has no CUDA backend";
+#endif
+  }
+  if (cudaBackend_)
+    request.options.backend = cudaBackend_;
+  else if (static_cast<BackendChoice>(settings.backend) == BackendChoice::CUDA)
+    notes.push_back("Backend CUDA is not available (" + cudaUnavailable_ + "); using the CPU");
+}
+
+Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Settings& settings,
+                   const std::function<void(double)>& progress, SolveOutcome& outcome) {
+  outcome = SolveOutcome();
+  ApplyMethodAndOrder(settings, request.options);
+  if (settings.fullReference() && request.options.elementOrder != ElementOrder::Linear) {
+    outcome.notes.push_back(
+        "the FullReference method supports linear elements only: solved with linear elements");
+    request.options.elementOrder = ElementOrder::Linear;
+  }
+  chooseBackend(settings, request, outcome.notes);
+
+  Status status;
+  if (settings.fullReference()) {
+    status = SolveFullReference(request, input, outcome.result);
+  } else {
+    auto fraction = std::make_shared<std::atomic<double>>(0.0);
+    if (!haveRequest_ || !SameRequest(request, lastRequest_)) {
+      background_.start(request, [fraction](double f, const char*) { fraction->store(f); });
+      lastRequest_ = request;
+      haveRequest_ = true;
+      outcome.freshPrecompute = true;
+      ++precomputeCount_;
+    }
+    // The worker's progress is reported from this (the pipeline's) thread.
+    while (!background_.ready()) {
+      if (progress)
+        progress(fraction->load());
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::shared_ptr<const CondensedSystem> system;
+    status = background_.wait(system);
+    if (!status) {
+      haveRequest_ = false; // a failed precompute is retried next time
+      return status;
+    }
+    // The precompute's findings (slivers, fallbacks) are reported once, not again on every edit.
+    if (outcome.freshPrecompute)
+      for (const auto& w : status.warnings)
+        outcome.notes.push_back(w);
+    status = Solve(*system, input, outcome.result);
+    const SystemInfo info = Describe(*system);
+    outcome.precomputeMs = info.precomputeTimings[Stage::Total].ms;
+    if (outcome.freshPrecompute)
+      for (int k = 0; k < kNumStages; ++k)
+        if (info.precomputeTimings.stages[k].ms > 0.0)
+          outcome.result.timings.stages[k].reused = false;
+    outcome.result.timings[Stage::Total].reused = false;
+  }
+  if (!status)
+    return status;
+  for (const auto& w : status.warnings)
+    outcome.notes.push_back(w); // the solve's (large strain, inversion)
+
+  if (settings.verify) {
+    const Status verified =
+        VerifyAgainstReference(request, input, outcome.result, outcome.verifyError);
+    if (!verified)
+      return verified;
+  }
+  return Status::Ok();
+}
+
+} // namespace fem_filter
+} // namespace faceplan

@@ -1,0 +1,49 @@
+#pragma once
+// Step 4 of CondensedFEMDeform: the backend, the cached background precompute and the solve.
+// Keeps the last request: when only the prescribed values change the precompute is reused.
+// Private to FacePlan::Filters.
+#include "CondensedFEMDeformSettings.h"
+
+#include "CondensedFEM/BackgroundPrecompute.h"
+#include "CondensedFEM/CondensedFEM.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace faceplan {
+namespace fem_filter {
+
+struct SolveOutcome {
+  SolveResult result;
+  bool freshPrecompute = false;   // this update started a precompute
+  double precomputeMs = 0.0;      // the cached precompute's total
+  double verifyError = -1.0;      // with Verify: largest relative difference to the reference
+  std::vector<std::string> notes; // warnings for the user (precompute findings once, then solve's)
+};
+
+class Solver {
+public:
+  // `progress` is called on the calling thread with a fraction in [0, 1] while the worker runs.
+  Status run(PrecomputeRequest request, const SolveInput& input, const Settings& settings,
+             const std::function<void(double)>& progress, SolveOutcome& outcome);
+  int precomputeCount() const { return precomputeCount_; }
+
+private:
+  void chooseBackend(const Settings& settings, PrecomputeRequest& request,
+                     std::vector<std::string>& notes);
+
+  BackgroundPrecompute background_;
+  PrecomputeRequest lastRequest_;
+  bool haveRequest_ = false;
+  int precomputeCount_ = 0;
+  std::shared_ptr<ComputeBackend> cudaBackend_;
+  std::string cudaUnavailable_;
+  bool cudaProbed_ = false;
+};
+
+// Core's options for the filter's Method and ElementOrder.
+void ApplyMethodAndOrder(const Settings& settings, PrecomputeOptions& options);
+
+} // namespace fem_filter
+} // namespace faceplan

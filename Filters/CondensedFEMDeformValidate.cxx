@@ -1,0 +1,171 @@
+#include "CondensedFEMDeformValidate.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellData.h"
+#include "vtkCellType.h"
+#include "vtkDataArray.h"
+#include "vtkIdList.h"
+#include "vtkNew.h"
+#include "vtkPointData.h"
+#include "vtkPointSet.h"
+#include "vtkPoints.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace faceplan {
+namespace fem_filter {
+
+namespace {
+
+template <class... Parts> Status Error(const Parts&... parts) {
+  std::ostringstream msg;
+  (msg << ... << parts);
+  return Status::Error(msg.str());
+}
+
+// The first non-finite point coordinate, or -1.
+vtkIdType FirstNonFinitePoint(vtkPointSet* data) {
+  for (vtkIdType i = 0; i < data->GetNumberOfPoints(); ++i) {
+    double p[3];
+    data->GetPoint(i, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      return i;
+  }
+  return -1;
+}
+
+// An array with one tuple per point (or cell) and the expected components, all finite.
+Status CheckArray(vtkDataArray* array, const char* name, const char* owner, vtkIdType tuples,
+                  int components) {
+  if (array->GetNumberOfComponents() != components)
+    return Error("the ", owner, " array ", name, " has ", array->GetNumberOfComponents(),
+                 " components; it needs ", components);
+  if (array->GetNumberOfTuples() != tuples)
+    return Error("the ", owner, " array ", name, " has ", array->GetNumberOfTuples(),
+                 " values; it needs one per ", owner == std::string("cell") ? "cell" : "point",
+                 " (", tuples, ")");
+  for (vtkIdType i = 0; i < tuples; ++i)
+    for (int c = 0; c < components; ++c)
+      if (!std::isfinite(array->GetComponent(i, c)))
+        return Error("the ", owner, " array ", name, " has a NaN or infinite value at ", i);
+  return Status::Ok();
+}
+
+} // namespace
+
+Status ValidateProperties(const Settings& s) {
+  if (!(s.youngsModulus > 0.0) || !std::isfinite(s.youngsModulus))
+    return Error("YoungsModulus must be a positive number of pascals (got ", s.youngsModulus, ")");
+  if (!(s.poissonRatio > -1.0 && s.poissonRatio < 0.5))
+    return Error("PoissonRatio must lie in (-1, 0.5) (got ", s.poissonRatio, ")");
+  if (!(s.lengthUnit > 0.0) || !std::isfinite(s.lengthUnit))
+    return Error("LengthUnit must be a positive number of metres per mesh unit (got ", s.lengthUnit,
+                 ")");
+  if (!(s.contactDistance >= 0.0) || !std::isfinite(s.contactDistance))
+    return Error("ContactDistance must be zero or positive and finite (got ", s.contactDistance,
+                 ")");
+  if (s.useGravity) {
+    if (!(s.density >= 0.0) || !std::isfinite(s.density))
+      return Error("Density must be zero or positive and finite with UseGravity on (got ",
+                   s.density, ")");
+    for (double g : s.gravity)
+      if (!std::isfinite(g))
+        return Error("Gravity has a NaN or infinite component");
+  }
+  if (s.outputMode < 0 || s.outputMode > 1)
+    return Error("OutputMode must be 0 (Volume) or 1 (Surface), not ", s.outputMode);
+  if (s.backend < 0 || s.backend > 2)
+    return Error("Backend must be 0 (Auto), 1 (CPU) or 2 (CUDA), not ", s.backend);
+  if (s.method < 0 || s.method > 3)
+    return Error(
+        "Method must be 0 (Auto), 1 (DenseResponse), 2 (CachedFactor) or 3 (FullReference), not ",
+        s.method);
+  if (s.elementOrder < 0 || s.elementOrder > 2)
+    return Error(
+        "ElementOrder must be 0 (Linear), 1 (Quadratic) or 2 (QuadraticNodalPressure), not ",
+        s.elementOrder);
+  return Status::Ok();
+}
+
+Status ValidateTissue(vtkUnstructuredGrid* tissue, const Settings& settings) {
+  if (!tissue || tissue->GetNumberOfCells() == 0 || tissue->GetNumberOfPoints() == 0)
+    return Error("the Input (soft tissue) is empty");
+  const vtkIdType n = tissue->GetNumberOfPoints(), m = tissue->GetNumberOfCells();
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < m; ++c) {
+    if (tissue->GetCellType(c) != VTK_TETRA)
+      return Error("cell ", c, " of the tissue is not a linear tetrahedron (VTK type ",
+                   tissue->GetCellType(c),
+                   "); apply ParaView's Tetrahedralize filter to the tissue first");
+    tissue->GetCellPoints(c, ids);
+    if (ids->GetNumberOfIds() != 4)
+      return Error("tetrahedron ", c, " has ", ids->GetNumberOfIds(), " point ids, not 4");
+    for (vtkIdType k = 0; k < 4; ++k) {
+      const vtkIdType id = ids->GetId(k);
+      if (id < 0 || id >= n)
+        return Error("tetrahedron ", c, " uses point id ", id, ", outside the tissue's ", n,
+                     " points");
+      for (vtkIdType j = 0; j < k; ++j)
+        if (ids->GetId(j) == id)
+          return Error("tetrahedron ", c, " uses point ", id, " twice");
+    }
+  }
+  const vtkIdType bad = FirstNonFinitePoint(tissue);
+  if (bad >= 0)
+    return Error("the tissue's point ", bad, " has a NaN or infinite coordinate");
+  if (settings.useCellMaterials) {
+    for (const char* name : {"YoungsModulus", "PoissonRatio"})
+      if (vtkDataArray* a = tissue->GetCellData()->GetArray(name)) {
+        const Status s = CheckArray(a, name, "cell", m, 1);
+        if (!s)
+          return s;
+      }
+  }
+  return Status::Ok();
+}
+
+Status ValidateBone(vtkPointSet* bone) {
+  if (!bone)
+    return Error("no Bone input: connect the output of BezierCut or Osteotomy (a surface with a "
+                 "Displacement array)");
+  if (bone->GetNumberOfPoints() == 0 || bone->GetNumberOfCells() == 0)
+    return Error("the Bone input has no cells to make contact with");
+  const vtkIdType n = bone->GetNumberOfPoints();
+  bool hasSurfaceCell = false;
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
+    const int type = bone->GetCellType(c);
+    if (type == VTK_TRIANGLE || type == VTK_QUAD || type == VTK_POLYGON ||
+        type == VTK_TRIANGLE_STRIP || type == VTK_PIXEL)
+      hasSurfaceCell = true;
+    bone->GetCellPoints(c, ids);
+    for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
+      if (ids->GetId(k) < 0 || ids->GetId(k) >= n)
+        return Error("bone cell ", c, " uses point id ", ids->GetId(k), ", outside the bone's ", n,
+                     " points");
+  }
+  if (!hasSurfaceCell)
+    return Error(
+        "the Bone input has no surface cells (triangles or polygons) to make contact with");
+  const vtkIdType bad = FirstNonFinitePoint(bone);
+  if (bad >= 0)
+    return Error("the bone's point ", bad, " has a NaN or infinite coordinate");
+  vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
+  if (!displacement)
+    return Error("the Bone input needs a 3-component point array named Displacement "
+                 "(connect the output of BezierCut or Osteotomy)");
+  Status s = CheckArray(displacement, "Displacement", "point", n, 3);
+  if (!s)
+    return s;
+  if (vtkDataArray* mask = bone->GetPointData()->GetArray("ROIMask")) {
+    s = CheckArray(mask, "ROIMask", "point", n, 1);
+    if (!s)
+      return s;
+  }
+  return Status::Ok();
+}
+
+} // namespace fem_filter
+} // namespace faceplan

@@ -1,0 +1,20 @@
+#pragma once
+// Step 1 of CondensedFEMDeform: every check on the inputs and properties that can be made before
+// anything is converted or built, so that later steps (VTK locators, surface extraction, Core) only
+// ever see well-formed data. Private to FacePlan::Filters.
+#include "CondensedFEMDeformSettings.h"
+
+#include "Common/Status.h"
+
+class vtkPointSet;
+class vtkUnstructuredGrid;
+
+namespace faceplan {
+namespace fem_filter {
+
+Status ValidateProperties(const Settings& settings);
+Status ValidateTissue(vtkUnstructuredGrid* tissue, const Settings& settings);
+Status ValidateBone(vtkPointSet* bone);
+
+} // namespace fem_filter
+} // namespace faceplan
