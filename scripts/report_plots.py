@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Plots of the error-against-run-time report (issue 5) from <out>/results.csv.
+"""Plots of the error-against-run-time report from <out>/results.csv.
 
 Run with Debian's Python (/usr/bin/python3, package python3-matplotlib); scripts/report calls it.
 Writes <out>/plots/error_vs_time.png (per-edit time), error_vs_total_time.png (precompute + one
