@@ -928,7 +928,7 @@ void Report::write() const {
 
   // Auto.
   md << "## Which path Auto picks, and why\n\n"
-     << "`SolveMethod::Auto` (Core/CondensedFEM.cpp, `ChooseMethod`) picks between the two exact condensed "
+     << "`SolveMethod::Auto` (Core/CondensedFEM/MethodChoice.cpp, `ChooseMethod`) picks between the two exact condensed "
         "paths by the per-edit cost: the dense response (kept × ROI matrix, an edit is one "
         "matrix-vector product, 2·kept·ROI flops) when it fits the 2 GB budget and is cheaper than a "
         "solve with the cached sparse factor (≈ 4·nnz(L) flops, or 2·nnz(L) + t² when the t ROI-coupled DOFs "
@@ -1010,7 +1010,7 @@ void Report::write() const {
          << " GFLOP/s (median " << Num(Summarize(factorRate).median, "%.2g")
          << "). A flop of the dense product is thus about " << Num(k, "%.1f")
          << "x cheaper than a flop of the sparse triangular solves (median over the scenes), against the weight 3 Core "
-            "uses (Core/CondensedFEM.cpp, kSparseSolveFlopWeight; the rates vary with the machine's load). "
+            "uses (Core/CondensedFEM/MethodChoice.cpp, kSparseSolveFlopWeight; the rates vary with the machine's load). "
             "Weighting by this run's ratio would have picked the faster method on "
          << calibratedAgree << " of " << calibratedTotal
          << " scenes. Near the break-even point either choice is within a small factor per edit and both are "

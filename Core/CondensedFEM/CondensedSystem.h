@@ -1,6 +1,6 @@
 #pragma once
 // Internal layout of a precomputed system (not part of the public interface; shared by
-// CondensedFEM.cpp and the report tools that need the assembled blocks).
+// the CondensedFEM sources and the report tools that need the assembled blocks).
 #include "SparseSolver/CholmodFactor.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "CondensedFEM/NodeLayout.h"

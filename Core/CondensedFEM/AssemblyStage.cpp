@@ -1,0 +1,70 @@
+// The ElementStiffness and Assembly stages.
+#include "CondensedFEM/PrecomputeStages.h"
+
+#include "Element/NodalPressure.h"
+
+#include <sstream>
+
+namespace faceplan {
+
+Status AssembleStiffness(PrecomputeState& state) {
+  const PrecomputeRequest& request = state.request;
+  const PrecomputeOptions& options = request.options;
+  const TetMesh& mesh = request.mesh;
+  const NodeLayout& layout = state.sys->layout;
+  const QuadraticMesh& qmesh = state.qmesh;
+  StageClock& clock = state.clock;
+  // Nodal pressure: cells give the shear part; the volumetric part is added after assembly.
+  const Materials cellMaterials =
+      state.nodalPressure ? ShearOnlyMaterials(request.materials) : Materials();
+  const Materials& stiffnessMaterials = state.nodalPressure ? cellMaterials : request.materials;
+
+  AssemblyPattern& pattern = state.pattern;
+  pattern =
+      state.quadratic
+          ? BuildCellAssemblyPattern(qmesh.cells.data(), qmesh.cells.rows(), 10, layout.dofNode,
+                                     static_cast<int>(layout.meshNode.size()))
+          : BuildAssemblyPattern(mesh, layout.dofNode, static_cast<int>(layout.meshNode.size()));
+  const double patternMs = clock.lapMs();
+  state.backend = options.backend ? options.backend : MakeCpuBackend();
+  ComputeBackend::AssemblyTimings at;
+  std::string error;
+  if (state.quadratic) {
+    // The backends implement 4-node cells; 10-node cells are computed and assembled on the CPU.
+    std::vector<double> packed;
+    std::vector<long long> invalid;
+    ComputePackedTet10Stiffness(qmesh, stiffnessMaterials, packed, invalid,
+                                options.quadraticMeanDilatation);
+    if (!invalid.empty()) {
+      std::ostringstream msg;
+      msg << invalid.size() << " quadratic cells have a non-positive Jacobian after the mid-edge "
+          << "projection (first: cell " << invalid.front()
+          << "); the projection moves mid-edge nodes too far for these cells";
+      return Status::Error(msg.str());
+    }
+    at.elementStiffnessMs = clock.lapMs();
+    AssembleFromPacked(packed, pattern);
+    at.assemblyMs = clock.lapMs();
+  } else if (!state.backend->assembleStiffness(mesh, request.materials, pattern, at, error)) {
+    state.status.warnings.push_back(state.backend->name() + " backend failed (" + error +
+                                    "); used the CPU");
+    state.backend = MakeCpuBackend();
+    at = {};
+    state.backend->assembleStiffness(mesh, request.materials, pattern, at, error);
+  }
+  if (state.nodalPressure) { // the volumetric part, added to the shear part assembled above
+    clock.lapMs();
+    AddNodalPressureStiffness(pattern.upper, qmesh.points, qmesh.cells.data(), qmesh.cells.rows(),
+                              10, request.materials, layout.dofNode,
+                              static_cast<int>(layout.meshNode.size()));
+    at.assemblyMs += clock.lapMs();
+  }
+  state.sys->backendName = state.backend->name();
+  state.time(Stage::ElementStiffness).ms = at.elementStiffnessMs;
+  state.time(Stage::Assembly).ms = patternMs + at.assemblyMs;
+  clock.lapMs();
+  state.report(0.15, "assembly");
+  return state.cancelled() ? Status::Error("cancelled") : Status::Ok();
+}
+
+} // namespace faceplan

@@ -1,0 +1,187 @@
+// The Condensation stage: the dense response of the kept DOFs to the ROI DOFs.
+#include "CondensedFEM/PrecomputeStages.h"
+
+#include "Common/BlasThreads.h"
+#include "CondensedFEM/RefinedSolve.h"
+#include "SparseSolver/TrailingResponse.h"
+
+#include <algorithm>
+#include <limits>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <thread>
+
+namespace faceplan {
+
+namespace {
+
+// Relative deviation of a backend's response operator from the double response, on random ROI
+// vectors (a float operator shows ~1e-7; a double one ~1e-16).
+double ProbeResponseOperator(const CondensedSystem& sys, ResponseOperator& op, std::string& error) {
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  double worst = 0.0;
+  for (int probe = 0; probe < 2; ++probe) {
+    Eigen::VectorXd roi(sys.response.cols());
+    for (Eigen::Index k = 0; k < roi.size(); ++k)
+      roi[k] = uniform(rng);
+    Eigen::VectorXd approx;
+    if (!op.apply(roi, approx, error))
+      return std::numeric_limits<double>::infinity();
+    const Eigen::VectorXd exact = sys.response * roi;
+    if (approx.size() != exact.size()) {
+      error = "operator returned the wrong size";
+      return std::numeric_limits<double>::infinity();
+    }
+    const double norm = exact.norm();
+    const double dev = (approx - exact).norm();
+    worst = std::max(worst, norm > 0.0 ? dev / norm : dev);
+  }
+  return worst;
+}
+
+// Columns of the response, solved in blocks: one single-threaded solve per core at a time, each
+// with its own CHOLMOD workspace, blocks sized so the transient memory stays near 1 GB.
+// First the cheap path (backward substitutions from the trailing block, residual estimated by
+// random probes; TrailingResponse.h); when it is unavailable or its estimate misses the tolerance,
+// full solves with a residual and iterative refinement per column.
+Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
+                     const std::atomic<bool>* cancel, const ProgressCallback& progress) {
+  const Eigen::Index keptDofs = 3 * sys.layout.keptFree, roiDofs = sys.kfr.cols();
+  const Eigen::Index freeDofs = sys.kff.rows();
+  const int threads =
+      static_cast<int>(std::max(1u, std::min(std::thread::hardware_concurrency(), 16u)));
+  const double bytesPerColumn = 8.0 * 5.0 * double(std::max<Eigen::Index>(freeDofs, 1));
+  const Eigen::Index memoryBlock = static_cast<Eigen::Index>(1.0e9 / (bytesPerColumn * threads));
+  const Eigen::Index largestBlock =
+      std::clamp<Eigen::Index>(std::min<Eigen::Index>(memoryBlock, options.responseBlockColumns), 8,
+                               std::max(8, options.responseBlockColumns));
+  if (sys.factor.trailingDofs() > 0) {
+    TrailingResponseResult fast;
+    Status fs = BuildTrailingResponse(
+        sys.factor, sys.kff, sys.kfr, keptDofs, largestBlock, cancel,
+        [&progress](double f) {
+          if (progress)
+            progress(0.6 + 0.4 * f, "dense response");
+        },
+        fast);
+    if (!fs)
+      return fs;
+    std::ostringstream how;
+    how.precision(3);
+    if (fast.residualEstimate <= sys.residualTolerance) {
+      sys.response = std::move(fast.response);
+      sys.responseResidual = fast.residualEstimate;
+      how << "backward substitutions from the ROI-coupled trailing block; relative residual "
+          << fast.residualEstimate << " estimated with " << fast.probes << " random probes";
+      sys.info.responsePath = how.str();
+      return Status::Ok();
+    }
+    how << "full solves with per-column residuals and refinement (the probe estimate "
+        << fast.residualEstimate << " of the backward-substitution response missed "
+        << sys.residualTolerance << ")";
+    sys.info.responsePath = how.str();
+  } else {
+    sys.info.responsePath = "full solves with per-column residuals and refinement";
+  }
+  sys.response.resize(keptDofs, roiDofs);
+  const Eigen::Index evenShare = (roiDofs + threads - 1) / threads; // keep every core busy
+  const Eigen::Index block = std::max<Eigen::Index>(1, std::min(largestBlock, evenShare));
+  const Eigen::Index blocks = (roiDofs + block - 1) / block;
+
+  ScopedBlasThreads singleThreadedBlas(1);
+  const RowMajorSparse kffFull = sys.kff.selfadjointView<Eigen::Upper>(); // for the residuals
+  std::atomic<Eigen::Index> nextBlock{0}, doneBlocks{0};
+  std::mutex resultMutex;
+  Status failure = Status::Ok();
+  double worst = 0.0;
+  auto worker = [&] {
+    for (Eigen::Index b = nextBlock++; b < blocks; b = nextBlock++) {
+      if (cancel && cancel->load())
+        return;
+      const Eigen::Index c0 = b * block, cols = std::min(block, roiDofs - c0);
+      const Eigen::MatrixXd rhs = Eigen::MatrixXd(sys.kfr.middleCols(c0, cols));
+      Eigen::MatrixXd x;
+      double blockWorst = 0.0;
+      int steps = 0;
+      Status s = RefinedSolve(sys, rhs, x, true, sys.residualTolerance, sys.maxRefinementSteps,
+                              blockWorst, steps, &kffFull);
+      if (!s) {
+        std::lock_guard<std::mutex> lock(resultMutex);
+        failure = s;
+        return;
+      }
+      sys.response.middleCols(c0, cols) = -x.topRows(keptDofs); // disjoint columns per block
+      std::lock_guard<std::mutex> lock(resultMutex);
+      worst = std::max(worst, blockWorst);
+      ++doneBlocks;
+      if (progress)
+        progress(0.6 + 0.4 * double(doneBlocks.load()) / double(blocks), "dense response");
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::min<Eigen::Index>(threads, blocks); ++t)
+    pool.emplace_back(worker);
+  worker(); // the calling thread works too
+  for (auto& th : pool)
+    th.join();
+  if (progress)
+    progress(1.0, "dense response");
+  if (cancel && cancel->load())
+    return Status::Error("cancelled");
+  if (!failure)
+    return failure;
+  sys.responseResidual = worst;
+  return Status::Ok();
+}
+
+} // namespace
+
+Status Condense(PrecomputeState& state) {
+  CondensedSystem& sys = *state.sys;
+  if (sys.method != SolveMethod::DenseResponse)
+    return Status::Ok();
+  const PrecomputeOptions& options = state.request.options;
+  SystemInfo& info = sys.info;
+  ComputeBackend& backend = *state.backend;
+  std::string error;
+  if (!state.backendResponse) {
+    Status rs = BuildResponse(sys, options, state.cancel, state.progress);
+    if (!rs)
+      return rs;
+  }
+  info.responseBytes = 8.0 * double(sys.response.size());
+  sys.responseOperator = state.backendOperator ? std::move(state.backendOperator)
+                                               : backend.makeResponseOperator(sys.response, error);
+  if (!sys.responseOperator) {
+    state.status.warnings.push_back(backend.name() + " could not hold the response (" + error +
+                                    "); edits run on the CPU");
+    sys.responseOperator = MakeCpuBackend()->makeResponseOperator(sys.response, error);
+  } else if (options.backend) {
+    // A backend may hold the response in lower precision: probe it against the double response.
+    std::string probeError;
+    info.responseProbeError = ProbeResponseOperator(sys, *sys.responseOperator, probeError);
+    std::ostringstream note;
+    note.precision(3);
+    if (!(info.responseProbeError <= options.responseTolerance)) {
+      note << backend.name() << " response operator deviates by " << info.responseProbeError
+           << " from the double response (tolerance " << options.responseTolerance
+           << (probeError.empty() ? "" : "; " + probeError)
+           << "): edits are redone in double precision on the CPU";
+      state.status.warnings.push_back(note.str());
+      sys.responseOperator = MakeCpuBackend()->makeResponseOperator(sys.response, error);
+      sys.responseRedoneInDouble = info.responseRedoneInDouble = true;
+      sys.precisionNote = note.str();
+    } else if (info.responseProbeError > 1e-13) {
+      note << backend.name() << " response operator deviates by " << info.responseProbeError
+           << " from the double response (within the tolerance " << options.responseTolerance
+           << ")";
+      sys.precisionNote = note.str();
+    }
+  }
+  state.time(Stage::Condensation).ms += state.clock.lapMs();
+  return Status::Ok();
+}
+
+} // namespace faceplan
