@@ -205,28 +205,23 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
     const vtkIdType tri[3] = {ids[0], ids[1], ids[2]};
     tris->InsertNextCell(3, tri);
   }
-  faceplan::BezierSurface bs;
   vtkNew<vtkDoubleArray> normals, uv;
   normals->SetName("Normals");
   normals->SetNumberOfComponents(3);
+  normals->SetNumberOfTuples(s.numPoints());
   uv->SetName("UV");
   uv->SetNumberOfComponents(2);
-  if (faceplan::BezierSurface::Create(ToCurve(this->CurveU), ToCurve(this->CurveV), this->FlipNormal != 0, bs)) {
-    const int nu = this->SurfaceResolution * bs.SegmentsU(), nv = this->SurfaceResolution * bs.SegmentsV();
-    for (int j = 0; j <= nv; ++j)
-      for (int i = 0; i <= nu; ++i) {
-        const double u = double(i) / nu, v = double(j) / nv;
-        const Eigen::Vector3d nrm = bs.UnitNormal(u, v);
-        normals->InsertNextTuple3(nrm.x(), nrm.y(), nrm.z());
-        uv->InsertNextTuple2(u, v);
-      }
+  uv->SetNumberOfTuples(s.numPoints());
+  for (vtkIdType i = 0; i < s.numPoints(); ++i) {
+    const Eigen::Vector2d& p = result.operativeParameters[static_cast<std::size_t>(i)];
+    normals->SetTuple3(i, result.operativeNormals(i, 0), result.operativeNormals(i, 1),
+                       result.operativeNormals(i, 2));
+    uv->SetTuple2(i, p.x(), p.y());
   }
   surface->SetPoints(spts);
   surface->SetPolys(tris);
-  if (normals->GetNumberOfTuples() == s.numPoints()) {
-    surface->GetPointData()->SetNormals(normals);
-    surface->GetPointData()->SetTCoords(uv);
-  }
+  surface->GetPointData()->SetNormals(normals);
+  surface->GetPointData()->SetTCoords(uv);
   return 1;
 }
 

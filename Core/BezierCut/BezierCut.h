@@ -1,10 +1,7 @@
 #pragma once
 // Bezier cut / fill of a bone surface (no VTK).
 //
-// The operative surface is the translational surface S(u,v) = U(u) + V(v) - P0 over two composite
-// cubic Bezier curves U (3k+1 control points) and V (3m+1 control points) sharing their first
-// control point P0; u and v run over [0,1] across all segments of each curve (segment s of k
-// covers u in [s/k, (s+1)/k]). Its normal is n = dS/du x dS/dv, negated by flipNormal.
+// The operative surface S(u,v) and its normal n are BezierSurface's (BezierSurface.h).
 //
 // Side of a vertex x: let (u*,v*) minimise |S(u,v) - x| over [0,1]^2 (grid initialisation, then
 // projected Newton). The vertex "projects inside the patch" when S(u*,v*) is an orthogonal foot
@@ -33,18 +30,18 @@
 //     its triangles), then harmonic (uniform Tutte) relaxation of neighbourhoods of the bad
 //     triangles that double their ring count each round, each followed by untangling;
 //  2. intermediary surfaces as in the ICAT 2008 paper: at step t = s/T (s = 1..T) vertex i sits at
-//     (1-t) x_i + t S(u_i,v_i); after each step the vertices near triangles that flipped relative to
-//     the previous step, degenerated or became badly squashed are relaxed harmonically, and at
+//     (1-t) x_i + t S(u_i,v_i); after each step the vertices near triangles that flipped relative
+//     to the previous step, degenerated or became badly squashed are relaxed harmonically, and at
 //     t = 1 the full check (flips and new intersections, the latter through a uniform spatial
 //     hash over the moved neighbourhood) must pass. Schedules with more steps are tried in turn.
 // If all fail, an error is returned (naming ROIBoundary vertices that lie beyond the surface, the
 // usual cause), never a bad mesh.
+#include "BezierCut/BezierSurface.h"
 #include "Common/Status.h"
 #include "Mesh/SurfaceMesh.h"
 
 #include <Eigen/Core>
 
-#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -53,66 +50,14 @@ namespace faceplan {
 
 enum class CutOperation { Cut = 0, Fill = 1 };
 
-struct SurfaceProjection {
-  double u = 0, v = 0;
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // S(u,v)
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero(); // unit normal (flip applied)
-  double signedDistance = 0;                        // (x - S(u,v)) . normal
-  bool inside = false;                              // orthogonal foot point within [0,1]^2
-};
-
-class BezierSurface {
-public:
-  // Validates the control points; the error names the problem:
-  //  "invalid control points" (count not 3k+1, non-finite), "first control points not shared",
-  //  "degenerate" (coincident consecutive control points, zero-area surface, Su x Sv vanishing),
-  //  "self-intersecting" (sampled normals reversing, or sampled patch triangles crossing).
-  static Status Create(const std::vector<Eigen::Vector3d>& curveU,
-                       const std::vector<Eigen::Vector3d>& curveV, bool flipNormal,
-                       BezierSurface& out);
-
-  Eigen::Vector3d Evaluate(double u, double v) const;
-  // S and its derivatives (Suv = 0 for a translational surface).
-  void Derivatives(double u, double v, Eigen::Vector3d& S, Eigen::Vector3d& Su, Eigen::Vector3d& Sv,
-                   Eigen::Vector3d& Suu, Eigen::Vector3d& Svv) const;
-  Eigen::Vector3d UnitNormal(double u, double v) const; // flip applied
-  // Closest point of the patch to x (grid initialisation + projected Newton).
-  SurfaceProjection Project(const Eigen::Vector3d& x) const;
-  // The same, starting Newton from (u0,v0) instead of the grid.
-  SurfaceProjection ProjectFrom(const Eigen::Vector3d& x, double u0, double v0) const;
-  // Triangles over a regular grid with `perSegment` intervals per Bezier segment, oriented along
-  // the (flipped) normal. uv receives the parameters of each point.
-  void Tessellate(int perSegment, SurfaceMesh& out, std::vector<Eigen::Vector2d>* uv = nullptr) const;
-
-  int SegmentsU() const { return int(U_.size() - 1) / 3; }
-  int SegmentsV() const { return int(V_.size() - 1) / 3; }
-  double Size() const { return size_; } // diagonal of the control points' bounding box
-
-private:
-  struct CurveEval {
-    Eigen::Vector3d p, d1, d2;
-  };
-  static CurveEval EvalCurve(const std::vector<Eigen::Vector3d>& P, double u);
-  static CurveEval EvalSegment(const std::vector<Eigen::Vector3d>& P, int seg, double t);
-  SurfaceProjection Finish(const Eigen::Vector3d& x, double u, double v) const;
-  SurfaceProjection Newton(const Eigen::Vector3d& x, double u, double v) const;
-
-  std::vector<Eigen::Vector3d> U_, V_;
-  Eigen::Vector3d P0_ = Eigen::Vector3d::Zero();
-  bool flip_ = false;
-  double size_ = 0;
-  // Initialisation grid: samples of U and V.
-  std::vector<double> gridU_, gridV_;
-  std::vector<Eigen::Vector3d> gridUP_, gridVP_;
-};
-
 struct BezierCutOptions {
   CutOperation operation = CutOperation::Cut;
   bool flipNormal = false;
-  int displayResolution = 16;     // tessellation intervals per Bezier segment (output port 1)
-  bool localRepair = true;                  // step 1 of the fallback (off: intermediary surfaces only)
+  int displayResolution = 16; // tessellation intervals per Bezier segment (output port 1)
+  bool localRepair = true;    // step 1 of the fallback (off: intermediary surfaces only)
   std::vector<int> stepSchedules = {8, 32}; // numbers of intermediary surfaces tried in turn
-  int maxRelaxIterations = 24;    // relaxation rounds per step (the region doubles its rings each round)
+  int maxRelaxIterations =
+      24; // relaxation rounds per step (the region doubles its rings each round)
 };
 
 struct BezierCutResult {
@@ -121,11 +66,13 @@ struct BezierCutResult {
   std::vector<std::uint8_t> moved;
   std::vector<Eigen::Vector2d> parameters; // (u,v) of each moved vertex (others: 0)
   std::int64_t numMoved = 0;
-  std::int64_t numInsidePatch = 0;  // ROI vertices projecting inside the patch
-  int intermediarySteps = 0;        // 0: direct projection was valid; 1: local repair on S;
-                                    // T > 1: mapped through T intermediary surfaces
-  double maxDistanceToSurface = 0;  // max over moved vertices of |x - S(u,v)| (should be ~1e-15)
-  SurfaceMesh operativeSurface;     // triangles of S for display
+  std::int64_t numInsidePatch = 0; // ROI vertices projecting inside the patch
+  int intermediarySteps = 0;       // 0: direct projection was valid; 1: local repair on S;
+                                   // T > 1: mapped through T intermediary surfaces
+  double maxDistanceToSurface = 0; // max over moved vertices of |x - S(u,v)| (should be ~1e-15)
+  SurfaceMesh operativeSurface;    // triangles of S for display
+  SurfacePoints operativeNormals;  // unit normal (flip applied) at each operativeSurface point
+  std::vector<Eigen::Vector2d> operativeParameters; // (u,v) of each operativeSurface point
   std::string mappingNote;           // why intermediary surfaces were needed (informational)
   std::vector<std::string> warnings; // e.g. nothing moved
 };
@@ -138,14 +85,5 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
                  const std::vector<Eigen::Vector3d>& curveU,
                  const std::vector<Eigen::Vector3d>& curveV, const BezierCutOptions& options,
                  BezierCutResult& result);
-
-// Mesh checks used by the cut, exposed for tests: triangles (fan triangulation of the cells) that
-// intersect in `after` but not in `before` (pairs sharing an edge are skipped; pairs sharing one
-// vertex are tested on their other edges). Only triangles with a point flagged in `active` are
-// tested (against all triangles near them).
-std::int64_t CountNewIntersections(const SurfaceMesh& cells, const SurfacePoints& before,
-                                   const SurfacePoints& after,
-                                   const std::vector<std::uint8_t>& active,
-                                   std::int64_t* firstTriangle = nullptr);
 
 } // namespace faceplan

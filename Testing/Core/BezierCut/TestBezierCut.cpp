@@ -1,6 +1,7 @@
 // BezierCut contract tests: moved vertices on S, the others untouched bit for bit, topology
 // unchanged, no flipped / degenerate / newly intersecting triangles, clear errors for bad curves.
 #include "BezierCut/BezierCut.h"
+#include "BezierCut/MeshIntersection.h"
 #include "Support/FaceplanTestMeshes.h"
 #include "ROIExtract/ROIExtract.h"
 

@@ -1,0 +1,230 @@
+#include "BezierCut/MeshIntersection.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace faceplan {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+
+double Cross2(const Vector2d& a, const Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// Does segment pq meet the interior of triangle abc (touching an edge or vertex of the triangle, or
+// the segment only touching it with an endpoint on its border, does not count)?
+bool SegmentHitsTriangle(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b,
+                         const Vector3d& c) {
+  Vector3d n = (b - a).cross(c - a);
+  const double nn = n.norm();
+  if (!(nn > 0))
+    return false; // degenerate triangles are reported by the flip check
+  n /= nn;
+  const double scale = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm(), (q - p).norm()});
+  const double eps = 1e-9 * scale;
+  const double dp = (p - a).dot(n), dq = (q - a).dot(n);
+  if ((dp > eps && dq > eps) || (dp < -eps && dq < -eps))
+    return false;
+  if (std::abs(dp) <= eps && std::abs(dq) <= eps) {
+    // Coplanar: work in the plane of the two largest normal components.
+    int ax = 0;
+    n.cwiseAbs().maxCoeff(&ax);
+    const int i = (ax + 1) % 3, j = (ax + 2) % 3;
+    auto P2 = [&](const Vector3d& x) { return Vector2d(x[i], x[j]); };
+    Vector2d P = P2(p), Q = P2(q), A = P2(a), B = P2(b), C = P2(c);
+    if (Cross2(B - A, C - A) < 0)
+      std::swap(B, C);
+    const double area2 = Cross2(B - A, C - A);
+    const double tolA = 1e-9 * area2;
+    auto inside = [&](const Vector2d& X) {
+      return Cross2(B - A, X - A) > tolA && Cross2(C - B, X - B) > tolA &&
+             Cross2(A - C, X - C) > tolA;
+    };
+    if (inside(P) || inside(Q))
+      return true;
+    const double tolL = 1e-9 * scale * scale;
+    auto proper = [&](const Vector2d& E0, const Vector2d& E1) {
+      const double o1 = Cross2(Q - P, E0 - P), o2 = Cross2(Q - P, E1 - P);
+      const double o3 = Cross2(E1 - E0, P - E0), o4 = Cross2(E1 - E0, Q - E0);
+      return ((o1 > tolL && o2 < -tolL) || (o1 < -tolL && o2 > tolL)) &&
+             ((o3 > tolL && o4 < -tolL) || (o3 < -tolL && o4 > tolL));
+    };
+    return proper(A, B) || proper(B, C) || proper(C, A);
+  }
+  const double s = std::clamp(dp / (dp - dq), 0.0, 1.0);
+  const Vector3d x = p + s * (q - p);
+  // Barycentric coordinates of x in abc.
+  const Vector3d v0 = b - a, v1 = c - a, v2 = x - a;
+  const double d00 = v0.dot(v0), d01 = v0.dot(v1), d11 = v1.dot(v1), d20 = v2.dot(v0),
+               d21 = v2.dot(v1);
+  const double den = d00 * d11 - d01 * d01;
+  if (!(den > 0))
+    return false;
+  const double bv = (d11 * d20 - d01 * d21) / den, bw = (d00 * d21 - d01 * d20) / den;
+  const double bu = 1.0 - bv - bw;
+  const double tol = 1e-9;
+  return bu > tol && bv > tol && bw > tol;
+}
+
+} // namespace
+
+bool TrianglesIntersect(const Tri& A, const Tri& B, const SurfacePoints& P, bool skipSharedVertex) {
+  int shared = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (A.v[i] == B.v[j])
+        ++shared;
+  if (shared >= 2 || (shared == 1 && skipSharedVertex))
+    return false;
+  auto row = [&](std::int64_t k) { return Vector3d(P.row(k).transpose()); };
+  const Vector3d a[3] = {row(A.v[0]), row(A.v[1]), row(A.v[2])};
+  const Vector3d b[3] = {row(B.v[0]), row(B.v[1]), row(B.v[2])};
+  for (int e = 0; e < 3; ++e) {
+    if (SegmentHitsTriangle(a[e], a[(e + 1) % 3], b[0], b[1], b[2]))
+      return true;
+    if (SegmentHitsTriangle(b[e], b[(e + 1) % 3], a[0], a[1], a[2]))
+      return true;
+  }
+  return false;
+}
+
+TriangleHash::TriangleHash(const std::vector<Tri>& tris, const SurfacePoints& P,
+                           const std::vector<std::int64_t>& ids, double cell)
+    : tris_(tris), P_(P), h_(cell) {
+  for (std::int64_t t : ids) {
+    Eigen::Array3i lo, hi;
+    Range(t, lo, hi);
+    for (int x = lo[0]; x <= hi[0]; ++x)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int z = lo[2]; z <= hi[2]; ++z)
+          map_[Key(x, y, z)].push_back(t);
+  }
+}
+
+void TriangleHash::Candidates(std::int64_t t, std::vector<std::int64_t>& out) const {
+  out.clear();
+  Eigen::Array3i lo, hi;
+  Range(t, lo, hi);
+  for (int x = lo[0]; x <= hi[0]; ++x)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int z = lo[2]; z <= hi[2]; ++z) {
+        auto it = map_.find(Key(x, y, z));
+        if (it != map_.end())
+          out.insert(out.end(), it->second.begin(), it->second.end());
+      }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+void TriangleHash::Range(std::int64_t t, Eigen::Array3i& lo, Eigen::Array3i& hi) const {
+  Eigen::Array3d mn = P_.row(tris_[t].v[0]).transpose().array(), mx = mn;
+  for (int k = 1; k < 3; ++k) {
+    mn = mn.min(P_.row(tris_[t].v[k]).transpose().array());
+    mx = mx.max(P_.row(tris_[t].v[k]).transpose().array());
+  }
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = int(std::floor(mn[d] / h_));
+    hi[d] = int(std::floor(mx[d] / h_));
+    if (hi[d] - lo[d] > 64)
+      hi[d] = lo[d] + 64; // guard against huge triangles
+  }
+}
+
+std::int64_t TriangleHash::Key(int x, int y, int z) {
+  return (std::int64_t(x) * 73856093) ^ (std::int64_t(y) * 19349663) ^ (std::int64_t(z) * 83492791);
+}
+
+std::vector<Tri> FanTriangles(const SurfaceMesh& mesh) {
+  std::vector<Tri> tris;
+  for (std::int64_t c = 0; c < mesh.numCells(); ++c) {
+    const std::int64_t m = mesh.cellSize(c);
+    const std::int64_t* ids = mesh.cell(c);
+    for (std::int64_t k = 1; k + 1 < m; ++k)
+      tris.push_back(Tri{{ids[0], ids[k], ids[k + 1]}});
+  }
+  return tris;
+}
+
+std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris,
+                                           const SurfacePoints& before, const SurfacePoints& after,
+                                           const std::vector<std::uint8_t>& activeTri) {
+  std::vector<std::int64_t> active;
+  Eigen::Array3d lo = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  double edgeSum = 0;
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    if (!activeTri[t])
+      continue;
+    active.push_back(std::int64_t(t));
+    for (int k = 0; k < 3; ++k) {
+      lo = lo.min(after.row(tris[t].v[k]).transpose().array());
+      hi = hi.max(after.row(tris[t].v[k]).transpose().array());
+      edgeSum += (after.row(tris[t].v[k]) - after.row(tris[t].v[(k + 1) % 3])).norm();
+    }
+  }
+  std::vector<std::int64_t> result;
+  if (active.empty())
+    return result;
+  double h = 2.0 * edgeSum / (3.0 * double(active.size()));
+  const double ext = (hi - lo).maxCoeff();
+  if (!(h > 0))
+    h = ext > 0 ? ext : 1.0;
+  h = std::max(h, ext / 200.0); // at most ~200^3 cells over the active region
+  // Every triangle whose box meets the active region's box (grown by one cell).
+  std::vector<std::int64_t> nearby;
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    bool meets = true;
+    Eigen::Array3d mn = after.row(tris[t].v[0]).transpose().array(), mx = mn;
+    for (int k = 1; k < 3; ++k) {
+      mn = mn.min(after.row(tris[t].v[k]).transpose().array());
+      mx = mx.max(after.row(tris[t].v[k]).transpose().array());
+    }
+    for (int d = 0; d < 3; ++d)
+      if (mx[d] < lo[d] - h || mn[d] > hi[d] + h)
+        meets = false;
+    if (meets)
+      nearby.push_back(std::int64_t(t));
+  }
+  TriangleHash hash(tris, after, nearby, h);
+  std::vector<std::uint8_t> flagged(tris.size(), 0);
+  std::vector<std::int64_t> cand;
+  for (std::int64_t a : active) {
+    hash.Candidates(a, cand);
+    for (std::int64_t b : cand) {
+      if (b == a || (activeTri[b] && b < a))
+        continue; // each pair once
+      if (!TrianglesIntersect(tris[a], tris[b], after, false))
+        continue;
+      if (TrianglesIntersect(tris[a], tris[b], before, false))
+        continue; // was already so
+      flagged[a] = flagged[b] = 1;
+    }
+  }
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    if (flagged[t])
+      result.push_back(std::int64_t(t));
+  return result;
+}
+
+std::int64_t CountNewIntersections(const SurfaceMesh& cells, const SurfacePoints& before,
+                                   const SurfacePoints& after,
+                                   const std::vector<std::uint8_t>& active,
+                                   std::int64_t* firstTriangle) {
+  std::vector<Tri> tris = FanTriangles(cells);
+  std::vector<std::uint8_t> activeTri(tris.size(), 0);
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (std::size_t(tris[t].v[k]) < active.size() && active[tris[t].v[k]])
+        activeTri[t] = 1;
+  std::vector<std::int64_t> bad = NewIntersections(tris, before, after, activeTri);
+  if (firstTriangle)
+    *firstTriangle = bad.empty() ? -1 : bad.front();
+  return std::int64_t(bad.size());
+}
+
+} // namespace faceplan
