@@ -46,9 +46,11 @@ double ProbeResponseOperator(const CondensedSystem& sys, ResponseOperator& op, s
 // First the cheap path (backward substitutions from the trailing block, residual estimated by
 // random probes; TrailingResponse.h); when it is unavailable or its estimate misses the tolerance,
 // full solves with a residual and iterative refinement per column.
-Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
-                     const std::atomic<bool>* cancel, const ProgressCallback& progress) {
-  const Eigen::Index keptDofs = 3 * sys.layout.keptFree, roiDofs = sys.kfr.cols();
+// `coupling` holds the columns' right-hand sides (K_FR, or K_FR times the segment basis).
+Status BuildResponse(CondensedSystem& sys, const SparseMatrix& coupling,
+                     const PrecomputeOptions& options, const std::atomic<bool>* cancel,
+                     const ProgressCallback& progress) {
+  const Eigen::Index keptDofs = 3 * sys.layout.keptFree, roiDofs = coupling.cols();
   const Eigen::Index freeDofs = sys.kff.rows();
   const int threads =
       static_cast<int>(std::max(1u, std::min(std::thread::hardware_concurrency(), 16u)));
@@ -60,7 +62,7 @@ Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
   if (sys.factor.trailingDofs() > 0) {
     TrailingResponseResult fast;
     Status fs = BuildTrailingResponse(
-        sys.factor, sys.kff, sys.kfr, keptDofs, largestBlock, cancel,
+        sys.factor, sys.kff, coupling, keptDofs, largestBlock, cancel,
         [&progress](double f) {
           if (progress)
             progress(0.6 + 0.4 * f, "dense response");
@@ -101,7 +103,7 @@ Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
       if (cancel && cancel->load())
         return;
       const Eigen::Index c0 = b * block, cols = std::min(block, roiDofs - c0);
-      const Eigen::MatrixXd rhs = Eigen::MatrixXd(sys.kfr.middleCols(c0, cols));
+      const Eigen::MatrixXd rhs = Eigen::MatrixXd(coupling.middleCols(c0, cols));
       Eigen::MatrixXd x;
       double blockWorst = 0.0;
       int steps = 0;
@@ -140,14 +142,16 @@ Status BuildResponse(CondensedSystem& sys, const PrecomputeOptions& options,
 
 Status Condense(PrecomputeState& state) {
   CondensedSystem& sys = *state.sys;
-  if (sys.method != SolveMethod::DenseResponse)
+  const bool segments = sys.method == SolveMethod::RigidSegments;
+  if (sys.method != SolveMethod::DenseResponse && !segments)
     return Status::Ok();
   const PrecomputeOptions& options = state.request.options;
   SystemInfo& info = sys.info;
   ComputeBackend& backend = *state.backend;
   std::string error;
   if (!state.backendResponse) {
-    Status rs = BuildResponse(sys, options, state.cancel, state.progress);
+    Status rs = BuildResponse(sys, segments ? state.segmentCoupling : sys.kfr, options,
+                              state.cancel, state.progress);
     if (!rs)
       return rs;
   }
@@ -180,6 +184,7 @@ Status Condense(PrecomputeState& state) {
       sys.precisionNote = note.str();
     }
   }
+  state.segmentCoupling = SparseMatrix();
   state.time(Stage::Condensation).ms += state.clock.lapMs();
   return Status::Ok();
 }

@@ -17,6 +17,7 @@ const char* MethodName(SolveMethod method) {
   case SolveMethod::Auto: return "Auto";
   case SolveMethod::DenseResponse: return "DenseResponse";
   case SolveMethod::CachedFactor: return "CachedFactor";
+  case SolveMethod::RigidSegments: return "RigidSegments";
   case SolveMethod::FullReference: return "FullReference";
   }
   return "?";
@@ -88,26 +89,23 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
   result.precisionNote = sys.precisionNote;
   Status status = Status::Ok();
 
-  // Boundary condition: the ROI's prescribed displacements (and, for quadratic cells, the mean of
-  // their ends at mid-edge ROI nodes).
-  const Eigen::Index derived = static_cast<Eigen::Index>(sys.derivedMovable.size());
-  const Eigen::Index movable = static_cast<Eigen::Index>(layout.roiPosition.size()) - derived;
+  // Boundary condition: the ROI DOFs' prescribed values from the movable displacements (mid-edge
+  // ROI nodes of quadratic cells take the mean of their ends, sliding nodes their normal part).
+  const Eigen::Index movable = static_cast<Eigen::Index>(sys.movableNodes.size());
   if (input.movableDisplacement.rows() != movable)
     return Status::Error("expected " + std::to_string(movable) + " ROI displacements, got " +
                          std::to_string(input.movableDisplacement.rows()));
   if (!input.movableDisplacement.allFinite())
     return Status::Error("prescribed displacements contain NaN or infinite values");
-  Eigen::VectorXd roi = Eigen::VectorXd::Zero(3 * layout.roi);
-  for (Eigen::Index k = 0; k < movable; ++k)
-    if (layout.roiPosition[k] >= 0)
-      roi.segment<3>(3 * layout.roiPosition[k]) = input.movableDisplacement.row(k).transpose();
-  for (Eigen::Index d = 0; d < derived; ++d) {
-    const int pos = layout.roiPosition[movable + d];
-    if (pos < 0) continue;
-    Eigen::Vector3d value = Eigen::Vector3d::Zero();
-    for (int end : sys.derivedMovable[d])
-      if (end >= 0) value += 0.5 * input.movableDisplacement.row(end).transpose();
-    roi.segment<3>(3 * pos) = value;
+  const Eigen::VectorXd roi =
+      sys.movableToRoi * Eigen::Map<const Eigen::VectorXd>(input.movableDisplacement.data(), 3 * movable);
+  const bool rigidProduct = sys.method == SolveMethod::RigidSegments && !input.recoverInterior;
+  if (sys.method == SolveMethod::RigidSegments && input.segmentTransforms.empty())
+    return Status::Error("RigidSegments needs one transform per segment (SolveInput::segmentTransforms)");
+  if (!input.segmentTransforms.empty()) {
+    Status check = CheckSegmentDisplacements(sys.cornerMesh.points, sys.segmentSets,
+                                             input.segmentTransforms, input.movableDisplacement);
+    if (!check) return check;
   }
   result.timings[Stage::BoundaryCondition] = {clock.lapMs(), false};
 
@@ -126,16 +124,26 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
   if (input.gravity.squaredNorm() > 0.0)
     for (int pos = 0; pos < layout.freeNodes(); ++pos)
       load.segment<3>(3 * pos) += sys.nodeMass[pos] * input.gravity;
+  // Sliding nodes: loads in their normal frame; the normal one is taken by the contact.
+  for (int pos = 0; pos < layout.freeNodes(); ++pos)
+    if (const int slide = sys.slidingOfPosition.empty() ? -1 : sys.slidingOfPosition[pos]; slide >= 0) {
+      const Eigen::Vector3d local = sys.slidingFrame[slide].transpose() * load.segment<3>(3 * pos);
+      load.segment<3>(3 * pos) << 0.0, local[1], local[2];
+    }
   const bool hasLoad = load.squaredNorm() > 0.0;
   result.timings[Stage::Load] = {clock.lapMs(), false};
 
   Eigen::VectorXd keptFree, freeValues;
-  const bool fullSolve = sys.method != SolveMethod::DenseResponse || input.recoverInterior;
+  const bool fullSolve = !(sys.method == SolveMethod::DenseResponse || rigidProduct) ||
+                         input.recoverInterior;
   if (freeDofs == 0) {
     freeValues.resize(0);
   } else if (!fullSolve) {
     std::string error;
-    if (!sys.responseOperator->apply(roi, keptFree, error))
+    const Eigen::VectorXd parameters =
+        rigidProduct ? SegmentParameters(sys.segmentSets, input.segmentTransforms, input.movableDisplacement)
+                     : roi;
+    if (!sys.responseOperator->apply(parameters, keptFree, error))
       return Status::Error("dense response update failed: " + error);
     result.relativeResidual = sys.responseResidual;
     result.residualFromPrecompute = true;
@@ -189,7 +197,11 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
     if (pos < 0) return Eigen::RowVector3d::Zero();
     if (pos >= layout.freeNodes()) return roi.segment<3>(3 * (pos - layout.freeNodes())).transpose();
     if (3 * pos + 2 >= freeSource.size()) return Eigen::RowVector3d::Zero();
-    return freeSource.segment<3>(3 * pos).transpose();
+    const int slide = sys.slidingOfPosition.empty() ? -1 : sys.slidingOfPosition[pos];
+    if (slide < 0) return freeSource.segment<3>(3 * pos).transpose();
+    Eigen::Vector3d local = freeSource.segment<3>(3 * pos); // normal, tangent, tangent
+    local[0] = sys.slidingRoiDof[slide] >= 0 ? roi[sys.slidingRoiDof[slide]] : 0.0;
+    return (sys.slidingFrame[slide] * local).transpose();
   };
   result.keptDisplacement.resize(static_cast<Eigen::Index>(sys.kept.size()), 3);
   for (size_t k = 0; k < sys.kept.size(); ++k) result.keptDisplacement.row(k) = valueOf(sys.kept[k], keptFree);

@@ -6,10 +6,14 @@
 // prescribed displacements and the rest stay at zero; kept (the caller needs their displacement,
 // typically the skin); interior (everything else, condensed out). Because only ROI DOFs ever carry
 // prescribed values, an edit needs nothing but the response of the kept DOFs to the ROI DOFs.
+// Sliding nodes (NodeSets::sliding) are constrained along their normal only: their DOFs are
+// rotated into the normal frame (K' = Q^T K Q on their blocks), the normal DOF is prescribed and
+// the tangential ones are free, so the same precompute/solve split holds.
 #include "Backend/ComputeBackend.h"
 #include "Element/QuadraticTet.h"
 #include "Common/StageTimings.h"
 #include "Common/Status.h"
+#include "CondensedFEM/RigidSegments.h"
 #include "Mesh/NodeSets.h"
 #include "Mesh/TetMesh.h"
 
@@ -25,6 +29,10 @@ enum class SolveMethod {
   Auto,           // pick the cheapest exact method from the sizes (see ChooseMethod)
   DenseResponse,  // precompute kept x ROI response; an edit is one matrix-vector product
   CachedFactor,   // keep the sparse Cholesky factor of the free block; an edit is one solve
+  RigidSegments,  // precompute the kept response to 12 affine motions per rigid segment (plus the
+                  // general response to the ROI DOFs of segment-0 nodes); an edit is one product
+                  // with the 12 s segment parameters and the general part. Auto picks it when
+                  // NodeSets::movableSegment names segments and the response fits the budget.
   FullReference   // no condensation, no cache: assemble and factor everything on every solve
 };
 const char* MethodName(SolveMethod method);
@@ -78,7 +86,13 @@ struct PrecomputeOptions {
 };
 
 struct SolveInput {
-  Displacements movableDisplacement; // |movable| x 3, in NodeSets::movable order
+  // |movable| x 3, in NodeSets::movable order. Sliding nodes use only its normal part.
+  Displacements movableDisplacement;
+  // One [R | t] per rigid segment (segment k uses entry k - 1), or empty. The displacements above
+  // remain the boundary values of every path; when transforms are given, Solve checks that the
+  // segments' displacements follow them (CheckSegmentDisplacements) and RigidSegments takes its
+  // parameters from them. RigidSegments requires them.
+  std::vector<SegmentTransform> segmentTransforms;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero(); // body load density * gravity, if non-zero
   Displacements nodalLoads;          // n x 3 or empty
   bool recoverInterior = false;      // also return every node's displacement

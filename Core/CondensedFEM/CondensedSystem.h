@@ -19,10 +19,10 @@ public:
   std::vector<int> kept; // NodeSets::kept as given
 
   SparseMatrix kff; // upper triangle, free x free
-  SparseMatrix kfr; // free x ROI
+  SparseMatrix kfr; // free x ROI DOFs (NodeLayout::roiDofs)
   CholmodFactor factor;
 
-  Eigen::MatrixXd response; // kept-free DOFs x ROI DOFs (DenseResponse)
+  Eigen::MatrixXd response; // kept-free DOFs x ROI DOFs (DenseResponse) or x parameters (RigidSegments)
   std::unique_ptr<ResponseOperator> responseOperator;
   double responseResidual = 0.0;
 
@@ -42,6 +42,20 @@ public:
   double strainWarningLimit = 0.1;
   std::string precisionNote;       // set when the response operator is not plain double
   bool responseRedoneInDouble = false;
+
+  // ROI DOF values from the caller's movable displacements (3 per node, node-major): the
+  // displacement itself, the mean of the ends for a mid-edge node, the normal part for a sliding one.
+  SparseMatrix movableToRoi;
+  // RigidSegments: the ROI DOFs as a function of the segment parameters (RigidSegments.h).
+  SparseMatrix segmentToRoi;
+  NodeSets segmentSets; // movable nodes and their segment ids, as given
+  int segments = 0;
+
+  // Sliding nodes (free positions whose DOFs are in the node's normal frame: local DOF 0 is the
+  // normal one, pinned in K_FF; its prescribed value reaches the others through a K_FR column).
+  std::vector<int> slidingOfPosition;        // free position -> sliding index, -1 when not sliding
+  std::vector<Eigen::Matrix3d> slidingFrame; // columns: normal, two tangents
+  std::vector<int> slidingRoiDof;            // the normal value's ROI DOF, -1 when fixed (0)
 
   // Response of the free DOFs to the last load vector, reused while loads do not change.
   mutable std::mutex loadMutex;

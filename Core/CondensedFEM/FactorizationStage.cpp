@@ -14,9 +14,9 @@ void ChooseSolveMethod(PrecomputeState& state) {
   SystemInfo& info = sys.info;
   // The method needs only the analysis (the factor's size), so it is chosen before the numeric
   // factorization, which a backend may then do together with the response.
-  sys.method =
-      ChooseMethod(state.request.options, double(info.keptDofs), double(info.roiDofs),
-                   info.factorNonzeros, double(sys.factor.trailingDofs()), info.choiceReason);
+  sys.method = ChooseMethod(state.request.options, double(info.keptDofs), double(info.roiDofs),
+                            double(state.segmentCoupling.cols()), info.factorNonzeros,
+                            double(sys.factor.trailingDofs()), info.choiceReason);
   if (info.freeDofs == 0)
     sys.method = SolveMethod::CachedFactor;
   info.method = sys.method;

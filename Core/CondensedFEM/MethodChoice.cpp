@@ -17,14 +17,16 @@ double FactorSolveFlops(double factorNonzeros, double trailingDofs) {
 }
 
 SolveMethod ChooseMethod(const PrecomputeOptions& options, double keptDofs, double roiDofs,
-                         double factorNonzeros, double trailingDofs, std::string& reason) {
+                         double segmentColumns, double factorNonzeros, double trailingDofs,
+                         std::string& reason) {
   const double denseBytes = 8.0 * keptDofs * roiDofs;
   const double denseFlops = 2.0 * keptDofs * roiDofs;
   const double factorFlops =
       FactorSolveFlops(factorNonzeros, trailingDofs) * kSparseSolveFlopWeight;
   std::ostringstream why;
   why.precision(3);
-  if (options.method == SolveMethod::DenseResponse || options.method == SolveMethod::CachedFactor) {
+  if (options.method == SolveMethod::DenseResponse || options.method == SolveMethod::CachedFactor ||
+      options.method == SolveMethod::RigidSegments) {
     why << "requested";
     reason = why.str();
     return options.method;
@@ -32,6 +34,14 @@ SolveMethod ChooseMethod(const PrecomputeOptions& options, double keptDofs, doub
   if (roiDofs == 0 || keptDofs == 0) {
     reason = "nothing moves or nothing is kept: a cached factor serves loads alone";
     return SolveMethod::CachedFactor;
+  }
+  const double segmentBytes = 8.0 * keptDofs * segmentColumns;
+  if (segmentColumns > 0 && segmentBytes <= options.denseResponseBudgetBytes) {
+    why << "rigid segments: the response needs " << segmentColumns
+        << " columns (12 per segment plus "
+        << "the general ROI DOFs) instead of " << roiDofs;
+    reason = why.str();
+    return SolveMethod::RigidSegments;
   }
   if (denseBytes > options.denseResponseBudgetBytes) {
     why << "dense response would take " << denseBytes / 1e6 << " MB, over the "

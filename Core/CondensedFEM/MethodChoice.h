@@ -11,9 +11,11 @@ namespace faceplan {
 // (trailingDofs > 0), else both full substitutions.
 double FactorSolveFlops(double factorNonzeros, double trailingDofs);
 
-// The requested method, or for Auto the one with the cheaper edit within the memory budget;
-// `reason` says why in words.
+// The requested method, or for Auto: RigidSegments when there are segments (`segmentColumns` > 0,
+// the columns of their response) and it fits the memory budget, else the one with the cheaper edit
+// within the budget; `reason` says why in words.
 SolveMethod ChooseMethod(const PrecomputeOptions& options, double keptDofs, double roiDofs,
-                         double factorNonzeros, double trailingDofs, std::string& reason);
+                         double segmentColumns, double factorNonzeros, double trailingDofs,
+                         std::string& reason);
 
 } // namespace faceplan

@@ -29,6 +29,9 @@ struct PrecomputeState {
   std::shared_ptr<ComputeBackend> backend;
   std::unique_ptr<ResponseOperator> backendOperator; // when the backend built the response
   bool backendResponse = false;
+  // Rigid segments (when the method may be RigidSegments): K_FR times the ROI DOFs' dependence on
+  // the segment parameters, the right-hand sides of the response's columns.
+  SparseMatrix segmentCoupling;
 
   bool cancelled() const { return cancel && cancel->load(); }
   void report(double fraction, const char* what) const {
@@ -49,7 +52,8 @@ Status SeparateNodes(PrecomputeState& state);
 // so both stages are one function; each keeps its own time.
 Status AssembleStiffness(PrecomputeState& state);
 
-// Separation, second part: K_FF and K_FR from the assembled matrix, the free nodes' masses.
+// Separation, second part: K_FF and K_FR from the assembled matrix (sliding nodes' DOFs rotated
+// into their normal frames and the normal DOF moved to the ROI side), the free nodes' masses.
 Status SeparateBlocks(PrecomputeState& state);
 
 // Reordering: the fill-reducing ordering of K_FF and its symbolic analysis.
@@ -61,7 +65,8 @@ void ChooseSolveMethod(PrecomputeState& state);
 // Factorization of K_FF (a backend may build the dense response in the same call).
 Status Factorize(PrecomputeState& state);
 
-// Condensation: the dense response of the kept DOFs to the ROI DOFs and its per-edit operator.
+// Condensation: the dense response of the kept DOFs to the ROI DOFs (DenseResponse) or to the
+// segment parameters (RigidSegments), and its per-edit operator.
 Status Condense(PrecomputeState& state);
 
 } // namespace faceplan

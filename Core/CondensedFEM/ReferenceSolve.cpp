@@ -25,6 +25,8 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
   if (status) status = ValidateNodeSets(mesh, sets);
   if (status) status = CheckEveryComponentConstrained(mesh, sets.constrained);
   if (!status) return status;
+  if (!sets.sliding.empty())
+    return Status::Error("the reference solve ties every constrained node: it does not model sliding nodes");
   if (input.movableDisplacement.rows() != static_cast<Eigen::Index>(sets.movable.size()))
     return Status::Error("expected one ROI displacement per movable node");
   if (!input.movableDisplacement.allFinite())

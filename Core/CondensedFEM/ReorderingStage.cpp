@@ -16,7 +16,8 @@ Status ReorderFreeDofs(PrecomputeState& state) {
   // the lower estimated precompute is kept: factorization flops plus one solve per ROI DOF
   // (forward + backward, or backward + the trailing block). CHOLMOD's own choice if neither
   // ordering can be made.
-  const double roiColumns = double(sys.kfr.cols());
+  const double roiColumns =
+      double(state.segmentCoupling.cols() > 0 ? state.segmentCoupling.cols() : sys.kfr.cols());
   auto estimatedCost = [roiColumns](double nonzeros, double flops, int trailing) {
     return flops + roiColumns * FactorSolveFlops(nonzeros, trailing);
   };

@@ -1,9 +1,12 @@
 // Validation and the Separation stage: node classes, DOF layout, and the K_FF / K_FR blocks.
 #include "CondensedFEM/PrecomputeStages.h"
 
+#include "CondensedFEM/RigidSegments.h"
 #include "Element/ElementStiffness.h"
 #include "Mesh/MeshValidation.h"
 #include "Mesh/NodeSetValidation.h"
+
+#include <Eigen/Geometry>
 
 namespace faceplan {
 
@@ -84,6 +87,130 @@ NodeSets QuadraticNodeSets(const QuadraticMesh& q, const NodeSets& sets,
   return out;
 }
 
+// Normal frames of the sliding nodes: columns n, t1, t2 (any orthonormal tangents will do: the
+// tangential DOFs are both free).
+Eigen::Matrix3d NormalFrame(const Eigen::Vector3d& normal) {
+  Eigen::Index axis;
+  normal.cwiseAbs().minCoeff(&axis);
+  const Eigen::Vector3d t1 = normal.cross(Eigen::Vector3d::Unit(axis)).normalized();
+  Eigen::Matrix3d frame;
+  frame << normal, t1, normal.cross(t1);
+  return frame;
+}
+
+void DescribeSlidingNodes(const NodeSets& sets, CondensedSystem& sys) {
+  const NodeLayout& layout = sys.layout;
+  sys.slidingOfPosition.assign(layout.meshNode.size(), -1);
+  std::vector<int> roiDofOfNode(sys.numMeshNodes, -1);
+  for (size_t k = 0; k < sets.movable.size(); ++k)
+    if (layout.slidingRoiDof[k] >= 0)
+      roiDofOfNode[sets.movable[k]] = layout.slidingRoiDof[k];
+  for (size_t s = 0; s < sets.sliding.size(); ++s) {
+    const int node = sets.sliding[s], pos = layout.dofNode[node];
+    if (pos < 0)
+      continue; // in no cell
+    sys.slidingOfPosition[pos] = static_cast<int>(sys.slidingFrame.size());
+    sys.slidingFrame.push_back(NormalFrame(sets.slidingNormal[s]));
+    sys.slidingRoiDof.push_back(roiDofOfNode[node]);
+  }
+}
+
+// The ROI DOF values as a linear map of the caller's movable displacements (3 per node,
+// node-major). The layout's movable list may extend the caller's with `derived` mid-edge nodes.
+// A repeated movable id takes its last occurrence's value.
+SparseMatrix MovableToRoi(const NodeLayout& layout, const std::vector<std::array<int, 2>>& derived,
+                          const NodeSets& callerSets) {
+  const Eigen::Index movable = static_cast<Eigen::Index>(callerSets.movable.size());
+  std::vector<int> source(layout.roiDofs(), -1); // ROI DOF group -> caller movable index
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index k = 0; k < movable; ++k) {
+    if (layout.roiPosition[k] >= 0)
+      source[3 * layout.roiPosition[k]] = static_cast<int>(k);
+    if (layout.slidingRoiDof[k] >= 0)
+      source[layout.slidingRoiDof[k]] = static_cast<int>(k);
+  }
+  std::vector<Eigen::Vector3d> normalOf(layout.dofNode.size(), Eigen::Vector3d::Zero());
+  for (size_t s = 0; s < callerSets.sliding.size(); ++s)
+    normalOf[callerSets.sliding[s]] = callerSets.slidingNormal[s];
+  for (Eigen::Index k = 0; k < movable; ++k) {
+    const int pos = layout.roiPosition[k], dof = layout.slidingRoiDof[k];
+    if (pos >= 0 && source[3 * pos] == k)
+      for (int i = 0; i < 3; ++i)
+        entries.emplace_back(3 * pos + i, 3 * k + i, 1.0);
+    if (dof >= 0 && source[dof] == k)
+      for (int i = 0; i < 3; ++i)
+        entries.emplace_back(dof, 3 * k + i, normalOf[callerSets.movable[k]][i]);
+  }
+  for (size_t d = 0; d < derived.size(); ++d) {
+    const int pos = layout.roiPosition[movable + static_cast<Eigen::Index>(d)];
+    if (pos < 0)
+      continue;
+    for (int end : derived[d])
+      if (end >= 0)
+        for (int i = 0; i < 3; ++i)
+          entries.emplace_back(3 * pos + i, 3 * end + i, 0.5);
+  }
+  SparseMatrix map(layout.roiDofs(), 3 * movable);
+  map.setFromTriplets(entries.begin(), entries.end());
+  return map;
+}
+
+// K' = T^T K T with T the sliding nodes' frames, then split: the sliding normal DOFs are pinned in
+// K_FF (their row and column cleared, the diagonal kept so the scaling stays), and their columns
+// join K_FR as the ROI DOFs of their prescribed normal values.
+void SeparateRotatedBlocks(const SparseMatrix& upper, CondensedSystem& sys) {
+  const NodeLayout& layout = sys.layout;
+  const Eigen::Index n = upper.rows(), freeDofs = 3 * layout.freeNodes();
+  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<int> pinned(n, -2); // -2: not pinned; -1: pinned at zero; else its ROI DOF
+  std::vector<char> rotated(layout.meshNode.size(), 0);
+  for (size_t pos = 0; pos < sys.slidingOfPosition.size(); ++pos) {
+    const int s = sys.slidingOfPosition[pos];
+    if (s < 0)
+      continue;
+    rotated[pos] = 1;
+    pinned[3 * pos] = sys.slidingRoiDof[s];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        entries.emplace_back(3 * pos + a, 3 * pos + b, sys.slidingFrame[s](a, b));
+  }
+  for (size_t pos = 0; pos < rotated.size(); ++pos)
+    if (!rotated[pos])
+      for (int a = 0; a < 3; ++a)
+        entries.emplace_back(3 * pos + a, 3 * pos + a, 1.0);
+  SparseMatrix frames(n, n);
+  frames.setFromTriplets(entries.begin(), entries.end());
+  const SparseMatrix full = upper.selfadjointView<Eigen::Upper>();
+  const SparseMatrix framesT = frames.transpose();
+  const SparseMatrix turned = framesT * full * frames;
+
+  std::vector<Eigen::Triplet<double>> ff, fr;
+  for (Eigen::Index j = 0; j < turned.outerSize(); ++j)
+    for (SparseMatrix::InnerIterator it(turned, j); it; ++it) {
+      const Eigen::Index i = it.row();
+      if (i >= freeDofs)
+        continue;
+      if (j < freeDofs) {
+        if (i > j)
+          continue;
+        if ((pinned[i] != -2 || pinned[j] != -2) && i != j) {
+          if (pinned[j] >= 0 && pinned[i] == -2)
+            fr.emplace_back(i, pinned[j], it.value());
+          if (pinned[i] >= 0 && pinned[j] == -2)
+            fr.emplace_back(j, pinned[i], it.value());
+          continue;
+        }
+        ff.emplace_back(i, j, it.value());
+      } else if (pinned[i] == -2) {
+        fr.emplace_back(i, j - freeDofs, it.value());
+      }
+    }
+  sys.kff.resize(freeDofs, freeDofs);
+  sys.kff.setFromTriplets(ff.begin(), ff.end());
+  sys.kfr.resize(freeDofs, layout.roiDofs());
+  sys.kfr.setFromTriplets(fr.begin(), fr.end());
+}
+
 } // namespace
 
 Status ValidatePrecomputeRequest(PrecomputeState& state) {
@@ -100,6 +227,11 @@ Status ValidatePrecomputeRequest(PrecomputeState& state) {
     status = CheckRigidModesHeld(request.mesh, request.sets.constrained);
   if (!status)
     return status;
+  if (options.method == SolveMethod::RigidSegments && SegmentCount(request.sets) == 0)
+    return Status::Error(
+        "RigidSegments needs segment ids (NodeSets::movableSegment) of at least 1");
+  if (!request.sets.sliding.empty() && options.elementOrder != ElementOrder::Linear)
+    return Status::Error("sliding nodes need linear elements (ElementOrder::Linear)");
   if (!(options.residualTolerance > 0.0) || options.maxRefinementSteps < 0)
     return Status::Error("residualTolerance must be positive and maxRefinementSteps non-negative");
   if (options.sliverQualityThreshold > 0.0) {
@@ -157,14 +289,24 @@ Status SeparateNodes(PrecomputeState& state) {
   {
     // Cells a kept-only solve can check for large strain: every corner kept or constrained.
     std::vector<char> known(mesh.numPoints(), 0);
-    for (int i : request.sets.kept)
-      known[i] = 1;
     for (int i : request.sets.constrained)
+      known[i] = 1;
+    for (int i : request.sets.sliding)
+      known[i] = 0; // tangential part solved, not given
+    for (int i : request.sets.kept)
       known[i] = 1;
     for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
       if (known[mesh.tets(e, 0)] && known[mesh.tets(e, 1)] && known[mesh.tets(e, 2)] &&
           known[mesh.tets(e, 3)])
         sys.checkableCells.push_back(static_cast<int>(e));
+  }
+  DescribeSlidingNodes(request.sets, sys);
+  sys.movableToRoi = MovableToRoi(sys.layout, sys.derivedMovable, request.sets);
+  sys.segments = SegmentCount(request.sets);
+  if (sys.segments > 0) {
+    sys.segmentSets.movable = request.sets.movable;
+    sys.segmentSets.movableSegment = request.sets.movableSegment;
+    sys.segmentToRoi = sys.movableToRoi * SegmentBasis(mesh.points, request.sets);
   }
   state.time(Stage::Separation).ms = state.clock.lapMs();
   state.report(0.05, "separation");
@@ -177,11 +319,19 @@ Status SeparateBlocks(PrecomputeState& state) {
   // Blocks of the assembled upper triangle: free columns first, then ROI columns.
   const int freeDofs = 3 * layout.freeNodes();
   const SparseMatrix& upper = state.pattern.upper;
-  sys.kff = Eigen::Map<const SparseMatrix>(freeDofs, freeDofs, upper.outerIndexPtr()[freeDofs],
-                                           upper.outerIndexPtr(), upper.innerIndexPtr(),
-                                           upper.valuePtr());
-  sys.kfr = upper.block(0, freeDofs, freeDofs, upper.cols() - freeDofs);
+  if (sys.slidingFrame.empty()) {
+    sys.kff = Eigen::Map<const SparseMatrix>(freeDofs, freeDofs, upper.outerIndexPtr()[freeDofs],
+                                             upper.outerIndexPtr(), upper.innerIndexPtr(),
+                                             upper.valuePtr());
+    sys.kfr = upper.block(0, freeDofs, freeDofs, upper.cols() - freeDofs);
+  } else {
+    SeparateRotatedBlocks(upper, sys);
+  }
   sys.kfr.makeCompressed();
+  const SolveMethod requested = state.request.options.method;
+  if (sys.segments > 0 &&
+      (requested == SolveMethod::Auto || requested == SolveMethod::RigidSegments))
+    state.segmentCoupling = sys.kfr * sys.segmentToRoi;
   state.pattern = AssemblyPattern(); // free the global pattern early
   sys.nodeMass = state.quadratic
                      ? FreeNodeMassQuadratic(state.qmesh, state.request.materials, layout)
@@ -193,7 +343,7 @@ Status SeparateBlocks(PrecomputeState& state) {
   info.backend = sys.backendName;
   info.freeDofs = freeDofs;
   info.keptDofs = 3LL * layout.keptFree;
-  info.roiDofs = 3LL * layout.roi;
+  info.roiDofs = layout.roiDofs();
   info.interiorDofs = 3LL * layout.interior;
   return Status::Ok();
 }

@@ -1,5 +1,6 @@
 #include "Mesh/NodeSetValidation.h"
 
+#include <cmath>
 #include <string>
 
 namespace faceplan {
@@ -24,6 +25,32 @@ Status ValidateNodeSets(const TetMesh& mesh, const NodeSets& sets) {
   for (int id : sets.movable)
     if (!constrained[id])
       return Status::Error("ROI (movable) node " + std::to_string(id) + " is not a constrained node");
+  if (!sets.movableSegment.empty()) {
+    if (sets.movableSegment.size() != sets.movable.size())
+      return Status::Error("movableSegment needs one segment id per movable node (" +
+                           std::to_string(sets.movable.size()) + "), got " +
+                           std::to_string(sets.movableSegment.size()));
+    for (int segment : sets.movableSegment)
+      if (segment < 0)
+        return Status::Error("segment id " + std::to_string(segment) + " is negative");
+  }
+  if (sets.slidingNormal.size() != sets.sliding.size())
+    return Status::Error("slidingNormal needs one normal per sliding node (" +
+                         std::to_string(sets.sliding.size()) + "), got " +
+                         std::to_string(sets.slidingNormal.size()));
+  if (Status s = check(sets.sliding, "sliding"); !s) return s;
+  std::vector<char> sliding(n, 0);
+  for (size_t k = 0; k < sets.sliding.size(); ++k) {
+    const int id = sets.sliding[k];
+    if (!constrained[id])
+      return Status::Error("sliding node " + std::to_string(id) + " is not a constrained node");
+    if (sliding[id]) return Status::Error("sliding node " + std::to_string(id) + " is listed twice");
+    sliding[id] = 1;
+    const double norm = sets.slidingNormal[k].norm();
+    if (!std::isfinite(norm) || std::abs(norm - 1.0) > 1e-6)
+      return Status::Error("the normal of sliding node " + std::to_string(id) +
+                           " is not a finite unit vector");
+  }
   return Status::Ok();
 }
 
