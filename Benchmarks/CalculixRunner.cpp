@@ -31,18 +31,37 @@ void WriteInput(const PrecomputeRequest& r, const Displacements& movable, const 
         << r.mesh.tets(e, 2) + 1 << ", " << r.mesh.tets(e, 3) + 1 << "\n";
   out << "*NSET, NSET=KEPT\n";
   for (size_t k = 0; k < r.sets.kept.size(); ++k) out << r.sets.kept[k] + 1 << (k % 12 == 11 ? ",\n" : ", ");
-  out << "\n*MATERIAL, NAME=TISSUE\n*ELASTIC\n" << Num(r.materials.E(0)) << ", " << Num(r.materials.nu(0))
+  out << "\n";
+  // Sliding nodes: a local system per node whose x axis is the normal (*TRANSFORM, TYPE=R: x along
+  // the first point, the second point in the local x-y plane); only local DOF 1 is prescribed.
+  std::unordered_map<int, Eigen::Vector3d> slidingNormal;
+  for (size_t k = 0; k < r.sets.sliding.size(); ++k) {
+    const int node = r.sets.sliding[k];
+    const Eigen::Vector3d n = r.sets.slidingNormal[k];
+    slidingNormal[node] = n;
+    Eigen::Index axis;
+    n.cwiseAbs().minCoeff(&axis);
+    const Eigen::Vector3d inPlane = Eigen::Vector3d::Unit(axis);
+    out << "*NSET, NSET=S" << node + 1 << "\n" << node + 1 << "\n*TRANSFORM, NSET=S" << node + 1
+        << ", TYPE=R\n" << Num(n[0]) << ", " << Num(n[1]) << ", " << Num(n[2]) << ", "
+        << Num(inPlane[0]) << ", " << Num(inPlane[1]) << ", " << Num(inPlane[2]) << "\n";
+  }
+  out << "*MATERIAL, NAME=TISSUE\n*ELASTIC\n" << Num(r.materials.E(0)) << ", " << Num(r.materials.nu(0))
       << "\n*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n*STEP\n*STATIC\n*BOUNDARY\n";
   std::unordered_map<int, Eigen::Index> movableRow;
   for (size_t k = 0; k < r.sets.movable.size(); ++k) movableRow[r.sets.movable[k]] = static_cast<Eigen::Index>(k);
   for (int node : r.sets.constrained) {
     auto it = movableRow.find(node);
-    for (int c = 0; c < 3; ++c) {
-      const double v = it == movableRow.end() ? 0.0 : movable(it->second, c);
-      out << node + 1 << ", " << c + 1 << ", " << c + 1 << ", " << Num(v) << "\n";
+    const Eigen::Vector3d u =
+        it == movableRow.end() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(movable.row(it->second).transpose());
+    auto sliding = slidingNormal.find(node);
+    if (sliding != slidingNormal.end()) {
+      out << node + 1 << ", 1, 1, " << Num(u.dot(sliding->second)) << "\n";
+      continue;
     }
+    for (int c = 0; c < 3; ++c) out << node + 1 << ", " << c + 1 << ", " << c + 1 << ", " << Num(u[c]) << "\n";
   }
-  out << "*NODE PRINT, NSET=KEPT\nU\n*END STEP\n";
+  out << "*NODE PRINT, NSET=KEPT, GLOBAL=YES\nU\n*END STEP\n";
 }
 
 } // namespace

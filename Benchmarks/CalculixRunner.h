@@ -1,6 +1,7 @@
 #pragma once
 // Runs CalculiX (ccx, C3D4, *STATIC) on the same mesh and boundary conditions as a FacePlan
-// solve, as an outside peer, and reads back the kept nodes' displacements.
+// solve, as an outside peer, and reads back the kept nodes' displacements (global axes). Sliding
+// nodes get a local system with the normal as its x axis (*TRANSFORM) and only that DOF prescribed.
 #include "CondensedFEM/CondensedFEM.h"
 
 #include <string>

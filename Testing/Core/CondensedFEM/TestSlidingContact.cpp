@@ -1,0 +1,192 @@
+// Sliding contact (NodeSets::sliding): only the normal displacement is prescribed. Checked against
+// the analytic uniaxial solution of a block between frictionless walls, and against CalculiX on a
+// curved surface (*TRANSFORM + *BOUNDARY on the local normal DOF).
+#include "CalculixRunner.h"
+#include "Support/BoxMeshGenerator.h"
+#include "Support/FEMTestScenes.h"
+#include "Support/ShellMeshGenerator.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <gtest/gtest.h>
+
+using namespace faceplan;
+using namespace faceplan::testing;
+
+namespace {
+
+constexpr double kLx = 20.0, kLy = 16.0, kLz = 12.0, kPress = 0.6, kNu = 0.3;
+
+// A block on a frictionless floor (z = 0), pressed down by a frictionless plate at z = kLz.
+// Corner (0, 0, 0) is tied, and the nodes of the edge x = kLx, y = 0 slide on the plane y = 0,
+// which removes the rigid motions the walls leave. Every node is kept.
+PrecomputeRequest PressedBlock() {
+  PrecomputeRequest r;
+  const int nx = 5, ny = 4, nz = 3;
+  r.mesh = MakeBoxTetMesh(nx, ny, nz, kLx, kLy, kLz);
+  r.materials = Materials::Uniform(3000.0, kNu);
+  for (Eigen::Index i = 0; i < r.mesh.numPoints(); ++i) {
+    const Eigen::RowVector3d p = r.mesh.points.row(i);
+    const int node = static_cast<int>(i);
+    r.sets.kept.push_back(node);
+    if (p.norm() == 0.0) {
+      r.sets.constrained.push_back(node); // tied
+    } else if (p.z() == 0.0 || p.z() == kLz) {
+      r.sets.constrained.push_back(node);
+      r.sets.sliding.push_back(node);
+      r.sets.slidingNormal.push_back(Eigen::Vector3d::UnitZ());
+      if (p.z() == kLz)
+        r.sets.movable.push_back(node);
+    } else if (p.y() == 0.0 && p.x() == kLx) {
+      r.sets.constrained.push_back(node);
+      r.sets.sliding.push_back(node);
+      r.sets.slidingNormal.push_back(Eigen::Vector3d::UnitY());
+    }
+  }
+  return r;
+}
+
+// u = (nu e x, nu e y, -e z) with e = kPress / kLz: uniaxial compression, lateral expansion free.
+Displacements Uniaxial(const Points& points) {
+  const double strain = kPress / kLz;
+  Displacements u(points.rows(), 3);
+  for (Eigen::Index i = 0; i < points.rows(); ++i)
+    u.row(i) << kNu * strain * points(i, 0), kNu * strain * points(i, 1), -strain * points(i, 2);
+  return u;
+}
+
+void ExpectUniaxial(SolveMethod method, bool recoverInterior) {
+  PrecomputeRequest request = PressedBlock();
+  request.options.method = method;
+  std::shared_ptr<const CondensedSystem> system;
+  Status s = Precompute(request, system);
+  ASSERT_TRUE(s.ok) << s.message;
+  SolveInput input;
+  // The plate's full motion may carry a tangential part: sliding nodes take only the normal one.
+  input.movableDisplacement =
+      Displacements::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+  input.movableDisplacement.col(0).setConstant(0.25);
+  input.movableDisplacement.col(2).setConstant(-kPress);
+  input.recoverInterior = recoverInterior;
+  SolveResult result;
+  s = Solve(*system, input, result);
+  ASSERT_TRUE(s.ok) << s.message;
+  const Displacements exact = Uniaxial(request.mesh.points);
+  EXPECT_LT(RelativeMaxError(result.keptDisplacement, exact), 1e-10);
+  if (recoverInterior)
+    EXPECT_LT(RelativeMaxError(result.allDisplacement, exact), 1e-10);
+}
+
+// A thick spherical shell: the bottom of its inner surface is tied, the rest of it slides on the
+// sphere, and a cap on top is pushed outwards along the normal; the outer surface is free.
+PrecomputeRequest SlidingShell(Displacements& push) {
+  const ShellMesh shell = MakeSphericalShell(4, 2, 40.0, 55.0);
+  PrecomputeRequest r;
+  r.mesh = shell.mesh;
+  r.materials = Materials::Uniform(3000.0, 0.45);
+  std::vector<Eigen::RowVector3d> pushes;
+  for (int node : shell.innerNodes) {
+    const Eigen::Vector3d x = r.mesh.points.row(node).transpose();
+    const Eigen::Vector3d n = x.normalized();
+    r.sets.constrained.push_back(node);
+    r.sets.kept.push_back(node);
+    if (n.z() < -0.6)
+      continue; // tied
+    r.sets.sliding.push_back(node);
+    r.sets.slidingNormal.push_back(n);
+    if (n.z() > 0.7) {
+      r.sets.movable.push_back(node);
+      const double q = (1.0 - n.z()) / 0.3;
+      pushes.push_back((1.5 * (1.0 - q * q) * n + Eigen::Vector3d(0.4, -0.2, 0.0)).transpose());
+    }
+  }
+  for (int node : shell.outerNodes)
+    r.sets.kept.push_back(node);
+  push.resize(static_cast<Eigen::Index>(pushes.size()), 3);
+  for (size_t k = 0; k < pushes.size(); ++k)
+    push.row(static_cast<Eigen::Index>(k)) = pushes[k];
+  return r;
+}
+
+} // namespace
+
+TEST(SlidingContact, BlockBetweenFrictionlessWallsIsUniaxialDenseResponse) {
+  ExpectUniaxial(SolveMethod::DenseResponse, false);
+}
+
+TEST(SlidingContact, BlockBetweenFrictionlessWallsIsUniaxialCachedFactor) {
+  ExpectUniaxial(SolveMethod::CachedFactor, true);
+}
+
+TEST(SlidingContact, SlidingNodesKeepTheirNormalValueAndMoveTangentially) {
+  Displacements push;
+  PrecomputeRequest request = SlidingShell(push);
+  std::shared_ptr<const CondensedSystem> system;
+  Status s = Precompute(request, system);
+  ASSERT_TRUE(s.ok) << s.message;
+  SolveInput input;
+  input.movableDisplacement = push;
+  SolveResult result;
+  s = Solve(*system, input, result);
+  ASSERT_TRUE(s.ok) << s.message;
+  std::vector<int> keptRow(request.mesh.numPoints(), -1);
+  for (size_t k = 0; k < request.sets.kept.size(); ++k)
+    keptRow[request.sets.kept[k]] = static_cast<int>(k);
+  std::vector<int> movableRow(request.mesh.numPoints(), -1);
+  for (size_t k = 0; k < request.sets.movable.size(); ++k)
+    movableRow[request.sets.movable[k]] = static_cast<int>(k);
+  double largestTangential = 0.0;
+  for (size_t k = 0; k < request.sets.sliding.size(); ++k) {
+    const int node = request.sets.sliding[k];
+    const Eigen::Vector3d n = request.sets.slidingNormal[k];
+    const Eigen::Vector3d u = result.keptDisplacement.row(keptRow[node]).transpose();
+    const double expected =
+        movableRow[node] >= 0 ? push.row(movableRow[node]).dot(n.transpose()) : 0.0;
+    EXPECT_NEAR(u.dot(n), expected, 1e-12);
+    largestTangential = std::max(largestTangential, (u - u.dot(n) * n).norm());
+  }
+  EXPECT_GT(largestTangential, 0.05); // the tissue slides, it is not tied
+}
+
+TEST(SlidingContact, CurvedSurfaceAgreesWithCalculix) {
+  if (std::system("command -v ccx > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "ccx (CalculiX) is not installed";
+  Displacements push;
+  PrecomputeRequest request = SlidingShell(push);
+  std::shared_ptr<const CondensedSystem> system;
+  Status s = Precompute(request, system);
+  ASSERT_TRUE(s.ok) << s.message;
+  SolveInput input;
+  input.movableDisplacement = push;
+  SolveResult result;
+  s = Solve(*system, input, result);
+  ASSERT_TRUE(s.ok) << s.message;
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / "faceplan_sliding_ccx").string();
+  std::filesystem::create_directories(dir);
+  const bench::CalculixResult ccx = bench::RunCalculix(request, push, dir, 1);
+  ASSERT_TRUE(ccx.ok) << ccx.error;
+  EXPECT_LT(RelativeMaxError(result.keptDisplacement, ccx.keptDisplacement), 1e-6);
+}
+
+TEST(SlidingContact, InvalidSlidingSetsAreErrors) {
+  PrecomputeRequest request = PressedBlock();
+  std::shared_ptr<const CondensedSystem> system;
+  PrecomputeRequest bad = request;
+  bad.sets.slidingNormal.pop_back();
+  EXPECT_FALSE(Precompute(bad, system).ok);
+  bad = request;
+  bad.sets.slidingNormal[0] = Eigen::Vector3d(0.0, 0.0, 2.0);
+  Status s = Precompute(bad, system);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("unit"), std::string::npos) << s.message;
+  bad = request;
+  bad.options.elementOrder = ElementOrder::Quadratic;
+  EXPECT_FALSE(Precompute(bad, system).ok);
+  SolveResult result;
+  SolveInput input;
+  input.movableDisplacement =
+      Displacements::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+  s = SolveFullReference(request, input, result);
+  EXPECT_FALSE(s.ok);
+}
