@@ -1,5 +1,7 @@
 #include "TissueModelFromCT/TissueModel.h"
 
+#include "Mesh/TetGeometry.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -58,17 +60,17 @@ double EstimateCellCount(const LabellingSummary& s, const TissueModelParameters&
          (tissue / RegularTetVolume(h) + bone / RegularTetVolume(h * p.boneCellSizeFactor));
 }
 
-Status ExtractTissueModel(const LabeledTetMesh& in, TissueModel& model) {
-  const TetMesh& mesh = in.mesh;
-  if (Eigen::Index(in.tetLabel.size()) != mesh.numTets())
-    return Status::Error("the mesher returned " + std::to_string(in.tetLabel.size()) + " labels for " +
-                         std::to_string(mesh.numTets()) + " tetrahedra");
-  // Faces of every cell, keyed by their sorted corners: which cells hold them.
-  struct FaceUse {
-    long long cell[2] = {-1, -1};
-    int slot[2] = {-1, -1}; // the corner opposite the face
-  };
-  std::map<std::array<int, 3>, FaceUse> faces;
+namespace {
+
+struct FaceUse {
+  long long cell[2] = {-1, -1};
+  int slot[2] = {-1, -1}; // the corner opposite the face
+};
+using FaceMap = std::map<std::array<int, 3>, FaceUse>;
+
+// Faces of every cell, keyed by their sorted corners: which cells hold them.
+Status CollectFaces(const TetMesh& mesh, FaceMap& faces) {
+  faces.clear();
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
     for (int f = 0; f < 4; ++f) {
       std::array<int, 3> key{mesh.tets(e, (f + 1) % 4), mesh.tets(e, (f + 2) % 4), mesh.tets(e, (f + 3) % 4)};
@@ -79,6 +81,51 @@ Status ExtractTissueModel(const LabeledTetMesh& in, TissueModel& model) {
       use.cell[side] = e;
       use.slot[side] = f;
     }
+  return Status::Ok();
+}
+
+} // namespace
+
+long long PeelBoundarySlivers(LabeledTetMesh& labelled, double bound, int rounds) {
+  const TetMesh& mesh = labelled.mesh;
+  std::vector<double> angle(std::size_t(mesh.numTets()));
+  TetCorners c;
+  for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
+    for (int k = 0; k < 4; ++k) c.row(k) = mesh.points.row(mesh.tets(e, k));
+    angle[std::size_t(e)] = TetMinDihedralAngle(c);
+  }
+  FaceMap faces;
+  if (!CollectFaces(mesh, faces)) return 0;
+  long long peeled = 0;
+  for (int round = 0; round < rounds; ++round) {
+    std::vector<std::pair<long long, int>> changes;
+    for (const auto& entry : faces) {
+      const FaceUse& use = entry.second;
+      for (int side = 0; side < 2; ++side) {
+        const long long e = use.cell[side];
+        if (e < 0 || labelled.tetLabel[std::size_t(e)] != kSoftTissue || angle[std::size_t(e)] >= bound) continue;
+        const long long other = use.cell[1 - side];
+        const int otherLabel = other < 0 ? kAir : labelled.tetLabel[std::size_t(other)];
+        if (otherLabel != kSoftTissue) changes.emplace_back(e, otherLabel);
+      }
+    }
+    if (changes.empty()) break;
+    for (const auto& change : changes)
+      if (labelled.tetLabel[std::size_t(change.first)] == kSoftTissue) {
+        labelled.tetLabel[std::size_t(change.first)] = change.second;
+        ++peeled;
+      }
+  }
+  return peeled;
+}
+
+Status ExtractTissueModel(const LabeledTetMesh& in, TissueModel& model) {
+  const TetMesh& mesh = in.mesh;
+  if (Eigen::Index(in.tetLabel.size()) != mesh.numTets())
+    return Status::Error("the mesher returned " + std::to_string(in.tetLabel.size()) + " labels for " +
+                         std::to_string(mesh.numTets()) + " tetrahedra");
+  FaceMap faces;
+  if (Status s = CollectFaces(mesh, faces); !s) return s;
 
   std::vector<int> newIndex(std::size_t(mesh.numPoints()), -1);
   std::vector<Eigen::Index> kept;
@@ -162,6 +209,7 @@ Status BuildTissueModelFromLabels(const LabelImage& labels, const TissueModelPar
   LabeledTetMesh labelled;
   if (Status s = mesher(labels, meshing, labelled, cancel, progress); !s) return s;
   model.meshedCells = labelled.mesh.numTets();
+  model.peeledSlivers = PeelBoundarySlivers(labelled, parameters.meshing.sliverBound);
   if (Status s = ExtractTissueModel(labelled, model); !s) return s;
 
   model.quality = MeasureTetQuality(model.tissue, parameters.meshing.sliverBound);

@@ -41,10 +41,18 @@ struct TissueModel {
   LabellingSummary labelling;
   double estimatedCells = 0.0;
   long long meshedCells = 0;      // every label, before the bone cells are dropped
+  long long peeledSlivers = 0;    // boundary slivers given to air or bone (PeelBoundarySlivers)
   TetQualitySummary quality;
   BoundaryDistanceResult boundaryDistance;
   std::vector<std::string> warnings;
 };
+
+// Boundary slivers: soft-tissue cells below the quality bound (smallest dihedral angle, degrees)
+// with a face on the tissue's boundary take the label across that face (air or bone). Such cells
+// are nearly flat and lie along the interface, where perturbation and exudation cannot move
+// their corners, so peeling them changes the volume negligibly. Repeats while any is found (at
+// most `rounds` times); returns the number of cells relabelled.
+long long PeelBoundarySlivers(LabeledTetMesh& labelled, double boundDegrees, int rounds = 3);
 
 // Splits a labelled mesh into the tissue model: keeps the kSoftTissue cells and their points, and
 // classifies their boundary facets by the label on the other side (none = air).
