@@ -15,6 +15,14 @@ namespace {
 
 bool Contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
+// The defaults are in mm^3 for a head; this scene is a few units wide (0.1 voxels).
+LabellingOptions SmallScene() {
+  LabellingOptions o;
+  o.minimumBoneComponentVolume = 0.01; // ten voxels
+  o.maximumBoneHoleVolume = 0.1;
+  return o;
+}
+
 CTImage ShellCT() { return testimages::AsCT(testimages::ShellAroundBall(1.0, 2.0, 0.1, 2.5)); }
 
 } // namespace
@@ -23,7 +31,8 @@ TEST(TissueLabelling, ShellAroundBallIsLabelledAsDrawn) {
   const LabelImage drawn = testimages::ShellAroundBall(1.0, 2.0, 0.1, 2.5);
   LabelImage labels;
   LabellingSummary summary;
-  ASSERT_TRUE(LabelTissue(testimages::AsCT(drawn), LabellingOptions(), labels, summary).ok);
+  const Status s = LabelTissue(testimages::AsCT(drawn), SmallScene(), labels, summary);
+  ASSERT_TRUE(s.ok) << s.message;
   EXPECT_EQ(labels.labels, drawn.labels);
   EXPECT_EQ(summary.bonePieces, 1);
   const double voxel = 0.1 * 0.1 * 0.1;
@@ -44,7 +53,8 @@ TEST(TissueLabelling, CavitiesNoiseAndHolesAreHandled) {
   at({1.6, 0.0, 0.6}) = 1000.0f;   // a bone speck in the tissue
   LabelImage labels;
   LabellingSummary summary;
-  ASSERT_TRUE(LabelTissue(ct, LabellingOptions(), labels, summary).ok);
+  const Status s = LabelTissue(ct, SmallScene(), labels, summary);
+  ASSERT_TRUE(s.ok) << s.message;
   auto label = [&](const Eigen::Vector3d& x) {
     const Eigen::Vector3d s = g.toScaled(x);
     return labels.labels[g.index(int(std::lround(s[0] / 0.1)), int(std::lround(s[1] / 0.1)), int(std::lround(s[2] / 0.1)))];
@@ -56,7 +66,7 @@ TEST(TissueLabelling, CavitiesNoiseAndHolesAreHandled) {
   EXPECT_EQ(summary.cavityVoxelsFilled, 1);
   EXPECT_EQ(summary.boneHoleVoxelsFilled, 1);
 
-  LabellingOptions keepAll;
+  LabellingOptions keepAll = SmallScene();
   keepAll.keepLargestComponent = false;
   keepAll.fillBoneHoles = false;
   keepAll.minimumBoneComponentVolume = 0.0;
@@ -106,13 +116,13 @@ TEST(TissueLabelling, BadInputsGiveNamedErrors) {
   LabelImage labels;
   LabellingSummary summary;
   CTImage ct = ShellCT();
-  LabellingOptions o;
+  LabellingOptions o = SmallScene();
   o.boneThreshold = 2000.0;
   Status s = LabelTissue(ct, o, labels, summary);
   EXPECT_FALSE(s.ok);
   EXPECT_TRUE(Contains(s.message, "no voxel at or above BoneThreshold")) << s.message;
 
-  o = LabellingOptions();
+  o = SmallScene();
   o.skinThreshold = 500.0;
   o.boneThreshold = 100.0;
   s = LabelTissue(ct, o, labels, summary);
@@ -120,11 +130,11 @@ TEST(TissueLabelling, BadInputsGiveNamedErrors) {
 
   CTImage allBone = ct;
   for (float& v : allBone.hounsfield) v = v > 0.0f ? 1000.0f : v;
-  s = LabelTissue(allBone, LabellingOptions(), labels, summary);
+  s = LabelTissue(allBone, SmallScene(), labels, summary);
   EXPECT_TRUE(Contains(s.message, "soft-tissue label is empty")) << s.message;
 
   ct.hounsfield.pop_back();
-  EXPECT_FALSE(LabelTissue(ct, LabellingOptions(), labels, summary).ok);
+  EXPECT_FALSE(LabelTissue(ct, SmallScene(), labels, summary).ok);
 }
 
 TEST(TissueModelParameters, InvalidParametersAreNamed) {
@@ -144,6 +154,7 @@ TEST(TissueModelParameters, InvalidParametersAreNamed) {
 
 TEST(TissueModelParameters, OverBudgetRunsAreRefusedBeforeMeshing) {
   TissueModelParameters p;
+  p.labelling = SmallScene();
   p.meshing.cellSize = 0.05;
   p.maximumCells = 100000;
   bool meshed = false;
@@ -154,6 +165,7 @@ TEST(TissueModelParameters, OverBudgetRunsAreRefusedBeforeMeshing) {
   };
   TissueModel model;
   const Status s = BuildTissueModel(ShellCT(), p, mesher, model);
+  ASSERT_FALSE(s.ok);
   EXPECT_FALSE(s.ok);
   EXPECT_TRUE(Contains(s.message, "exceeds MaximumCells")) << s.message;
   EXPECT_FALSE(meshed);

@@ -43,6 +43,8 @@ TissueModelParameters Parameters(double cellSize, double surfaceDistance) {
   p.meshing.surfaceDistance = surfaceDistance;
   p.meshing.sliverBound = 10.0;
   p.meshing.seed = 7;
+  p.labelling.minimumBoneComponentVolume = 0.01; // the defaults are for a head in mm
+  p.labelling.maximumBoneHoleVolume = 0.1;
   return p;
 }
 
