@@ -110,15 +110,15 @@ protected:
 
   double BoneThreshold = 200.0;
   double SkinThreshold = -400.0;
-  double CellSize = 4.0;
-  double SurfaceDistance = 1.5;
-  double QualityBound = 10.0;
+  double CellSize = 5.0;
+  double SurfaceDistance = 2.0;
+  double QualityBound = 5.0;
   bool KeepLargestComponent = true;
   double MinimumBoneComponentVolume = 50.0;
   bool FillBoneHoles = true;
   double MaximumBoneHoleVolume = 2000.0;
   bool SeparateMandible = false;
-  int Optimiser = ODT;
+  int Optimiser = LLOYD;
   double BoneCellSizeFactor = 2.0;
   vtkIdType MaximumCells = 1000000;
   int Seed = 0;

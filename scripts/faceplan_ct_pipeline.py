@@ -11,7 +11,7 @@ ROI_CENTER = [92.0, 45.0, 125.0]
 ROI_RADIUS = 25.0
 
 
-def build_model(data_dir, cell_size, surface_distance=3.0, seed=0):
+def build_model(data_dir, cell_size, surface_distance=2.5, seed=0):
     """Returns (ct, model) proxies; LoadPlugin must have run first."""
     ct = simple.XMLImageDataReader(registrationName="headsq.vti", FileName=[data_dir + "/ct/headsq.vti"])
     model = simple.TissueModelFromCT(registrationName="TissueModelFromCT", Input=ct)
@@ -21,7 +21,7 @@ def build_model(data_dir, cell_size, surface_distance=3.0, seed=0):
     return ct, model
 
 
-def build(data_dir, cell_size=8.0, surface_distance=3.0):
+def build(data_dir, cell_size=10.0, surface_distance=2.5):
     """Returns (ct, model, roi, cut, fem) proxies."""
     ct, model = build_model(data_dir, cell_size, surface_distance)
     roi = simple.ROIExtract(registrationName="ROIExtract", Input=simple.OutputPort(model, 1))

@@ -13,7 +13,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import faceplan_ct_pipeline
 
 plugin, data_dir, out_dir = sys.argv[1], sys.argv[2], sys.argv[3]
-cell_size = float(sys.argv[4]) if len(sys.argv) > 4 else 8.0
+cell_size = float(sys.argv[4]) if len(sys.argv) > 4 else 10.0
 os.makedirs(out_dir, exist_ok=True)
 LoadPlugin(plugin)
 if "TissueModelFromCT" not in dir(sys.modules["paraview.simple"]):

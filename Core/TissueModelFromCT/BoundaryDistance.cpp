@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
 
 namespace faceplan {
 
@@ -72,6 +73,11 @@ BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image, const Ei
   BoundaryDistanceResult r;
   const auto& s = image.grid.spacing;
   const double step = std::min({s[0], s[1], s[2], radius}) / 8.0;
+  std::vector<Eigen::Vector3d> directions;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz)
+        if (dx || dy || dz) directions.push_back(image.grid.direction * Eigen::Vector3d(dx, dy, dz).normalized());
   double sum = 0.0;
   for (Eigen::Index f = 0; f < facets.rows(); ++f) {
     const Eigen::Vector3d a = points.row(facets(f, 0)).transpose(), b = points.row(facets(f, 1)).transpose(),
@@ -82,14 +88,19 @@ BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image, const Ei
     const Eigen::Vector3d samples[4] = {(a + b + c) / 3.0, 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)};
     for (const Eigen::Vector3d& q : samples) {
       const int start = InterpolatedLabel(image, q);
-      const double up = DistanceAlong(image, q, n, start, radius, step);
-      const double down = DistanceAlong(image, q, -n, start, radius, step);
-      double d;
-      if (up < 0 && down < 0) {
+      // The normal first; then the 26 grid directions, each searched only up to the best so far.
+      double d = -1.0;
+      auto tryDirection = [&](const Eigen::Vector3d& dir) {
+        const double limit = d < 0 ? radius : d;
+        const double t = DistanceAlong(image, q, dir, start, limit, step);
+        if (t >= 0 && (d < 0 || t < d)) d = t;
+      };
+      tryDirection(n);
+      tryDirection(-n);
+      for (const Eigen::Vector3d& dir : directions) tryDirection(dir);
+      if (d < 0) {
         d = radius;
         ++r.notFound;
-      } else {
-        d = up < 0 ? down : (down < 0 ? up : std::min(up, down));
       }
       r.largest = std::max(r.largest, d);
       sum += d;

@@ -16,18 +16,18 @@ namespace faceplan {
 enum class MeshOptimiser { None, ODT, Lloyd };
 
 struct MeshingParameters {
-  double cellSize = 4.0;        // target tetrahedron edge length (image units, mm)
-  double surfaceDistance = 1.0; // largest distance between a boundary facet and the interface
+  double cellSize = 5.0;        // target tetrahedron edge length (image units, mm)
+  double surfaceDistance = 2.0; // largest distance between a boundary facet and the interface
   double facetAngle = 25.0;     // smallest angle of a boundary triangle, degrees
   double radiusEdgeRatio = 3.0; // largest circumradius / shortest edge of a tetrahedron
   // Labels meshed with another target edge length (e.g. coarser bone, whose cells are dropped).
   std::vector<std::pair<int, double>> labelCellSize;
-  MeshOptimiser optimiser = MeshOptimiser::ODT;
+  MeshOptimiser optimiser = MeshOptimiser::Lloyd;
   double optimiserTimeLimit = 0.0; // seconds, 0 = no limit
-  int optimiserIterations = 30;
+  int optimiserIterations = 10;
   bool perturb = true;
   bool exude = true;
-  double sliverBound = 10.0;          // smallest dihedral angle perturb and exude aim for, degrees
+  double sliverBound = 5.0;           // smallest dihedral angle perturb and exude aim for, degrees
   unsigned int seed = 0;              // makes the result reproducible
   long long maximumVertices = 0;      // hard cap on the refinement (0 = none)
 };

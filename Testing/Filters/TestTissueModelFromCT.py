@@ -46,8 +46,8 @@ def tet_volumes(grid):
 # ---- the real CT, whole pipeline ----------------------------------------------------------------
 ct = XMLImageDataReader(FileName=[data + "/ct/headsq.vti"])
 model = TissueModelFromCT(Input=ct)
-model.CellSize = 8.0
-model.SurfaceDistance = 3.0
+model.CellSize = 10.0
+model.SurfaceDistance = 2.5
 model_warnings = WarningCatcher(model)
 model_errors = ErrorCatcher(model)
 model.UpdatePipeline()
@@ -119,7 +119,7 @@ not_image = TissueModelFromCT(Input=producer(poly))
 expect_error(not_image, ErrorCatcher(not_image), "not an image", "a polydata input")
 
 bad = TissueModelFromCT(Input=ct)
-bad.CellSize = 8.0
+bad.CellSize = 10.0
 bad_errors = ErrorCatcher(bad)
 bad.BoneThreshold = 5000.0
 expect_error(bad, bad_errors, "no voxel at or above BoneThreshold", "BoneThreshold above every voxel")

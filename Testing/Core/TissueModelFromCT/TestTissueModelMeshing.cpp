@@ -76,7 +76,7 @@ double LargestSphereDistance(const TissueModel& m, const Facets& f, double radiu
 TEST(TissueModelMeshing, ShellVolumeBoundaryAndQuality) {
   REQUIRE_CGAL();
   const double surfaceDistance = 0.025;
-  const TissueModelParameters p = Parameters(0.4, surfaceDistance);
+  const TissueModelParameters p = Parameters(0.3, surfaceDistance);
   TissueModel m;
   const Status s = BuildTissueModelFromLabels(Shell(), p, kMesher, m);
   ASSERT_TRUE(s.ok) << s.message;
