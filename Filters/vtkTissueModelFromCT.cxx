@@ -38,8 +38,8 @@ void AddScalar(vtkFieldData* fd, const char* name, double value) {
 
 // A triangle surface over the tissue points its facets use, renumbered densely;
 // TissuePointId maps back to the tissue.
-void BuildSurface(const faceplan::TissueModel& model, const faceplan::Facets& facets, const std::vector<int>* labels,
-                  vtkPolyData* out) {
+void BuildSurface(const faceplan::TissueModel& model, const faceplan::Facets& facets,
+                  const std::vector<int>* labels, vtkPolyData* out) {
   std::vector<vtkIdType> local(std::size_t(model.tissue.numPoints()), -1);
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
@@ -52,7 +52,8 @@ void BuildSurface(const faceplan::TissueModel& model, const faceplan::Facets& fa
       const int p = facets(f, k);
       vtkIdType& id = local[std::size_t(p)];
       if (id < 0) {
-        id = points->InsertNextPoint(model.tissue.points(p, 0), model.tissue.points(p, 1), model.tissue.points(p, 2));
+        id = points->InsertNextPoint(model.tissue.points(p, 0), model.tissue.points(p, 1),
+                                     model.tissue.points(p, 2));
         tissueId->InsertNextValue(p);
       }
       ids[k] = id;
@@ -66,14 +67,17 @@ void BuildSurface(const faceplan::TissueModel& model, const faceplan::Facets& fa
     vtkNew<vtkIntArray> label;
     label->SetName("Label");
     label->SetNumberOfTuples(vtkIdType(labels->size()));
-    for (std::size_t c = 0; c < labels->size(); ++c) label->SetValue(vtkIdType(c), (*labels)[c]);
+    for (std::size_t c = 0; c < labels->size(); ++c)
+      label->SetValue(vtkIdType(c), (*labels)[c]);
     out->GetCellData()->AddArray(label);
   }
 }
 
 } // namespace
 
-vtkTissueModelFromCT::vtkTissueModelFromCT() { this->SetNumberOfOutputPorts(3); }
+vtkTissueModelFromCT::vtkTissueModelFromCT() {
+  this->SetNumberOfOutputPorts(3);
+}
 
 vtkTissueModelFromCT::~vtkTissueModelFromCT() = default;
 
@@ -105,10 +109,13 @@ int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** in
     return 1;
   }
   vtkDataArray* scalars = this->GetInputArrayToProcess(0, inputVector);
-  if (!scalars) scalars = input->GetPointData()->GetScalars();
+  if (!scalars)
+    scalars = input->GetPointData()->GetScalars();
   if (!scalars || scalars->GetNumberOfComponents() != 1 ||
-      scalars->GetNumberOfTuples() != input->GetNumberOfPoints() || input->GetNumberOfPoints() == 0) {
-    vtkErrorMacro(<< "Tissue Model From CT: the image has no one-component point scalars (Hounsfield units)");
+      scalars->GetNumberOfTuples() != input->GetNumberOfPoints() ||
+      input->GetNumberOfPoints() == 0) {
+    vtkErrorMacro(
+        << "Tissue Model From CT: the image has no one-component point scalars (Hounsfield units)");
     return 1;
   }
 
@@ -134,9 +141,11 @@ int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** in
   }
   vtkMatrix3x3* direction = input->GetDirectionMatrix();
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) ct.grid.direction(r, c) = direction->GetElement(r, c);
+    for (int c = 0; c < 3; ++c)
+      ct.grid.direction(r, c) = direction->GetElement(r, c);
   ct.hounsfield.resize(std::size_t(input->GetNumberOfPoints()));
-  for (vtkIdType i = 0; i < input->GetNumberOfPoints(); ++i) ct.hounsfield[std::size_t(i)] = float(scalars->GetTuple1(i));
+  for (vtkIdType i = 0; i < input->GetNumberOfPoints(); ++i)
+    ct.hounsfield[std::size_t(i)] = float(scalars->GetTuple1(i));
 
   faceplan::TissueModelParameters p;
   p.labelling.boneThreshold = this->BoneThreshold;
@@ -162,7 +171,8 @@ int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** in
   auto progress = [this, &cancel](double fraction, const char* what) {
     this->SetProgressText(what);
     this->UpdateProgress(fraction);
-    if (this->CheckAbort()) cancel = true;
+    if (this->CheckAbort())
+      cancel = true;
   };
   faceplan::TissueModel model;
   const faceplan::Status status =
@@ -172,21 +182,23 @@ int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** in
     vtkErrorMacro(<< "Tissue Model From CT: " << status.message);
     return 1;
   }
-  for (const std::string& w : status.warnings) vtkWarningMacro(<< "Tissue Model From CT: " << w);
+  for (const std::string& w : status.warnings)
+    vtkWarningMacro(<< "Tissue Model From CT: " << w);
 
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(model.tissue.numPoints());
   for (Eigen::Index i = 0; i < model.tissue.numPoints(); ++i)
-    points->SetPoint(i, model.tissue.points(i, 0), model.tissue.points(i, 1), model.tissue.points(i, 2));
+    points->SetPoint(i, model.tissue.points(i, 0), model.tissue.points(i, 1),
+                     model.tissue.points(i, 2));
   tissueOut->SetPoints(points);
   tissueOut->Allocate(model.tissue.numTets());
   vtkNew<vtkIntArray> label;
   label->SetName("Label");
   label->SetNumberOfTuples(model.tissue.numTets());
   for (Eigen::Index e = 0; e < model.tissue.numTets(); ++e) {
-    const vtkIdType ids[4] = {model.tissue.tets(e, 0), model.tissue.tets(e, 1), model.tissue.tets(e, 2),
-                              model.tissue.tets(e, 3)};
+    const vtkIdType ids[4] = {model.tissue.tets(e, 0), model.tissue.tets(e, 1),
+                              model.tissue.tets(e, 2), model.tissue.tets(e, 3)};
     tissueOut->InsertNextCell(VTK_TETRA, 4, ids);
     label->SetValue(e, model.tissueLabel[std::size_t(e)]);
   }

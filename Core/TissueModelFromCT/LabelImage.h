@@ -22,9 +22,12 @@ struct ImageGrid {
   std::array<double, 3> origin{{0.0, 0.0, 0.0}};
   Eigen::Matrix3d direction = Eigen::Matrix3d::Identity(); // orthonormal; columns are the axes
 
-  std::size_t numVoxels() const { return std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]); }
+  std::size_t numVoxels() const {
+    return std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]);
+  }
   std::size_t index(int i, int j, int k) const {
-    return std::size_t(i) + std::size_t(dims[0]) * (std::size_t(j) + std::size_t(dims[1]) * std::size_t(k));
+    return std::size_t(i) +
+           std::size_t(dims[0]) * (std::size_t(j) + std::size_t(dims[1]) * std::size_t(k));
   }
   double voxelVolume() const { return spacing[0] * spacing[1] * spacing[2]; }
   // A point given in the grid's own scaled frame (index times spacing, no origin or rotation) in

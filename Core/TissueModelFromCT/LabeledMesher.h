@@ -27,9 +27,9 @@ struct MeshingParameters {
   int optimiserIterations = 10;
   bool perturb = true;
   bool exude = true;
-  double sliverBound = 5.0;           // smallest dihedral angle perturb and exude aim for, degrees
-  unsigned int seed = 0;              // makes the result reproducible
-  long long maximumVertices = 0;      // hard cap on the refinement (0 = none)
+  double sliverBound = 5.0;      // smallest dihedral angle perturb and exude aim for, degrees
+  unsigned int seed = 0;         // makes the result reproducible
+  long long maximumVertices = 0; // hard cap on the refinement (0 = none)
 };
 
 // Tetrahedra of every non-zero label, positively oriented, in the image's physical frame.
@@ -42,8 +42,8 @@ using MeshingProgress = std::function<void(double fraction, const char* what)>;
 
 // Meshes every non-zero label of `image`. `cancel` may be set from another thread; the mesher
 // polls it and returns the error "cancelled".
-using LabelMesher = std::function<Status(const LabelImage& image, const MeshingParameters& parameters,
-                                         LabeledTetMesh& result, std::atomic<bool>* cancel,
-                                         const MeshingProgress& progress)>;
+using LabelMesher = std::function<Status(
+    const LabelImage& image, const MeshingParameters& parameters, LabeledTetMesh& result,
+    std::atomic<bool>* cancel, const MeshingProgress& progress)>;
 
 } // namespace faceplan

@@ -17,10 +17,13 @@ double TetMinDihedralAngle(const Eigen::Matrix<double, 4, 3>& c) {
   Eigen::Vector3d normal[4];
   for (int f = 0; f < 4; ++f) {
     const int a = (f + 1) % 4, b = (f + 2) % 4, d = (f + 3) % 4;
-    Eigen::Vector3d nrm = (c.row(b) - c.row(a)).transpose().cross((c.row(d) - c.row(a)).transpose());
-    if (nrm.dot((c.row(f) - c.row(a)).transpose()) > 0) nrm = -nrm; // point away from corner f
+    Eigen::Vector3d nrm =
+        (c.row(b) - c.row(a)).transpose().cross((c.row(d) - c.row(a)).transpose());
+    if (nrm.dot((c.row(f) - c.row(a)).transpose()) > 0)
+      nrm = -nrm; // point away from corner f
     const double len = nrm.norm();
-    if (len == 0.0) return 0.0;
+    if (len == 0.0)
+      return 0.0;
     normal[f] = nrm / len;
   }
   double smallest = 180.0;
@@ -38,13 +41,16 @@ TetQualitySummary MeasureTetQuality(const TetMesh& mesh, double bound) {
   s.smallestVolume = mesh.numTets() ? std::numeric_limits<double>::infinity() : 0.0;
   TetCorners c;
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-    for (int k = 0; k < 4; ++k) c.row(k) = mesh.points.row(mesh.tets(e, k));
+    for (int k = 0; k < 4; ++k)
+      c.row(k) = mesh.points.row(mesh.tets(e, k));
     const double volume = TetVolume(c);
     s.smallestVolume = std::min(s.smallestVolume, volume);
-    if (!(volume > 0.0)) ++s.nonPositive;
+    if (!(volume > 0.0))
+      ++s.nonPositive;
     const double angle = TetMinDihedralAngle(c);
     s.worstDihedralAngle = std::min(s.worstDihedralAngle, angle);
-    if (angle < bound) ++s.belowDihedralBound;
+    if (angle < bound)
+      ++s.belowDihedralBound;
     s.smallestMeanRatio = std::min(s.smallestMeanRatio, TetMeanRatio(c));
   }
   return s;

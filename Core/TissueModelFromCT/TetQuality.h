@@ -9,11 +9,11 @@ double TetMinDihedralAngle(const Eigen::Matrix<double, 4, 3>& corners);
 
 struct TetQualitySummary {
   long long cells = 0;
-  long long nonPositive = 0;         // cells with volume <= 0
+  long long nonPositive = 0; // cells with volume <= 0
   double smallestVolume = 0.0;
   double worstDihedralAngle = 180.0; // degrees
   double smallestMeanRatio = 1.0;
-  long long belowDihedralBound = 0;  // cells whose smallest dihedral angle is below the bound
+  long long belowDihedralBound = 0; // cells whose smallest dihedral angle is below the bound
 };
 
 TetQualitySummary MeasureTetQuality(const TetMesh& mesh, double dihedralBoundDegrees);

@@ -10,7 +10,9 @@
 
 namespace faceplan {
 
-double LabellingSummary::softTissueVolume() const { return double(softTissueVoxels) * voxelVolume; }
+double LabellingSummary::softTissueVolume() const {
+  return double(softTissueVoxels) * voxelVolume;
+}
 
 namespace {
 
@@ -23,9 +25,11 @@ Mask Erode(const Mask& in, const std::array<int, 3>& d) {
   for (int k = 1; k + 1 < d[2]; ++k)
     for (int j = 1; j + 1 < d[1]; ++j)
       for (int i = 1; i + 1 < d[0]; ++i) {
-        const std::size_t v = std::size_t(i) + std::size_t(d[0]) * (std::size_t(j) + std::size_t(d[1]) * k);
+        const std::size_t v =
+            std::size_t(i) + std::size_t(d[0]) * (std::size_t(j) + std::size_t(d[1]) * k);
         const std::size_t sx = 1, sy = std::size_t(d[0]), sz = std::size_t(d[0]) * d[1];
-        out[v] = in[v] && in[v - sx] && in[v + sx] && in[v - sy] && in[v + sy] && in[v - sz] && in[v + sz];
+        out[v] = in[v] && in[v - sx] && in[v + sx] && in[v - sy] && in[v + sy] && in[v - sz] &&
+                 in[v + sz];
       }
   return out;
 }
@@ -35,22 +39,30 @@ Mask Erode(const Mask& in, const std::array<int, 3>& d) {
 // two pieces.
 bool SplitMandible(const std::array<int, 3>& dims, int radius, std::vector<std::uint8_t>& labels) {
   Mask bone(labels.size());
-  for (std::size_t v = 0; v < labels.size(); ++v) bone[v] = labels[v] == kBone;
+  for (std::size_t v = 0; v < labels.size(); ++v)
+    bone[v] = labels[v] == kBone;
   Mask core = bone;
-  for (int r = 0; r < radius; ++r) core = Erode(core, dims);
+  for (int r = 0; r < radius; ++r)
+    core = Erode(core, dims);
   VoxelComponents pieces = FindComponents(core, dims);
-  if (pieces.sizes.size() < 2) return false;
+  if (pieces.sizes.size() < 2)
+    return false;
   std::vector<int> order(pieces.sizes.size());
-  for (std::size_t c = 0; c < order.size(); ++c) order[c] = int(c);
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return pieces.sizes[a] > pieces.sizes[b]; });
+  for (std::size_t c = 0; c < order.size(); ++c)
+    order[c] = int(c);
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return pieces.sizes[a] > pieces.sizes[b]; });
   const int largest = order[0], second = order[1];
   // Owner 1 = the rest of the bone, 2 = mandible; grown outwards from the two cores together.
   std::vector<std::uint8_t> owner(labels.size(), 0);
   std::deque<std::size_t> queue;
   for (std::size_t v = 0; v < labels.size(); ++v) {
-    if (pieces.id[v] == largest) owner[v] = 1;
-    else if (pieces.id[v] == second) owner[v] = 2;
-    if (owner[v]) queue.push_back(v);
+    if (pieces.id[v] == largest)
+      owner[v] = 1;
+    else if (pieces.id[v] == second)
+      owner[v] = 2;
+    if (owner[v])
+      queue.push_back(v);
   }
   const long long sx = 1, sy = dims[0], sz = (long long)dims[0] * dims[1];
   while (!queue.empty()) {
@@ -61,7 +73,8 @@ bool SplitMandible(const std::array<int, 3>& dims, int radius, std::vector<std::
     const long long steps[6] = {-sx, sx, -sy, sy, -sz, sz};
     const bool inside[6] = {i > 0, i + 1 < dims[0], j > 0, j + 1 < dims[1], k > 0, k + 1 < dims[2]};
     for (int n = 0; n < 6; ++n) {
-      if (!inside[n]) continue;
+      if (!inside[n])
+        continue;
       const std::size_t w = std::size_t((long long)v + steps[n]);
       if (bone[w] && !owner[w]) {
         owner[w] = owner[v];
@@ -70,7 +83,8 @@ bool SplitMandible(const std::array<int, 3>& dims, int radius, std::vector<std::
     }
   }
   for (std::size_t v = 0; v < labels.size(); ++v)
-    if (owner[v] == 2) labels[v] = kMandible;
+    if (owner[v] == 2)
+      labels[v] = kMandible;
   return true;
 }
 
@@ -80,15 +94,20 @@ LabellingSummary SummariseLabels(const LabelImage& image) {
   LabellingSummary s;
   s.voxelVolume = image.grid.voxelVolume();
   for (std::uint8_t l : image.labels) {
-    if (l == kAir) ++s.airVoxels;
-    else if (l == kSoftTissue) ++s.softTissueVoxels;
-    else if (l == kBone) ++s.boneVoxels;
-    else if (l == kMandible) ++s.mandibleVoxels;
+    if (l == kAir)
+      ++s.airVoxels;
+    else if (l == kSoftTissue)
+      ++s.softTissueVoxels;
+    else if (l == kBone)
+      ++s.boneVoxels;
+    else if (l == kMandible)
+      ++s.mandibleVoxels;
   }
   return s;
 }
 
-Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImage& out, LabellingSummary& summary) {
+Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImage& out,
+                   LabellingSummary& summary) {
   const auto& d = ct.grid.dims;
   if (d[0] < 2 || d[1] < 2 || d[2] < 2)
     return Status::Error("the image must have at least 2 voxels along each axis");
@@ -97,7 +116,8 @@ Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImag
     return Status::Error("the image has " + std::to_string(ct.hounsfield.size()) + " values for " +
                          std::to_string(n) + " voxels");
   if (!(options.skinThreshold < options.boneThreshold))
-    return Status::Error("thresholds in the wrong order: SkinThreshold must be below BoneThreshold");
+    return Status::Error(
+        "thresholds in the wrong order: SkinThreshold must be below BoneThreshold");
 
   const double voxel = ct.grid.voxelVolume();
   long long aboveBone = 0;
@@ -106,15 +126,18 @@ Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImag
     body[v] = ct.hounsfield[v] >= options.skinThreshold;
     aboveBone += ct.hounsfield[v] >= options.boneThreshold;
   }
-  if (aboveBone == 0) return Status::Error("no voxel at or above BoneThreshold");
+  if (aboveBone == 0)
+    return Status::Error("no voxel at or above BoneThreshold");
 
   summary = LabellingSummary();
   summary.voxelVolume = voxel;
-  if (options.keepLargestComponent) KeepLargestComponent(body, d);
+  if (options.keepLargestComponent)
+    KeepLargestComponent(body, d);
   // Enclosed air pockets become body.
   {
     Mask air(n);
-    for (std::size_t v = 0; v < n; ++v) air[v] = !body[v];
+    for (std::size_t v = 0; v < n; ++v)
+      air[v] = !body[v];
     const VoxelComponents pockets = FindComponents(air, d);
     for (std::size_t v = 0; v < n; ++v)
       if (pockets.id[v] >= 0 && !pockets.touchesBorder[pockets.id[v]]) {
@@ -124,7 +147,8 @@ Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImag
   }
 
   Mask bone(n);
-  for (std::size_t v = 0; v < n; ++v) bone[v] = body[v] && ct.hounsfield[v] >= options.boneThreshold;
+  for (std::size_t v = 0; v < n; ++v)
+    bone[v] = body[v] && ct.hounsfield[v] >= options.boneThreshold;
   {
     const VoxelComponents pieces = FindComponents(bone, d);
     std::vector<std::uint8_t> keep(pieces.sizes.size());
@@ -133,15 +157,18 @@ Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImag
       summary.bonePieces += keep[c];
     }
     for (std::size_t v = 0; v < n; ++v)
-      if (bone[v] && !keep[pieces.id[v]]) bone[v] = 0;
+      if (bone[v] && !keep[pieces.id[v]])
+        bone[v] = 0;
   }
   if (options.fillBoneHoles) {
     Mask notBone(n);
-    for (std::size_t v = 0; v < n; ++v) notBone[v] = !bone[v];
+    for (std::size_t v = 0; v < n; ++v)
+      notBone[v] = !bone[v];
     const VoxelComponents holes = FindComponents(notBone, d);
     for (std::size_t v = 0; v < n; ++v) {
       const int c = holes.id[v];
-      if (c >= 0 && !holes.touchesBorder[c] && double(holes.sizes[c]) * voxel <= options.maximumBoneHoleVolume) {
+      if (c >= 0 && !holes.touchesBorder[c] &&
+          double(holes.sizes[c]) * voxel <= options.maximumBoneHoleVolume) {
         bone[v] = 1;
         body[v] = 1;
         ++summary.boneHoleVoxelsFilled;
@@ -162,10 +189,12 @@ Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImag
   summary.boneVoxels = counts.boneVoxels;
   summary.mandibleVoxels = counts.mandibleVoxels;
   if (summary.boneVoxels + summary.mandibleVoxels == 0)
-    return Status::Error("no voxel at or above BoneThreshold is left after removing bone pieces smaller than " +
-                         std::to_string(options.minimumBoneComponentVolume) + " mm^3");
+    return Status::Error(
+        "no voxel at or above BoneThreshold is left after removing bone pieces smaller than " +
+        std::to_string(options.minimumBoneComponentVolume) + " mm^3");
   if (summary.softTissueVoxels == 0)
-    return Status::Error("the soft-tissue label is empty (no voxel between SkinThreshold and BoneThreshold)");
+    return Status::Error(
+        "the soft-tissue label is empty (no voxel between SkinThreshold and BoneThreshold)");
   return Status::Ok();
 }
 

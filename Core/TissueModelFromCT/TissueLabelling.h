@@ -7,7 +7,7 @@
 namespace faceplan {
 
 struct LabellingOptions {
-  double boneThreshold = 200.0; // HU: voxels at or above are bone
+  double boneThreshold = 200.0;  // HU: voxels at or above are bone
   double skinThreshold = -400.0; // HU: voxels at or above are body (soft tissue or bone)
   // Keep only the largest connected body (drops the table, head rest, noise).
   bool keepLargestComponent = true;
@@ -25,11 +25,11 @@ struct LabellingOptions {
 
 struct LabellingSummary {
   long long airVoxels = 0, softTissueVoxels = 0, boneVoxels = 0, mandibleVoxels = 0;
-  long long cavityVoxelsFilled = 0;  // enclosed air made soft tissue
+  long long cavityVoxelsFilled = 0; // enclosed air made soft tissue
   long long boneHoleVoxelsFilled = 0;
-  int bonePieces = 0;                // connected bone pieces kept
+  int bonePieces = 0; // connected bone pieces kept
   bool mandibleSeparated = false;
-  double softTissueVolume() const;   // set by LabelTissue together with the voxel volume
+  double softTissueVolume() const; // set by LabelTissue together with the voxel volume
   double voxelVolume = 0.0;
 };
 

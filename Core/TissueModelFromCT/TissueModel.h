@@ -16,8 +16,8 @@ namespace faceplan {
 
 struct TissueModelParameters {
   LabellingOptions labelling;
-  MeshingParameters meshing;     // meshing.sliverBound is the quality bound (smallest dihedral angle)
-  double boneCellSizeFactor = 2.0; // bone is meshed this much coarser (its cells are dropped)
+  MeshingParameters meshing; // meshing.sliverBound is the quality bound (smallest dihedral angle)
+  double boneCellSizeFactor = 2.0;  // bone is meshed this much coarser (its cells are dropped)
   long long maximumCells = 1000000; // refuse runs whose estimated tetrahedron count is larger
 };
 
@@ -33,15 +33,15 @@ constexpr double kDelaunayCellExcess = 2.5; // measured 1.7 (smooth shell) to 2.
 constexpr double kFacetDistanceMargin = 0.5;
 
 struct TissueModel {
-  TetMesh tissue;                 // soft-tissue tetrahedra, positively oriented
-  std::vector<int> tissueLabel;   // per tetrahedron (kSoftTissue)
-  Facets boneFacets;              // tissue facets facing bone, normals pointing into the tissue
-  std::vector<int> boneLabel;     // per bone facet: kBone or kMandible
-  Facets skinFacets;              // tissue facets facing air, normals pointing out of the tissue
+  TetMesh tissue;               // soft-tissue tetrahedra, positively oriented
+  std::vector<int> tissueLabel; // per tetrahedron (kSoftTissue)
+  Facets boneFacets;            // tissue facets facing bone, normals pointing into the tissue
+  std::vector<int> boneLabel;   // per bone facet: kBone or kMandible
+  Facets skinFacets;            // tissue facets facing air, normals pointing out of the tissue
   LabellingSummary labelling;
   double estimatedCells = 0.0;
-  long long meshedCells = 0;      // every label, before the bone cells are dropped
-  long long peeledSlivers = 0;    // boundary slivers given to air or bone (PeelBoundarySlivers)
+  long long meshedCells = 0;   // every label, before the bone cells are dropped
+  long long peeledSlivers = 0; // boundary slivers given to air or bone (PeelBoundarySlivers)
   TetQualitySummary quality;
   BoundaryDistanceResult boundaryDistance;
   std::vector<std::string> warnings;
@@ -62,11 +62,12 @@ Status ExtractTissueModel(const LabeledTetMesh& labelled, TissueModel& model);
 // Warns when the quality bound or SurfaceDistance is missed.
 Status BuildTissueModelFromLabels(const LabelImage& labels, const TissueModelParameters& parameters,
                                   const LabelMesher& mesher, TissueModel& model,
-                                  std::atomic<bool>* cancel = nullptr, const MeshingProgress& progress = {});
+                                  std::atomic<bool>* cancel = nullptr,
+                                  const MeshingProgress& progress = {});
 
 // Labels the CT (LabelTissue) and continues as above.
-Status BuildTissueModel(const CTImage& ct, const TissueModelParameters& parameters, const LabelMesher& mesher,
-                        TissueModel& model, std::atomic<bool>* cancel = nullptr,
-                        const MeshingProgress& progress = {});
+Status BuildTissueModel(const CTImage& ct, const TissueModelParameters& parameters,
+                        const LabelMesher& mesher, TissueModel& model,
+                        std::atomic<bool>* cancel = nullptr, const MeshingProgress& progress = {});
 
 } // namespace faceplan

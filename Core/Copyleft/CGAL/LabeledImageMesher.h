@@ -7,8 +7,9 @@
 namespace faceplan {
 namespace cgal {
 
-Status MeshLabeledImage(const LabelImage& image, const MeshingParameters& parameters, LabeledTetMesh& result,
-                        std::atomic<bool>* cancel, const MeshingProgress& progress);
+Status MeshLabeledImage(const LabelImage& image, const MeshingParameters& parameters,
+                        LabeledTetMesh& result, std::atomic<bool>* cancel,
+                        const MeshingProgress& progress);
 
 // The CGAL version this part was built with, e.g. "5.5.1".
 const char* CgalVersion();

@@ -24,7 +24,8 @@ inline LabelImage ShellAroundBall(double a, double b, double voxel, double halfW
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
-        const Eigen::Vector3d x = image.grid.toWorld(Eigen::Vector3d(i * voxel, j * voxel, k * voxel));
+        const Eigen::Vector3d x =
+            image.grid.toWorld(Eigen::Vector3d(i * voxel, j * voxel, k * voxel));
         const double r = (x - centre).norm();
         image.labels[image.grid.index(i, j, k)] = r < a ? kBone : (r < b ? kSoftTissue : kAir);
       }
@@ -37,7 +38,8 @@ inline CTImage AsCT(const LabelImage& labels) {
   ct.grid = labels.grid;
   ct.hounsfield.resize(labels.labels.size());
   for (std::size_t v = 0; v < labels.labels.size(); ++v)
-    ct.hounsfield[v] = labels.labels[v] == kAir ? -1000.0f : (labels.labels[v] == kSoftTissue ? 40.0f : 1000.0f);
+    ct.hounsfield[v] =
+        labels.labels[v] == kAir ? -1000.0f : (labels.labels[v] == kSoftTissue ? 40.0f : 1000.0f);
   return ct;
 }
 

@@ -1,19 +1,19 @@
 // TissueModelFromCT with CGAL Mesh_3 on a labelled shell around a bone ball (the analytic hollow
 // sphere's sizes): geometry, orientation, quality, boundary distance, reproducibility, the image
 // frame, and the deformation against the analytic solution. Skipped when built without CGAL.
-#include "SyntheticImages.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "Mesh/TetGeometry.h"
 #include "Support/AnalyticHollowSphere.h"
+#include "SyntheticImages.h"
 #include "TissueModelFromCT/TissueModel.h"
 #ifdef FACEPLAN_HAVE_CGAL
 #include "Copyleft/CGAL/LabeledImageMesher.h"
 #endif
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <gtest/gtest.h>
-#include <algorithm>
 #include <map>
 #include <set>
 
@@ -52,20 +52,23 @@ double Volume(const TetMesh& mesh) {
   double v = 0.0;
   TetCorners c;
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-    for (int k = 0; k < 4; ++k) c.row(k) = mesh.points.row(mesh.tets(e, k));
+    for (int k = 0; k < 4; ++k)
+      c.row(k) = mesh.points.row(mesh.tets(e, k));
     v += TetVolume(c);
   }
   return v;
 }
 
 // Largest distance of a facet's corners, edge midpoints and centroid from the sphere of `radius`.
-double LargestSphereDistance(const TissueModel& m, const Facets& f, double radius, const Eigen::Vector3d& centre) {
+double LargestSphereDistance(const TissueModel& m, const Facets& f, double radius,
+                             const Eigen::Vector3d& centre) {
   double largest = 0.0;
   for (Eigen::Index t = 0; t < f.rows(); ++t) {
     const Eigen::Vector3d a = m.tissue.points.row(f(t, 0)), b = m.tissue.points.row(f(t, 1)),
                           c = m.tissue.points.row(f(t, 2));
-    for (const Eigen::Vector3d& p : {a, b, c, Eigen::Vector3d(0.5 * (a + b)), Eigen::Vector3d(0.5 * (b + c)),
-                                     Eigen::Vector3d(0.5 * (c + a)), Eigen::Vector3d((a + b + c) / 3.0)})
+    for (const Eigen::Vector3d& p :
+         {a, b, c, Eigen::Vector3d(0.5 * (a + b)), Eigen::Vector3d(0.5 * (b + c)),
+          Eigen::Vector3d(0.5 * (c + a)), Eigen::Vector3d((a + b + c) / 3.0)})
       largest = std::max(largest, std::abs((p - centre).norm() - radius));
   }
   return largest;
@@ -80,14 +83,17 @@ TEST(TissueModelMeshing, ShellVolumeBoundaryAndQuality) {
   TissueModel m;
   const Status s = BuildTissueModelFromLabels(Shell(), p, kMesher, m);
   ASSERT_TRUE(s.ok) << s.message;
-  for (const std::string& w : s.warnings) ADD_FAILURE() << "warning: " << w;
+  for (const std::string& w : s.warnings)
+    ADD_FAILURE() << "warning: " << w;
 
   const double exact = 4.0 / 3.0 * M_PI * (8.0 - 1.0);
   const double volume = Volume(m.tissue);
-  std::printf("tets %lld, volume %.5f (exact %.5f, %+.3f %%), boundary distance %.4f, worst dihedral %.2f deg, "
+  std::printf("tets %lld, volume %.5f (exact %.5f, %+.3f %%), boundary distance %.4f, worst "
+              "dihedral %.2f deg, "
               "smallest mean ratio %.3f\n",
               (long long)m.tissue.numTets(), volume, exact, 100.0 * (volume - exact) / exact,
-              m.boundaryDistance.largest, m.quality.worstDihedralAngle, m.quality.smallestMeanRatio);
+              m.boundaryDistance.largest, m.quality.worstDihedralAngle,
+              m.quality.smallestMeanRatio);
   EXPECT_LT(std::abs(volume - exact), 0.01 * exact);
   // Against the labelled interface (Core's measure) and against the analytic spheres.
   EXPECT_LE(m.boundaryDistance.largest, surfaceDistance);
@@ -107,7 +113,8 @@ TEST(TissueModelMeshing, ShellVolumeBoundaryAndQuality) {
         const int u = (*f)(t, k), v = (*f)(t, (k + 1) % 3);
         ++edges[{std::min(u, v), std::max(u, v)}];
       }
-    for (const auto& e : edges) EXPECT_EQ(e.second, 2);
+    for (const auto& e : edges)
+      EXPECT_EQ(e.second, 2);
   }
 }
 
@@ -124,8 +131,10 @@ TEST(TissueModelMeshing, SameSeedSameMesh) {
 
 TEST(TissueModelMeshing, ImageFrameIsHonoured) {
   REQUIRE_CGAL();
-  // The same shell in an image rotated 30 degrees about an oblique axis and moved: the mesh follows.
-  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(M_PI / 6.0, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  // The same shell in an image rotated 30 degrees about an oblique axis and moved: the mesh
+  // follows.
+  const Eigen::Matrix3d rotation =
+      Eigen::AngleAxisd(M_PI / 6.0, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::Vector3d centre(10.0, -4.0, 7.0);
   const LabelImage moved = testimages::ShellAroundBall(1.0, 2.0, 0.05, 2.2, centre, rotation);
   TissueModel m;
@@ -139,8 +148,9 @@ TEST(TissueModelMeshing, ImageFrameIsHonoured) {
 TEST(TissueModelMeshing, FromCTThroughLabelling) {
   REQUIRE_CGAL();
   TissueModel m;
-  const Status s = BuildTissueModel(testimages::AsCT(testimages::ShellAroundBall(1.0, 2.0, 0.05, 2.2)),
-                                    Parameters(0.8, 0.06), kMesher, m);
+  const Status s =
+      BuildTissueModel(testimages::AsCT(testimages::ShellAroundBall(1.0, 2.0, 0.05, 2.2)),
+                       Parameters(0.8, 0.06), kMesher, m);
   ASSERT_TRUE(s.ok) << s.message;
   EXPECT_GT(m.tissue.numTets(), 0);
   EXPECT_GT(m.boneFacets.rows(), 0);
@@ -170,15 +180,18 @@ TEST(TissueModelMeshing, DeformationErrorFallsWithCellSize) {
     ASSERT_TRUE(built.ok) << built.message;
     std::set<int> boneNodes;
     for (Eigen::Index t = 0; t < m.boneFacets.rows(); ++t)
-      for (int k = 0; k < 3; ++k) boneNodes.insert(m.boneFacets(t, k));
+      for (int k = 0; k < 3; ++k)
+        boneNodes.insert(m.boneFacets(t, k));
     PrecomputeRequest request;
     request.mesh = m.tissue;
     request.materials = Materials::Uniform(exact.E, exact.nu);
     request.sets.constrained.assign(boneNodes.begin(), boneNodes.end());
     request.sets.movable = request.sets.constrained;
-    for (Eigen::Index t = 0; t < m.skinFacets.rows(); ++t) request.sets.kept.push_back(m.skinFacets(t, 0));
+    for (Eigen::Index t = 0; t < m.skinFacets.rows(); ++t)
+      request.sets.kept.push_back(m.skinFacets(t, 0));
     std::sort(request.sets.kept.begin(), request.sets.kept.end());
-    request.sets.kept.erase(std::unique(request.sets.kept.begin(), request.sets.kept.end()), request.sets.kept.end());
+    request.sets.kept.erase(std::unique(request.sets.kept.begin(), request.sets.kept.end()),
+                            request.sets.kept.end());
     request.options.method = SolveMethod::CachedFactor;
     std::shared_ptr<const CondensedSystem> system;
     const Status pre = Precompute(request, system);
@@ -193,8 +206,11 @@ TEST(TissueModelMeshing, DeformationErrorFallsWithCellSize) {
     const Status solved = Solve(*system, input, result);
     ASSERT_TRUE(solved.ok) << solved.message;
     double l2Exact = 0.0;
-    errors.push_back(HollowSphereL2Error(m.tissue, result.allDisplacement, exact, l2Exact) / l2Exact);
-    std::printf("CellSize %.2f: %lld tets, relative L2 error %.3e\n", h, (long long)m.tissue.numTets(), errors.back());
+    errors.push_back(HollowSphereL2Error(m.tissue, result.allDisplacement, exact, l2Exact) /
+                     l2Exact);
+    std::printf("CellSize %.2f: %lld tets, relative L2 error %.3e\n", h,
+                (long long)m.tissue.numTets(), errors.back());
   }
-  for (std::size_t k = 1; k < errors.size(); ++k) EXPECT_LT(errors[k], errors[k - 1]) << "refinement " << k;
+  for (std::size_t k = 1; k < errors.size(); ++k)
+    EXPECT_LT(errors[k], errors[k - 1]) << "refinement " << k;
 }
