@@ -580,6 +580,63 @@ def make_organ(name, cfg, info, workdir):
     log("  quality: " + fmt_quality(info["organs/%s.vtu" % name]["quality"]))
 
 
+# ----------------------------------------------------------------------------------------------
+# CT: VTK's quarter-resolution head CT
+# ----------------------------------------------------------------------------------------------
+CT_DIMS = (64, 64, 93)           # x, y, slices
+CT_SPACING = (3.2, 3.2, 1.5)     # mm, from quarter.nhdr
+CT_RAW_TO_HU = -1024             # raw CT numbers 0..3926 -> Hounsfield units
+
+
+def make_ct(info):
+    """Stacks headsq/quarter.1 .. quarter.93 (int16 LE, 64 x 64 each) into Data/ct/headsq.vti,
+    point scalars `HU` (int16) = raw - 1024, origin 0, spacing 3.2 x 3.2 x 1.5 mm."""
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
+    src = os.path.join(SHARED, "pyvista_vtk-data", "headsq")
+    nx, ny, nz = CT_DIMS
+    slices = []
+    for k in range(1, nz + 1):
+        raw = np.fromfile(os.path.join(src, "quarter.%d" % k), dtype="<i2")
+        assert raw.size == nx * ny, "quarter.%d has %d values" % (k, raw.size)
+        slices.append(raw)
+    raw = np.concatenate(slices)
+    hu = (raw.astype(np.int32) + CT_RAW_TO_HU).astype(np.int16)
+    img = vtkImageData()
+    img.SetDimensions(nx, ny, nz)
+    img.SetSpacing(*CT_SPACING)
+    img.SetOrigin(0.0, 0.0, 0.0)
+    arr = nps.numpy_to_vtk(hu, deep=True)
+    arr.SetName("HU")
+    img.GetPointData().SetScalars(arr)
+    os.makedirs(os.path.join(OUT, "ct"), exist_ok=True)
+    path = os.path.join(OUT, "ct", "headsq.vti")
+    w = vtkXMLImageDataWriter()
+    w.SetFileName(path)
+    w.SetDataModeToBinary()
+    w.SetCompressorTypeToZLib()
+    w.SetInputData(img)
+    if not w.Write():
+        sys.exit("could not write " + path)
+    info["ct/headsq.vti"] = check_ct_file(path)
+    log("  ct/headsq.vti: %s voxels, HU %d..%d" % ("x".join(map(str, CT_DIMS)), hu.min(), hu.max()))
+
+
+def check_ct_file(path):
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+    r = vtkXMLImageDataReader()
+    r.SetFileName(path)
+    r.Update()
+    img = r.GetOutput()
+    dims = img.GetDimensions()
+    assert tuple(dims) == CT_DIMS, "%s: dimensions %s" % (path, dims)
+    assert np.allclose(img.GetSpacing(), CT_SPACING), "%s: spacing %s" % (path, img.GetSpacing())
+    hu = nps.vtk_to_numpy(img.GetPointData().GetArray("HU"))
+    assert hu.size == np.prod(CT_DIMS)
+    return {"dims": list(dims), "spacing": list(img.GetSpacing()), "hu_min": int(hu.min()),
+            "hu_max": int(hu.max())}
+
+
 def copy_licenses():
     ldir = os.path.join(OUT, "licenses")
     os.makedirs(ldir, exist_ok=True)
@@ -587,6 +644,8 @@ def copy_licenses():
                     os.path.join(ldir, "ArtiSynth-models-LICENSE.txt"))
     shutil.copyfile(os.path.join(SHARED, "sofa", "LICENSE-LGPL.md"),
                     os.path.join(ldir, "SOFA-LICENSE-LGPL.md"))
+    shutil.copyfile(os.path.join(SHARED, "pyvista_vtk-data", "Copyright.txt"),
+                    os.path.join(ldir, "VTK-data-Copyright.txt"))
 
 
 def check_all():
@@ -599,6 +658,8 @@ def check_all():
         info[rel] = check_surface_file(os.path.join(OUT, rel))
     for rel, v in info.items():
         log("  %-36s %6d points %6d cells" % (rel, v["points"], v["cells"]))
+    info["ct/headsq.vti"] = check_ct_file(os.path.join(OUT, "ct", "headsq.vti"))
+    log("  %-36s %s voxels" % ("ct/headsq.vti", "x".join(map(str, CT_DIMS))))
     return info
 
 
@@ -614,11 +675,12 @@ def main():
         make_face(info)
         for name, cfg in ORGANS.items():
             make_organ(name, cfg, info, wd)
+        make_ct(info)
     copy_licenses()
     info["files_sha256"] = {
         os.path.relpath(os.path.join(dp, f), OUT): sha256(os.path.join(dp, f))
         for dp, _, fs in os.walk(OUT) for f in sorted(fs)
-        if f.endswith((".vtu", ".vtp"))}
+        if f.endswith((".vtu", ".vtp", ".vti"))}
     with open(os.path.join(OUT, "manifest.json"), "w") as f:
         json.dump(info, f, indent=1, sort_keys=True)
         f.write("\n")

@@ -1,0 +1,125 @@
+#include "TissueModelFromCT/BoundaryDistance.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace faceplan {
+
+int InterpolatedLabel(const LabelImage& image, const Eigen::Vector3d& world) {
+  const ImageGrid& g = image.grid;
+  const Eigen::Vector3d p = g.toScaled(world);
+  double l[3];
+  for (int a = 0; a < 3; ++a) {
+    l[a] = p[a] / g.spacing[a];
+    if (!(l[a] >= 0.0) || l[a] >= double(g.dims[a] - 1))
+      return kAir;
+  }
+  const int i = int(l[0]), j = int(l[1]), k = int(l[2]);
+  const double fx = l[0] - i, fy = l[1] - j, fz = l[2] - k;
+  // Corners in Mesh_3's order (x fastest, then y, then z); the first label to reach the largest
+  // weight wins, as there.
+  std::array<int, 8> label;
+  std::array<double, 8> weight;
+  for (int c = 0; c < 8; ++c) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+    label[c] = image.labels[g.index(i + dx, j + dy, k + dz)];
+    weight[c] = (dx ? fx : 1 - fx) * (dy ? fy : 1 - fy) * (dz ? fz : 1 - fz);
+  }
+  int best = label[0];
+  double bestWeight = -1.0;
+  for (int c = 0; c < 8; ++c) {
+    bool seen = false;
+    for (int b = 0; b < c; ++b)
+      seen = seen || label[b] == label[c];
+    if (seen)
+      continue;
+    double w = 0.0;
+    for (int b = c; b < 8; ++b)
+      if (label[b] == label[c])
+        w += weight[b];
+    if (w > bestWeight) {
+      bestWeight = w;
+      best = label[c];
+    }
+  }
+  return best;
+}
+
+namespace {
+
+// Distance along `dir` from q to the first label change, or a negative value when there is none
+// within `radius`.
+double DistanceAlong(const LabelImage& image, const Eigen::Vector3d& q, const Eigen::Vector3d& dir,
+                     int start, double radius, double step) {
+  double previous = 0.0;
+  for (double t = step; t <= radius + 1e-12; t += step) {
+    if (InterpolatedLabel(image, q + t * dir) != start) {
+      double lo = previous, hi = t;
+      for (int it = 0; it < 30; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (InterpolatedLabel(image, q + mid * dir) != start ? hi : lo) = mid;
+      }
+      return 0.5 * (lo + hi);
+    }
+    previous = t;
+  }
+  return -1.0;
+}
+
+} // namespace
+
+BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image,
+                                               const Eigen::MatrixXd& points, const Facets& facets,
+                                               double radius) {
+  BoundaryDistanceResult r;
+  const auto& s = image.grid.spacing;
+  const double step = std::min({s[0], s[1], s[2], radius}) / 8.0;
+  std::vector<Eigen::Vector3d> directions;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz)
+        if (dx || dy || dz)
+          directions.push_back(image.grid.direction * Eigen::Vector3d(dx, dy, dz).normalized());
+  double sum = 0.0;
+  for (Eigen::Index f = 0; f < facets.rows(); ++f) {
+    const Eigen::Vector3d a = points.row(facets(f, 0)).transpose(),
+                          b = points.row(facets(f, 1)).transpose(),
+                          c = points.row(facets(f, 2)).transpose();
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() == 0.0)
+      continue;
+    n.normalize();
+    const Eigen::Vector3d samples[4] = {(a + b + c) / 3.0, 0.5 * (a + b), 0.5 * (b + c),
+                                        0.5 * (c + a)};
+    for (const Eigen::Vector3d& q : samples) {
+      const int start = InterpolatedLabel(image, q);
+      // The normal first; then the 26 grid directions, each searched only up to the best so far.
+      double d = -1.0;
+      auto tryDirection = [&](const Eigen::Vector3d& dir) {
+        const double limit = d < 0 ? radius : d;
+        const double t = DistanceAlong(image, q, dir, start, limit, step);
+        if (t >= 0 && (d < 0 || t < d))
+          d = t;
+      };
+      tryDirection(n);
+      tryDirection(-n);
+      for (const Eigen::Vector3d& dir : directions)
+        tryDirection(dir);
+      if (d < 0) {
+        d = radius;
+        ++r.notFound;
+      }
+      r.largest = std::max(r.largest, d);
+      sum += d;
+      ++r.samples;
+    }
+  }
+  r.mean = r.samples ? sum / double(r.samples) : 0.0;
+  return r;
+}
+
+} // namespace faceplan

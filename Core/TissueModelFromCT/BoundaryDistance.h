@@ -1,0 +1,31 @@
+#pragma once
+// How far a mesh's boundary facets lie from the labelled interface they approximate, measured
+// against the same interpolated label function Mesh_3 meshes (labellized trilinear interpolation:
+// at a point, the label whose indicator has the largest trilinear weight; 0 outside the voxel
+// centres' hull).
+#include "TissueModelFromCT/LabelImage.h"
+
+#include <Eigen/Core>
+
+namespace faceplan {
+
+using Facets = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+int InterpolatedLabel(const LabelImage& image, const Eigen::Vector3d& world);
+
+struct BoundaryDistanceResult {
+  double largest = 0.0; // over every sample point; `searchRadius` when one found no interface
+  double mean = 0.0;
+  long long samples = 0;
+  long long notFound = 0; // samples with no label change within searchRadius along the normal
+};
+
+// Samples each facet at its centroid and edge midpoints and searches along the facet normal (both
+// ways) and the 26 grid directions for the nearest change of the interpolated label (refined by
+// bisection). The shortest such distance bounds the true distance to the interface from above
+// (by at most about 8 % for an interface between the directions).
+BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image,
+                                               const Eigen::MatrixXd& points, const Facets& facets,
+                                               double searchRadius);
+
+} // namespace faceplan
