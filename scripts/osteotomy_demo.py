@@ -94,8 +94,20 @@ face_before.ColorArrayName = ["POINTS", ""]
 view.CameraPosition = [-200, -420, 140]
 images.append(shoot("face_before.png"))
 Hide(face_before.Input, view)
-colour(Show(ExtractSurface(Input=OutputPort(fem, 0)), view))
+face_after = Show(ExtractSurface(Input=OutputPort(fem, 0)), view)
+colour(face_after)
 images.append(shoot("face_after.png"))
+
+# The plan in one picture: the operated skeleton and the cut inside the translucent deformed face.
+face_after.Opacity = 0.35
+colour(Show(skeleton, view))
+planes = Show(OutputPort(osteotomy, 1), view)
+planes.ColorArrayName = ["POINTS", ""]
+planes.AmbientColor = planes.DiffuseColor = [0.2, 0.5, 0.9]
+planes.Opacity = 0.3
+view.CameraFocalPoint = [90, 0, 105]
+view.CameraPosition = [-130, -300, 150]
+images.append(shoot("plan.png"))
 
 table = fem.GetClientSideObject().GetOutputDataObject(1)
 csv = os.path.join(out_dir, "stage_timings.csv")
