@@ -5,7 +5,8 @@
  * Input: a bone surface of triangles (polygons and strips are triangulated; lines, vertices and
  * volume cells are an error). The segment is the part on the positive side of CutPlane1 (and of
  * CutPlane2 when UseSecondPlane is on: the slab or wedge between them); InsideOut swaps the sides.
- * Both sides are clipped and capped with vtkClipClosedSurface, so every piece is closed. The
+ * Both sides are clipped and capped with vtkClipClosedSurface, so every piece is closed (with two
+ * planes the side that is not convex is clipped as two closed pieces that touch on CutPlane1). The
  * segment moves by x -> Rz Ry Rx (x - pivot) + pivot + Translation, angles from Rotation (degrees),
  * pivot = the segment's area-weighted surface centroid (PivotMode 0) or Pivot (PivotMode 1).
  *
