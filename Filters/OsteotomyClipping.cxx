@@ -9,7 +9,7 @@
 #include <vtkTriangleFilter.h>
 
 namespace faceplan {
-namespace vtkosteotomy {
+namespace osteotomy_filter {
 
 vtkSmartPointer<vtkPolyData> ClipIntoPieces(vtkPolyData* bone,
                                             const std::vector<ConvexPiece>& pieces,
@@ -54,5 +54,5 @@ vtkSmartPointer<vtkPolyData> ClipIntoPieces(vtkPolyData* bone,
   return result;
 }
 
-} // namespace vtkosteotomy
+} // namespace osteotomy_filter
 } // namespace faceplan

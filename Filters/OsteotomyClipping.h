@@ -11,7 +11,7 @@
 class vtkPolyData;
 
 namespace faceplan {
-namespace vtkosteotomy {
+namespace osteotomy_filter {
 
 // `bone`: triangles with double points and the point arrays to interpolate. Returns the pieces
 // appended in order; moves[i] = 1 for the points of pieces with ConvexPiece::moves.
@@ -19,5 +19,5 @@ vtkSmartPointer<vtkPolyData> ClipIntoPieces(vtkPolyData* bone,
                                             const std::vector<ConvexPiece>& pieces,
                                             std::vector<std::uint8_t>& moves);
 
-} // namespace vtkosteotomy
+} // namespace osteotomy_filter
 } // namespace faceplan
