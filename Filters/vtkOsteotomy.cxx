@@ -95,11 +95,23 @@ int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVecto
     return 1;
 
   // Convert: split the bone with VTK's clipping, both sides capped, the bookkeeping interpolated.
-  std::vector<std::uint8_t> moves;
-  vtkSmartPointer<vtkPolyData> split = of::ClipIntoPieces(
-      of::BookkeepingBone(input), faceplan::ConvexPiecesOfCut(planes, this->InsideOut != 0), moves);
+  std::vector<double> key{this->InsideOut ? 1.0 : 0.0};
+  for (const faceplan::CutPlane& p : planes) {
+    key.insert(key.end(), p.origin.data(), p.origin.data() + 3);
+    key.insert(key.end(), p.normal.data(), p.normal.data() + 3);
+  }
+  if (!this->Split.split || this->Split.input != input ||
+      this->Split.inputTime != input->GetMTime() || this->Split.key != key) {
+    this->Split.split = of::ClipIntoPieces(
+        of::BookkeepingBone(input), faceplan::ConvexPiecesOfCut(planes, this->InsideOut != 0),
+        this->Split.moves);
+    this->Split.input = input;
+    this->Split.inputTime = input->GetMTime();
+    this->Split.key = key;
+  }
+  vtkPolyData* split = this->Split.split;
   faceplan::OsteotomyBone bone;
-  if (failed(of::ToOsteotomyBone(split, moves, input->GetFieldData(), bone)))
+  if (failed(of::ToOsteotomyBone(split, this->Split.moves, input->GetFieldData(), bone)))
     return 1;
   faceplan::OsteotomyMove move;
   move.move.translation = Eigen::Vector3d(this->Translation);

@@ -27,8 +27,11 @@
 
 #include "FacePlanFiltersModule.h"
 #include "vtkPolyDataAlgorithm.h"
+#include "vtkSmartPointer.h" // for the split cache
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 class vtkImplicitFunction;
 
@@ -99,6 +102,16 @@ protected:
   int PivotMode = SEGMENT_CENTROID;
   double UsedPivot[3] = {0.0, 0.0, 0.0};
   std::string LastError;
+
+  // The split bone of the last run, reused while input, planes and sides stay the same: an edit
+  // of the move then skips the clipping.
+  struct SplitCache {
+    const void* input = nullptr;
+    vtkMTimeType inputTime = 0;
+    std::vector<double> key; // plane origins and normals, InsideOut
+    vtkSmartPointer<vtkPolyData> split;
+    std::vector<std::uint8_t> moves;
+  } Split;
 
 private:
   vtkOsteotomy(const vtkOsteotomy&) = delete;

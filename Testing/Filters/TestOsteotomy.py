@@ -264,6 +264,28 @@ check(np.abs(M1 - first_map).max() < 1e-14, "chain: segment 1's transform carrie
 mask = point_array(o4, "ROIMask")
 check(np.all(mask[seg > 0] == 1) and np.all(mask[seg == 0] == 0), "chain: ROIMask OR-ed")
 check(boundary_edge_count(o4) == 0, "chain: every piece closed")
+# An edit upstream reaches the second osteotomy (its cached split must not hide it), and an edit of
+# the move alone gives what a fresh filter gives.
+ost.Translation = [0.0, 0.0, 1.2]
+second.Translation = [0.1, 0.2, 0.3]
+second.UpdatePipeline()
+o4b = fetch(second)
+fresh = Osteotomy(Input=ost)
+fresh.CutPlane1.Origin, fresh.CutPlane1.Normal = second.CutPlane1.Origin, second.CutPlane1.Normal
+fresh.Rotation, fresh.Translation = second.Rotation, second.Translation
+fresh.UpdatePipeline()
+o4c = fetch(fresh)
+check(np.array_equal(points(o4b), points(o4c)) and np.array_equal(point_array(o4b, "Displacement"),
+                                                                  point_array(o4c, "Displacement")),
+      "chain: after edits upstream and of the move, the output equals a fresh filter's")
+M1 = np.array(field(fetch(ost), "SegmentTransform")).reshape(3, 4)
+check(np.abs(M1[:, 3] - np.array(field(o4, "SegmentTransform"))[:12].reshape(3, 4)[:, 3]).max() > 0.1,
+      "chain: the upstream edit changed segment 1's transform")
+P = points(o4b).astype(float)
+X0 = P - point_array(o4b, "Displacement")
+one = point_array(o4b, "SegmentId") == 1
+check(np.abs(X0[one] @ M1[:, :3].T + M1[:, 3] - P[one]).max() < 1e-9, "chain: segment 1 follows the new upstream move")
+Delete(fresh)
 
 # ------------------------------------------------------------- after a Bezier cut
 roi = ROIExtract(Input=sphere)
