@@ -1,9 +1,10 @@
-"""CTest wrapper of FacePlan's GUI test: starts the real `paraview` GUI on TestGUIUndoRedo.py,
+"""CTest wrapper of FacePlan's GUI tests: starts the real `paraview` GUI on a test script
+(TestGUIUndoRedo.py unless --script names another one in this folder),
 waits for the result file the script writes, optionally grabs the X screen (the whole GUI: pipeline
 browser, Bezier Cut properties panel, render view) into a PNG, closes the GUI and checks the result.
 
     python3 run_gui_test.py --paraview <exe> --plugin <FacePlan.so> --source-dir <repo>
-                            --work-dir <dir> [--screenshot <png>] [--timeout <s>]
+                            --work-dir <dir> [--script <name>.py] [--screenshot <png>] [--timeout <s>]
 
 Run it with an X display (faceplan_with_display.sh). Exit 0: every check passed; 1: a check failed,
 the script raised, or the GUI did not report in time; 77 (CTest SKIP): no display.
@@ -129,6 +130,7 @@ def main():
     ap.add_argument("--plugin", required=True)
     ap.add_argument("--source-dir", required=True)
     ap.add_argument("--work-dir", required=True)
+    ap.add_argument("--script", default="TestGUIUndoRedo.py")
     ap.add_argument("--screenshot")
     ap.add_argument("--timeout", type=float, default=150.0)
     a = ap.parse_args()
@@ -150,7 +152,8 @@ def main():
                # a fresh settings folder: the default layout (pipeline browser + properties
                # panel) whatever the user's own ParaView settings are
                HOME=a.work_dir, XDG_CONFIG_HOME=os.path.join(a.work_dir, "config"))
-    script = os.path.join(a.source_dir, "Testing", "GUI", "TestGUIUndoRedo.py")
+    script = os.path.join(a.source_dir, "Testing", "GUI", a.script)
+    name = os.path.splitext(a.script)[0]
     log_path = os.path.join(a.work_dir, "paraview_gui.log")
     log = open(log_path, "w")
     proc = subprocess.Popen([a.paraview, "--dr", "-geometry", "1280x1024+0+0", "--script=" + script], env=env,
@@ -185,9 +188,9 @@ def main():
         print("FAIL: the GUI script raised:\n" + result["error"])
         return 1
     if result["failures"] or not result["checks"]:
-        print("TestGUIUndoRedo: %d check(s) failed" % len(result["failures"]))
+        print("%s: %d check(s) failed" % (name, len(result["failures"])))
         return 1
-    print("TestGUIUndoRedo: all %d checks passed" % len(result["checks"]))
+    print("%s: all %d checks passed" % (name, len(result["checks"])))
     return 0
 
 

@@ -1,0 +1,151 @@
+#include "vtkOsteotomy.h"
+
+#include "FacePlanVTKConvert.h"
+#include "Osteotomy/CutPlanes.h"
+#include "Osteotomy/Osteotomy.h"
+#include "OsteotomyClipping.h"
+#include "OsteotomyConvert.h"
+#include "OsteotomyOutput.h"
+
+#include <vtkCellArray.h>
+#include <vtkDataSet.h>
+#include <vtkFieldData.h>
+#include <vtkImplicitFunction.h>
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkObjectFactory.h>
+#include <vtkPolyData.h>
+
+#include <algorithm>
+#include <array>
+
+vtkStandardNewMacro(vtkOsteotomy);
+vtkCxxSetObjectMacro(vtkOsteotomy, CutPlane1, vtkImplicitFunction);
+vtkCxxSetObjectMacro(vtkOsteotomy, CutPlane2, vtkImplicitFunction);
+
+vtkOsteotomy::vtkOsteotomy() {
+  this->SetNumberOfInputPorts(1);
+  this->SetNumberOfOutputPorts(2);
+}
+
+vtkOsteotomy::~vtkOsteotomy() {
+  this->SetCutPlane1(nullptr);
+  this->SetCutPlane2(nullptr);
+}
+
+vtkMTimeType vtkOsteotomy::GetMTime() {
+  vtkMTimeType t = this->Superclass::GetMTime();
+  if (this->CutPlane1)
+    t = std::max(t, this->CutPlane1->GetMTime());
+  if (this->CutPlane2)
+    t = std::max(t, this->CutPlane2->GetMTime());
+  return t;
+}
+
+int vtkOsteotomy::FillInputPortInformation(int, vtkInformation* info) {
+  // Any data set, so that a wrong type gets this filter's own message.
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkDataSet");
+  return 1;
+}
+
+void vtkOsteotomy::Fail(const std::string& message, vtkInformationVector* outputVector) {
+  this->LastError = message;
+  for (int port = 0; port < 2; ++port)
+    if (vtkDataObject* o =
+            outputVector->GetInformationObject(port)->Get(vtkDataObject::DATA_OBJECT()))
+      o->Initialize();
+  vtkErrorMacro(<< "Osteotomy: " << message);
+}
+
+int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVector,
+                              vtkInformationVector* outputVector) {
+  namespace of = faceplan::osteotomy_filter;
+  this->LastError.clear();
+  vtkDataSet* data = vtkDataSet::GetData(inputVector[0], 0);
+  vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);
+  vtkPolyData* planesOutput = vtkPolyData::GetData(outputVector, 1);
+  output->Initialize();
+  planesOutput->Initialize();
+  auto failed = [&](const faceplan::Status& s) {
+    if (!s)
+      this->Fail(s.message, outputVector);
+    return !s;
+  };
+
+  // Validate: the input, the planes, and that the cut leaves vertices on both sides.
+  if (failed(of::ValidateInput(data)))
+    return 1;
+  vtkPolyData* input = vtkPolyData::SafeDownCast(data);
+  std::vector<vtkImplicitFunction*> functions{this->CutPlane1};
+  if (this->UseSecondPlane)
+    functions.push_back(this->CutPlane2);
+  std::vector<faceplan::CutPlane> planes;
+  if (failed(of::ToCutPlanes(functions, planes)))
+    return 1;
+  faceplan::SurfaceMesh inputMesh;
+  std::string why;
+  if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly,
+                                           inputMesh, why)) {
+    this->Fail(why, outputVector);
+    return 1;
+  }
+  std::vector<std::uint8_t> inputSides;
+  if (failed(
+          faceplan::ClassifyCutSides(inputMesh.points, planes, this->InsideOut != 0, inputSides)))
+    return 1;
+
+  // Convert: split the bone with VTK's clipping, both sides capped, the bookkeeping interpolated.
+  std::vector<double> key{this->InsideOut ? 1.0 : 0.0};
+  for (const faceplan::CutPlane& p : planes) {
+    key.insert(key.end(), p.origin.data(), p.origin.data() + 3);
+    key.insert(key.end(), p.normal.data(), p.normal.data() + 3);
+  }
+  if (!this->Split.split || this->Split.input != input ||
+      this->Split.inputTime != input->GetMTime() || this->Split.key != key) {
+    this->Split.split = of::ClipIntoPieces(
+        of::BookkeepingBone(input), faceplan::ConvexPiecesOfCut(planes, this->InsideOut != 0),
+        this->Split.moves);
+    this->Split.input = input;
+    this->Split.inputTime = input->GetMTime();
+    this->Split.key = key;
+  }
+  vtkPolyData* split = this->Split.split;
+  faceplan::OsteotomyBone bone;
+  if (failed(of::ToOsteotomyBone(split, this->Split.moves, input->GetFieldData(), bone)))
+    return 1;
+  faceplan::OsteotomyMove move;
+  move.move.translation = Eigen::Vector3d(this->Translation);
+  move.move.rotationDegrees = Eigen::Vector3d(this->Rotation);
+  move.move.pivot = Eigen::Vector3d(this->Pivot);
+  move.pivotMode = this->PivotMode == CUSTOM_PIVOT ? faceplan::PivotMode::Custom
+                                                   : faceplan::PivotMode::SegmentCentroid;
+
+  // Core: move the segment, keep the bookkeeping.
+  faceplan::OsteotomyResult result;
+  if (failed(faceplan::MoveSegment(bone, move, result)))
+    return 1;
+  std::copy(result.pivot.data(), result.pivot.data() + 3, this->UsedPivot);
+
+  // Outputs.
+  of::BuildBoneOutput(result, split->GetPolys(), input->GetFieldData(), output);
+  std::array<double, 6> box;
+  input->GetBounds(box.data());
+  of::BuildCutPlaneOutput(planes, box, planesOutput);
+  return 1;
+}
+
+void vtkOsteotomy::PrintSelf(ostream& os, vtkIndent indent) {
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "CutPlane1: " << this->CutPlane1 << "\n";
+  os << indent << "CutPlane2: " << this->CutPlane2 << "\n";
+  os << indent << "UseSecondPlane: " << this->UseSecondPlane << "\n";
+  os << indent << "InsideOut: " << this->InsideOut << "\n";
+  os << indent << "Translation: " << this->Translation[0] << " " << this->Translation[1] << " "
+     << this->Translation[2] << "\n";
+  os << indent << "Rotation: " << this->Rotation[0] << " " << this->Rotation[1] << " "
+     << this->Rotation[2] << "\n";
+  os << indent << "PivotMode: " << (this->PivotMode == CUSTOM_PIVOT ? "Custom" : "SegmentCentroid")
+     << "\n";
+  os << indent << "Pivot: " << this->Pivot[0] << " " << this->Pivot[1] << " " << this->Pivot[2]
+     << "\n";
+}
