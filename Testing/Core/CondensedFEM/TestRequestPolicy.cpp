@@ -39,6 +39,12 @@ TEST(RequestIdentity, EveryOptionChangeGivesANewRequest) {
       [](PrecomputeRequest& r) { r.sets.kept.pop_back(); },
       [](PrecomputeRequest& r) { r.sets.movable.pop_back(); },
       [](PrecomputeRequest& r) { r.sets.constrained.push_back(r.sets.kept.front()); },
+      [](PrecomputeRequest& r) { r.sets.movableSegment.assign(r.sets.movable.size(), 1); },
+      [](PrecomputeRequest& r) { r.sets.sliding.push_back(r.sets.constrained.front()); },
+      [](PrecomputeRequest& r) {
+        r.sets.sliding.push_back(r.sets.constrained.front());
+        r.sets.slidingNormal.push_back(Eigen::Vector3d::UnitZ());
+      },
   };
   for (size_t k = 0; k < changes.size(); ++k) {
     PrecomputeRequest changed = base;
