@@ -2,6 +2,7 @@
 
 #include "CondensedFEM/PhysicalUnits.h"
 
+#include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
 #include "vtkDataSetSurfaceFilter.h"
@@ -10,6 +11,7 @@
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPolyData.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
 namespace faceplan {
@@ -58,6 +60,17 @@ TissueBoundary ExtractBoundary(vtkUnstructuredGrid* tissue) {
       boundary.surface->GetPointData()->GetArray(surface->GetOriginalPointIdsName()));
   for (vtkIdType k = 0; original && k < original->GetNumberOfTuples(); ++k)
     boundary.nodes.push_back(original->GetValue(k));
+  vtkPolyData* s = boundary.surface;
+  boundary.cellTypes = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  boundary.cellTypes->SetNumberOfValues(s->GetNumberOfCells());
+  boundary.cells = vtkSmartPointer<vtkCellArray>::New();
+  boundary.cells->AllocateExact(s->GetNumberOfCells(), 3 * s->GetNumberOfCells());
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < s->GetNumberOfCells(); ++c) {
+    boundary.cellTypes->SetValue(c, static_cast<unsigned char>(s->GetCellType(c)));
+    s->GetCellPoints(c, ids);
+    boundary.cells->InsertNextCell(ids);
+  }
   return boundary;
 }
 

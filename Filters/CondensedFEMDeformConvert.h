@@ -11,7 +11,9 @@
 
 #include <vector>
 
+class vtkCellArray;
 class vtkPolyData;
+class vtkUnsignedCharArray;
 class vtkUnstructuredGrid;
 
 namespace faceplan {
@@ -23,10 +25,13 @@ void ToTetMesh(vtkUnstructuredGrid* tissue, TetMesh& mesh);
 // UseCellMaterials is on), converted into the mesh's length unit by Core.
 Status ToMaterials(vtkUnstructuredGrid* tissue, const Settings& settings, Materials& materials);
 
-// The tissue's boundary triangles, with the tissue point id of each surface point.
+// The tissue's boundary triangles, with the tissue point id of each surface point, and its cells as
+// an unstructured grid's (types and cell array), built once and shared by every Surface output.
 struct TissueBoundary {
   vtkSmartPointer<vtkPolyData> surface;
   std::vector<vtkIdType> nodes;
+  vtkSmartPointer<vtkUnsignedCharArray> cellTypes;
+  vtkSmartPointer<vtkCellArray> cells;
 };
 TissueBoundary ExtractBoundary(vtkUnstructuredGrid* tissue);
 

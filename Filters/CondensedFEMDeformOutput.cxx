@@ -1,5 +1,6 @@
 #include "CondensedFEMDeformOutput.h"
 
+#include "vtkCellArray.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkIdList.h"
@@ -10,6 +11,7 @@
 #include "vtkPolyData.h"
 #include "vtkStringArray.h"
 #include "vtkTable.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
 namespace faceplan {
@@ -36,42 +38,37 @@ void AddString(vtkFieldData* fd, const char* name, const std::string& value) {
 void BuildDeformedTissue(vtkUnstructuredGrid* tissue, const TissueBoundary& boundary,
                          const Points& restPoints, const SolveOutcome& outcome, OutputMode mode,
                          vtkUnstructuredGrid* output) {
+  // The structure (cells, passed arrays) is shared with the tissue or with the cached boundary, so
+  // an update writes only the new points and Displacement.
   const SolveResult& result = outcome.result;
+  const bool volume = mode == OutputMode::Volume;
+  const vtkIdType n = volume ? tissue->GetNumberOfPoints() : boundary.surface->GetNumberOfPoints();
+  const Displacements& u = volume ? result.allDisplacement : result.keptDisplacement;
   vtkNew<vtkDoubleArray> displacement;
   displacement->SetName("Displacement");
   displacement->SetNumberOfComponents(3);
+  displacement->SetNumberOfTuples(n);
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->SetNumberOfComponents(3);
+  coordinates->SetNumberOfTuples(n);
+  double* d = displacement->GetPointer(0);
+  double* x = coordinates->GetPointer(0);
+  for (vtkIdType i = 0; i < n; ++i) {
+    // Surface: kept == boundary nodes, in the surface's point order.
+    const Eigen::Index rest = volume ? i : static_cast<Eigen::Index>(boundary.nodes[i]);
+    for (int c = 0; c < 3; ++c) {
+      d[3 * i + c] = u(i, c);
+      x[3 * i + c] = restPoints(rest, c) + u(i, c);
+    }
+  }
   vtkNew<vtkPoints> moved;
-  moved->SetDataTypeToDouble();
-  if (mode == OutputMode::Volume) {
-    const vtkIdType n = tissue->GetNumberOfPoints();
+  moved->SetData(coordinates);
+  if (volume) {
     output->ShallowCopy(tissue);
-    displacement->SetNumberOfTuples(n);
-    moved->SetNumberOfPoints(n);
-    for (vtkIdType i = 0; i < n; ++i) {
-      const Eigen::RowVector3d u = result.allDisplacement.row(i);
-      displacement->SetTuple3(i, u(0), u(1), u(2));
-      const Eigen::RowVector3d p = restPoints.row(i) + u;
-      moved->SetPoint(i, p(0), p(1), p(2));
-    }
   } else {
-    vtkPolyData* surface = boundary.surface;
-    const vtkIdType ns = surface->GetNumberOfPoints();
-    displacement->SetNumberOfTuples(ns);
-    moved->SetNumberOfPoints(ns);
-    for (vtkIdType k = 0; k < ns; ++k) { // kept == boundary nodes, in the surface's point order
-      const Eigen::RowVector3d u = result.keptDisplacement.row(k);
-      displacement->SetTuple3(k, u(0), u(1), u(2));
-      const Eigen::RowVector3d p = restPoints.row(boundary.nodes[k]) + u;
-      moved->SetPoint(k, p(0), p(1), p(2));
-    }
     output->Initialize();
-    output->GetPointData()->ShallowCopy(surface->GetPointData());
-    vtkNew<vtkIdList> ids;
-    output->Allocate(surface->GetNumberOfCells());
-    for (vtkIdType c = 0; c < surface->GetNumberOfCells(); ++c) {
-      surface->GetCellPoints(c, ids);
-      output->InsertNextCell(surface->GetCellType(c), ids);
-    }
+    output->SetCells(boundary.cellTypes, boundary.cells);
+    output->GetPointData()->ShallowCopy(boundary.surface->GetPointData());
   }
   output->SetPoints(moved);
   output->GetPointData()->AddArray(displacement);
@@ -108,12 +105,26 @@ void BuildStageTable(const SolveOutcome& outcome, vtkTable* table) {
   timeMs->SetName("TimeMs");
   vtkNew<vtkIntArray> reused;
   reused->SetName("Reused");
-  for (int k = 0; k < kNumStages; ++k) {
-    stage->InsertNextValue(StageName(static_cast<Stage>(k)));
-    timeMs->InsertNextValue(result.timings.stages[k].ms);
-    reused->InsertNextValue(result.timings.stages[k].reused ? 1 : 0);
+  auto addRow = [&](const char* name, double ms, bool wasReused) {
+    stage->InsertNextValue(name);
+    timeMs->InsertNextValue(ms);
+    reused->InsertNextValue(wasReused ? 1 : 0);
     backend->InsertNextValue(result.backend);
+  };
+  // Total is this update's time: the solve, plus the precompute when this update ran it.
+  // PrecomputeTotal is the (cached or fresh) precompute's own total.
+  double thisUpdateMs = result.timings[Stage::Total].ms;
+  if (outcome.freshPrecompute)
+    thisUpdateMs += outcome.precomputeMs;
+  for (int k = 0; k < kNumStages; ++k) {
+    const Stage s = static_cast<Stage>(k);
+    if (s == Stage::Total)
+      addRow(StageName(s), thisUpdateMs, false);
+    else
+      addRow(StageName(s), result.timings.stages[k].ms, result.timings.stages[k].reused);
   }
+  addRow("PrecomputeTotal", outcome.precomputeMs,
+         !outcome.freshPrecompute && outcome.precomputeMs > 0.0);
   table->AddColumn(stage);
   table->AddColumn(timeMs);
   table->AddColumn(reused);

@@ -10,7 +10,8 @@ class vtkUnstructuredGrid;
 namespace faceplan {
 namespace fem_filter {
 
-// Volume: the tissue's cells with moved points. Surface: the boundary triangles.
+// Volume: the tissue's cells with moved points. Surface: the boundary triangles. The cells are
+// shared with the tissue or the cached boundary; only points and Displacement are new.
 void BuildDeformedTissue(vtkUnstructuredGrid* tissue, const TissueBoundary& boundary,
                          const Points& restPoints, const SolveOutcome& outcome, OutputMode mode,
                          vtkUnstructuredGrid* output);
@@ -19,7 +20,9 @@ void BuildDeformedTissue(vtkUnstructuredGrid* tissue, const TissueBoundary& boun
 void AddFieldData(const SolveOutcome& outcome, const Settings& settings,
                   vtkUnstructuredGrid* output);
 
-// Stage, TimeMs, Reused, Backend: one row per stage, like the paper's Table 2.
+// Stage, TimeMs, Reused, Backend: one row per stage, like the paper's Table 2. `Total` is this
+// update's time (the precompute's stages when this update ran them, and the solve); a last row
+// `PrecomputeTotal` is the precompute's total, whether it ran now or was reused.
 void BuildStageTable(const SolveOutcome& outcome, vtkTable* table);
 
 } // namespace fem_filter

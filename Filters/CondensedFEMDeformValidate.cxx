@@ -167,5 +167,16 @@ Status ValidateBone(vtkPointSet* bone) {
   return Status::Ok();
 }
 
+Status ValidateBoneValues(vtkPointSet* bone) {
+  const vtkIdType bad = FirstNonFinitePoint(bone);
+  if (bad >= 0)
+    return Error("the bone's point ", bad, " has a NaN or infinite coordinate");
+  vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
+  if (!displacement)
+    return Error("the Bone input needs a 3-component point array named Displacement "
+                 "(connect the output of BezierCut or Osteotomy)");
+  return CheckArray(displacement, "Displacement", "point", bone->GetNumberOfPoints(), 3);
+}
+
 } // namespace fem_filter
 } // namespace faceplan

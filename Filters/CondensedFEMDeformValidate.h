@@ -15,6 +15,9 @@ namespace fem_filter {
 Status ValidateProperties(const Settings& settings);
 Status ValidateTissue(vtkUnstructuredGrid* tissue, const Settings& settings);
 Status ValidateBone(vtkPointSet* bone);
+// The part of ValidateBone that an edit can change (points and Displacement), for a bone whose
+// cells, point count and ROIMask passed ValidateBone before.
+Status ValidateBoneValues(vtkPointSet* bone);
 
 } // namespace fem_filter
 } // namespace faceplan

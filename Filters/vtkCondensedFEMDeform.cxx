@@ -2,6 +2,7 @@
 
 #include "CondensedFEMDeformContact.h"
 #include "CondensedFEMDeformConvert.h"
+#include "CondensedFEMDeformInputCache.h"
 #include "CondensedFEMDeformOutput.h"
 #include "CondensedFEMDeformSolver.h"
 #include "CondensedFEMDeformValidate.h"
@@ -20,12 +21,16 @@ vtkStandardNewMacro(vtkCondensedFEMDeform);
 
 using namespace faceplan::fem_filter;
 
-// What the filter keeps between updates: the converted tissue and its boundary, the contact map
-// and the solver with its cached precompute.
+// What the filter keeps between updates: the validated, converted tissue and its boundary, what
+// the bone looked like when the contact was built, the contact map, the precompute request made
+// from them, and the solver with its cached precompute.
 struct vtkCondensedFEMDeform::Cache {
-  faceplan::TetMesh mesh;
-  TissueBoundary boundary;
+  TissueCache tissue;
+  BoneCache bone;
   ContactCache contact;
+  faceplan::PrecomputeRequest request; // mesh, materials and node sets; options set by the solver
+  unsigned long requestTissue = 0;     // the tissue generation `request` was made from
+  bool requestValid = false;
   Solver solver;
 };
 
@@ -65,38 +70,32 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   Cache& cache = *this->State;
   const Settings settings = this->CurrentSettings();
 
-  // 1. validate: nothing below runs on malformed input.
+  // 1. validate and 2. convert: nothing below runs on malformed input. The tissue is validated and
+  // converted again only when it or the material properties changed, the bone's cells only when
+  // they changed (an edit changes its points and Displacement).
   faceplan::Status status = ValidateProperties(settings);
   if (status)
-    status = ValidateTissue(tissue, settings);
+    status = cache.tissue.update(tissue, settings);
   if (status)
-    status = ValidateBone(bone);
+    status = cache.bone.validate(bone);
   if (!status) {
+    cache.requestValid = false;
     vtkErrorMacro(<< status.message);
     return 1;
   }
-
-  // 2. convert
-  faceplan::PrecomputeRequest request;
-  ToTetMesh(tissue, request.mesh);
-  status = ToMaterials(tissue, settings, request.materials);
-  if (!status) {
-    vtkErrorMacro(<< status.message);
-    return 1;
-  }
-  if (!cache.boundary.surface || cache.mesh.points.rows() != request.mesh.points.rows() ||
-      cache.mesh.tets.rows() != request.mesh.tets.rows() ||
-      cache.mesh.points != request.mesh.points || cache.mesh.tets != request.mesh.tets) {
-    cache.boundary = ExtractBoundary(tissue);
-    cache.mesh = request.mesh;
-  }
+  const TissueBoundary& boundary = cache.tissue.boundary();
   this->UpdateProgress(0.05);
 
-  // 3. contact
-  status = cache.contact.update(tissue, cache.boundary.nodes, bone, settings.contactDistance);
-  if (!status) {
-    vtkErrorMacro(<< status.message);
-    return 1;
+  // 3. contact, rebuilt when the tissue, the distance, or the undeformed bone changed.
+  const unsigned long tissueGeneration = cache.tissue.generation();
+  if (!cache.bone.contactStillValid(bone, tissueGeneration, settings.contactDistance)) {
+    cache.requestValid = false;
+    status = cache.contact.update(tissue, boundary.nodes, bone, settings.contactDistance);
+    if (!status) {
+      vtkErrorMacro(<< status.message);
+      return 1;
+    }
+    cache.bone.contactBuilt(bone, tissueGeneration, settings.contactDistance);
   }
   const ContactMap& contact = cache.contact.map();
   if (contact.tiedNodes.empty()) {
@@ -106,7 +105,15 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
                      "bone share one frame and unit");
     return 1;
   }
-  request.sets = MakeNodeSets(contact, cache.boundary.nodes);
+  if (!cache.requestValid || cache.requestTissue != tissueGeneration) {
+    cache.request = faceplan::PrecomputeRequest();
+    cache.request.mesh = cache.tissue.mesh();
+    cache.request.materials = cache.tissue.materials();
+    cache.request.sets = MakeNodeSets(contact, boundary.nodes);
+    cache.requestTissue = tissueGeneration;
+    cache.requestValid = true;
+  }
+  const faceplan::PrecomputeRequest& request = cache.request;
   faceplan::SolveInput input;
   input.movableDisplacement =
       MovableDisplacements(contact, bone->GetPointData()->GetArray("Displacement"));
@@ -128,8 +135,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   this->UpdateProgress(0.95);
 
   // 5. build output
-  BuildDeformedTissue(tissue, cache.boundary, request.mesh.points, outcome, settings.output(),
-                      output);
+  BuildDeformedTissue(tissue, boundary, request.mesh.points, outcome, settings.output(), output);
   AddFieldData(outcome, settings, output);
   BuildStageTable(outcome, table);
   this->UpdateProgress(1.0);

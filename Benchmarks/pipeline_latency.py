@@ -1,0 +1,163 @@
+"""Edit latency through the ParaView pipeline (pvpython, CPU backend).
+
+Two scenes: the Badin face (ROIExtract -> BezierCut -> CondensedFEMDeform, scripts/faceplan_pipeline)
+and the ~100k-tetrahedron face-like shell of faceplan_benchmark (exported by export_shell_scene; its
+inner sphere is the bone, cut by a Bezier plane over a polar ROI cap). After the first update each
+edit moves the cut's control points a little, so only the bone's Displacement changes; per edit it
+times BezierCut's update and CondensedFEMDeform's update (wall clock around UpdatePipeline) and reads
+SolveTimeMs from CondensedFEMDeform's output. Prints medians and writes them as JSON.
+
+  pvpython Benchmarks/pipeline_latency.py --plugin FacePlan.so --data Data \
+      --shell-scene shell.vtk [--edits 30] [--json out.json]
+"""
+import argparse
+import json
+import os
+import statistics
+import sys
+import time
+
+from paraview import simple
+from vtkmodules.vtkFiltersCore import vtkThreshold
+from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter, vtkGeometryFilter
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+
+
+def field(proxy, name):
+    out = proxy.GetClientSideObject().GetOutputDataObject(0)
+    array = out.GetFieldData().GetArray(name)
+    return array.GetValue(0) if array is not None else float("nan")
+
+
+def precompute_count(fem):
+    fem.UpdatePropertyInformation()
+    return fem.GetPropertyValue("PrecomputeCount")
+
+
+def run_edits(name, cut, fem, curves, edits):
+    """curves(k) -> (CurveU, CurveV) of edit k; edit 0 is the first (precomputing) update."""
+    cut.CurveU, cut.CurveV = curves(0)
+    cut.UpdatePipeline()
+    start = time.perf_counter()
+    fem.UpdatePipeline()
+    first_ms = 1e3 * (time.perf_counter() - start)
+    if fem.GetClientSideObject().GetOutputDataObject(0).GetNumberOfPoints() == 0:
+        raise RuntimeError(name + ": CondensedFEMDeform produced no output")
+    precomputes = precompute_count(fem)
+    cut_ms, fem_ms, solve_ms = [], [], []
+    for k in range(1, edits + 1):
+        cut.CurveU, cut.CurveV = curves(k)
+        t0 = time.perf_counter()
+        cut.UpdatePipeline()
+        t1 = time.perf_counter()
+        fem.UpdatePipeline()
+        t2 = time.perf_counter()
+        cut_ms.append(1e3 * (t1 - t0))
+        fem_ms.append(1e3 * (t2 - t1))
+        solve_ms.append(field(fem, "SolveTimeMs"))
+    if precompute_count(fem) != precomputes:
+        raise RuntimeError(name + ": an edit of the cut started a new precompute")
+    overhead = [f - s for f, s in zip(fem_ms, solve_ms)]
+    whole = [c + f for c, f in zip(cut_ms, fem_ms)]
+    med = statistics.median
+    result = {
+        "scene": name,
+        "tissue_cells": fem.GetClientSideObject().GetInputDataObject(0, 0).GetNumberOfCells(),
+        "output_points": fem.GetClientSideObject().GetOutputDataObject(0).GetNumberOfPoints(),
+        "first_update_ms": first_ms,
+        "edits": edits,
+        "fem_update_ms_median": med(fem_ms),
+        "fem_update_ms_p90": sorted(fem_ms)[int(0.9 * (len(fem_ms) - 1))],
+        "solve_ms_median": med(solve_ms),
+        "overhead_ms_median": med(overhead),
+        "cut_update_ms_median": med(cut_ms),
+        "whole_edit_ms_median": med(whole),
+    }
+    print("%-28s tets %7d  first %8.1f ms | per edit (median of %d): CondensedFEMDeform %6.2f ms "
+          "(p90 %6.2f), SolveTimeMs %6.2f, overhead %5.2f; BezierCut %6.2f; whole edit %6.2f ms"
+          % (name, result["tissue_cells"], first_ms, edits, result["fem_update_ms_median"],
+             result["fem_update_ms_p90"], result["solve_ms_median"],
+             result["overhead_ms_median"], result["cut_update_ms_median"],
+             result["whole_edit_ms_median"]))
+    return result
+
+
+def face_scene(data, edits, output_mode):
+    import faceplan_pipeline as fp
+    tissue, mandible, roi, cut, fem = fp.build(data)
+    fem.Backend = "CPU"
+    fem.OutputMode = output_mode
+
+    def curves(k):
+        dz = 0.25 * ((k * 7) % 9 - 4) / 4.0  # -0.25 .. 0.25 mm, a different cut each edit
+        u = [c + (dz if i % 3 == 2 else 0.0) for i, c in enumerate(fp.CURVE_U)]
+        v = [c + (dz if i % 3 == 2 else 0.0) for i, c in enumerate(fp.CURVE_V)]
+        return u, v
+
+    result = run_edits("face (%s output)" % output_mode, cut, fem, curves, edits)
+    for p in (fem, cut, roi, mandible, tissue):
+        simple.Delete(p)
+    return result
+
+
+def shell_scene(path, edits, output_mode):
+    tissue = simple.LegacyVTKReader(FileNames=[path])
+    tissue.UpdatePipeline()
+    grid = tissue.GetClientSideObject().GetOutputDataObject(0)
+    # The bone: the tissue's boundary triangles on the inner sphere (Layer 0).
+    surface = vtkDataSetSurfaceFilter()
+    surface.SetInputData(grid)
+    inner = vtkThreshold()
+    inner.SetInputConnection(surface.GetOutputPort())
+    inner.SetInputArrayToProcess(0, 0, 0, 0, "Layer")
+    inner.SetLowerThreshold(0)
+    inner.SetUpperThreshold(0)
+    inner.SetAllScalars(True)
+    to_poly = vtkGeometryFilter()
+    to_poly.SetInputConnection(inner.GetOutputPort())
+    to_poly.Update()
+    bone = simple.TrivialProducer()
+    bone.GetClientSideObject().SetOutput(to_poly.GetOutput())
+    roi = simple.ROIExtract(Input=bone)
+    roi.Region = "Sphere"
+    roi.Region.Center = [0.0, 0.0, 80.0]  # the inner sphere's pole (radius 80 mm)
+    roi.Region.Radius = 50.0
+    cut = simple.BezierCut(Input=roi)
+    fem = simple.CondensedFEMDeform(Input=tissue, Bone=cut)
+    fem.Backend = "CPU"
+    fem.OutputMode = output_mode
+    fem.ContactDistance = 0.5
+
+    def curves(k):
+        z = 75.0 + 0.25 * ((k * 7) % 9 - 4) / 4.0  # a plane cutting the pole's cap
+        u = [-70, -70, z, -23, -70, z, 23, -70, z, 70, -70, z]
+        v = [-70, -70, z, -70, -23, z, -70, 23, z, -70, 70, z]
+        return u, v
+
+    result = run_edits("shell ~100k (%s output)" % output_mode, cut, fem, curves, edits)
+    for p in (fem, cut, roi, bone, tissue):
+        simple.Delete(p)
+    return result
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--plugin", required=True)
+    parser.add_argument("--data", required=True)
+    parser.add_argument("--shell-scene", help="export_shell_scene's .vtk (the ~100k scene)")
+    parser.add_argument("--edits", type=int, default=30)
+    parser.add_argument("--json")
+    args = parser.parse_args()
+    simple.LoadPlugin(args.plugin)  # into paraview.simple, where faceplan_pipeline finds the filters
+    results = [face_scene(args.data, args.edits, "Volume"),
+               face_scene(args.data, args.edits, "Surface")]
+    if args.shell_scene:
+        results.append(shell_scene(args.shell_scene, args.edits, "Surface"))
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(results, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()

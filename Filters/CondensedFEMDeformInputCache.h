@@ -1,0 +1,100 @@
+#pragma once
+// What changed in CondensedFEMDeform's inputs since the last update, so that an edit (a new bone
+// Displacement on the same tissue, bone surface and ROI) redoes only the per-edit work.
+//
+// Each input is first identified by VTK modification times: the data object's (which covers its
+// points and point/cell arrays) and those of its cell arrays and their storage (which
+// vtkDataObject::GetMTime leaves out). While they are unchanged the last validation and conversion
+// stand. When they change (a re-executed upstream filter, a copied or gathered data set) the
+// content is validated, converted and compared with the cached one before anything downstream is
+// rebuilt: an unchanged tissue keeps its precompute, a changed mesh or material always gets a new
+// one. Private to FacePlan::Filters.
+#include "CondensedFEMDeformConvert.h"
+#include "CondensedFEMDeformSettings.h"
+
+#include "Common/Status.h"
+#include "Mesh/TetMesh.h"
+
+#include "vtkType.h"
+
+#include <vector>
+
+class vtkPointSet;
+class vtkUnstructuredGrid;
+
+namespace faceplan {
+namespace fem_filter {
+
+// A data set's identity and modification times; equal stamps mean equal content as long as
+// whoever changes the data calls Modified() (VTK's contract).
+struct DataStamp {
+  const void* object = nullptr;
+  std::vector<const void*> arrays;
+  std::vector<vtkMTimeType> times;
+  bool operator==(const DataStamp& other) const {
+    return object == other.object && arrays == other.arrays && times == other.times;
+  }
+  bool operator!=(const DataStamp& other) const { return !(*this == other); }
+};
+
+// Everything: the data object with its points and arrays, and its cells.
+DataStamp StampOf(vtkPointSet* data);
+
+// The tissue validated and converted (mesh, materials, boundary), redone only when it or the
+// material properties changed. `generation` counts content changes: it stays the same when a new
+// stamp carries the same mesh and materials.
+class TissueCache {
+public:
+  Status update(vtkUnstructuredGrid* tissue, const Settings& settings);
+  const TetMesh& mesh() const { return mesh_; }
+  const Materials& materials() const { return materials_; }
+  const TissueBoundary& boundary() const { return boundary_; }
+  unsigned long generation() const { return generation_; }
+
+private:
+  struct MaterialSettings {
+    double youngsModulus, poissonRatio, density, lengthUnit;
+    bool useCellMaterials;
+    bool operator==(const MaterialSettings& o) const {
+      return youngsModulus == o.youngsModulus && poissonRatio == o.poissonRatio &&
+             density == o.density && lengthUnit == o.lengthUnit &&
+             useCellMaterials == o.useCellMaterials;
+    }
+  };
+  bool valid_ = false;
+  DataStamp stamp_;
+  MaterialSettings materialSettings_{};
+  TetMesh mesh_;
+  Materials materials_;
+  TissueBoundary boundary_;
+  unsigned long generation_ = 0;
+};
+
+// The bone's per-edit check: its cells and ROIMask (by stamp), and its undeformed points (points
+// minus Displacement, compared by value because an edit makes a new bone whose points and
+// Displacement both move). Validation runs in full when its structure changed, else only on the
+// values an edit changes.
+class BoneCache {
+public:
+  Status validate(vtkPointSet* bone);
+  // Whether the contact built for this bone still holds: same tissue content, distance, bone cells,
+  // ROIMask and undeformed points as at the last call of `contactBuilt`.
+  bool contactStillValid(vtkPointSet* bone, unsigned long tissueGeneration, double contactDistance);
+  void contactBuilt(vtkPointSet* bone, unsigned long tissueGeneration, double contactDistance);
+
+private:
+  static DataStamp StructureStampOf(vtkPointSet* bone);
+  static void UndeformedPoints(vtkPointSet* bone, std::vector<double>& points);
+
+  bool validated_ = false;
+  DataStamp validatedStructure_;
+
+  bool haveContact_ = false;
+  DataStamp contactStructure_;
+  unsigned long contactTissue_ = 0;
+  double contactDistance_ = -1.0;
+  std::vector<double> contactUndeformed_, scratch_;
+};
+
+} // namespace fem_filter
+} // namespace faceplan
