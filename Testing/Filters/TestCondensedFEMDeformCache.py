@@ -1,0 +1,158 @@
+"""CondensedFEMDeform's per-edit caches (pvpython, headless): an edit of the cut re-solves without a
+new precompute and equals a fresh filter's result; a tissue with the same content under a new
+modification time keeps the precompute; a changed mesh (new data set, or moved in place with
+Modified()), ROI, material property or material cell array always gets a new precompute.
+argv[1] is the plugin, argv[2] the Data folder.
+"""
+import sys
+
+import numpy as np
+from paraview.simple import *
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
+
+from faceplan_test_util import check, fetch, finish, producer
+
+LoadPlugin(sys.argv[1], ns=globals())
+data = sys.argv[2]
+
+reader = XMLUnstructuredGridReader(FileName=[data + "/face/face_tissue.vtu"])
+original = vtkUnstructuredGrid()
+original.DeepCopy(fetch(reader))
+grid = vtkUnstructuredGrid()
+grid.DeepCopy(original)
+tissue = producer(grid)
+mandible = XMLPolyDataReader(FileName=[data + "/face/mandible.vtp"])
+roi = ROIExtract(Input=mandible)
+roi.Region = "Sphere"
+roi.Region.Center = [70.0, 0.0, 58.0]
+roi.Region.Radius = 22.0
+cut = BezierCut(Input=roi)
+Z = 60.0
+
+
+def curves(dz):
+    z = Z + dz
+    return ([40, -30, z, 60, -30, z - 0.5, 80, -30, z - 0.5, 100, -30, z],
+            [40, -30, z, 40, -10, z + 0.5, 40, 10, z + 0.5, 40, 30, z])
+
+
+cut.CurveU, cut.CurveV = curves(0.0)
+cut.FlipNormal = 1
+fem = CondensedFEMDeform(Input=tissue, Bone=cut)
+fem.OutputMode = "Surface"
+fem.Backend = "CPU"
+
+
+def count():
+    fem.UpdatePropertyInformation()
+    return fem.GetPropertyValue("PrecomputeCount")
+
+
+def displacement(proxy):
+    return vtk_to_numpy(fetch(proxy).GetPointData().GetArray("Displacement")).copy()
+
+
+def stages():
+    table = fem.GetClientSideObject().GetOutputDataObject(1)
+    return {table.GetValue(r, 0).ToString(): (table.GetValue(r, 1).ToDouble(), table.GetValue(r, 2).ToInt())
+            for r in range(table.GetNumberOfRows())}
+
+
+def updated_count():
+    fem.UpdatePipeline()
+    return count()
+
+
+n0 = updated_count()
+check(n0 == 1, "the first update precomputes once (%d)" % n0)
+u0 = displacement(fem)
+first = stages()
+precompute_rows = sum(first[s][0] for s in ("Reordering", "ElementStiffness", "Assembly", "Separation",
+                                            "Condensation", "Factorization"))
+check(first["PrecomputeTotal"][1] == 0 and first["PrecomputeTotal"][0] >= precompute_rows * 0.99,
+      "PrecomputeTotal is the fresh precompute's total")
+check(first["Total"][0] >= first["PrecomputeTotal"][0] + first["Solve"][0] - 1e-9,
+      "the first update's Total holds the precompute and the solve")
+
+# Edits of the cut: no new precompute, and the result equals a fresh filter on the same inputs.
+for k, dz in enumerate((0.3, -0.2, 0.5)):
+    cut.CurveU, cut.CurveV = curves(dz)
+    check(updated_count() == n0, "edit %d starts no new precompute" % k)
+edit = stages()
+check(edit["PrecomputeTotal"][1] == 1 and abs(edit["PrecomputeTotal"][0] - first["PrecomputeTotal"][0]) < 1e-9,
+      "an edit's PrecomputeTotal is the reused precompute's")
+check(edit["Total"][0] < edit["PrecomputeTotal"][0], "an edit's Total is the solve alone")
+u_edit = displacement(fem)
+check(np.abs(u_edit - u0).max() > 1e-3, "the edits changed the result")
+fresh = CondensedFEMDeform(Input=tissue, Bone=cut, OutputMode="Surface", Backend="CPU")
+fresh.UpdatePipeline()
+u_fresh = displacement(fresh)
+check(u_fresh.shape == u_edit.shape and np.abs(u_edit - u_fresh).max() <= 1e-10 * np.abs(u_fresh).max(),
+      "the edited result equals a fresh filter's")
+Delete(fresh)
+
+# The same content under a new modification time (a re-executed source): no new precompute.
+same = vtkUnstructuredGrid()
+same.DeepCopy(original)
+tissue.GetClientSideObject().SetOutput(same)
+tissue.MarkModified(tissue)
+check(updated_count() == n0, "a copy of the same tissue starts no new precompute")
+check(np.abs(displacement(fem) - u_edit).max() <= 1e-12 * np.abs(u_edit).max(),
+      "a copy of the same tissue gives the same result")
+
+# A changed mesh, as a new data set: a new precompute.
+moved = vtkUnstructuredGrid()
+moved.DeepCopy(original)
+pts = vtk_to_numpy(moved.GetPoints().GetData())
+far = np.argmax(pts[:, 2])  # a point far from the chin
+pts[far, 2] += 0.5
+moved.GetPoints().GetData().Modified()
+tissue.GetClientSideObject().SetOutput(moved)
+tissue.MarkModified(tissue)
+n1 = updated_count()
+check(n1 == n0 + 1, "a moved tissue point (new data set) starts a new precompute (%d -> %d)" % (n0, n1))
+
+# A changed mesh in place, the same data object with its points marked modified: a new precompute.
+pts = vtk_to_numpy(moved.GetPoints().GetData())
+pts[far, 2] -= 0.25
+moved.GetPoints().GetData().Modified()
+tissue.MarkModified(tissue)
+n2 = updated_count()
+check(n2 == n1 + 1, "a tissue point moved in place starts a new precompute (%d -> %d)" % (n1, n2))
+
+# A changed ROI: new contact (movable nodes), a new precompute.
+roi.Region.Radius = 18.0
+n3 = updated_count()
+check(n3 == n2 + 1, "a smaller ROI starts a new precompute (%d -> %d)" % (n2, n3))
+
+# A changed material property: a new precompute.
+fem.YoungsModulus = 20000.0
+n4 = updated_count()
+check(n4 == n3 + 1, "a new YoungsModulus starts a new precompute (%d -> %d)" % (n3, n4))
+
+# A per-cell material array changed in place and marked modified: a new precompute.
+modulus = np.full(moved.GetNumberOfCells(), 15000.0)
+array = numpy_to_vtk(modulus, deep=1)
+array.SetName("YoungsModulus")
+moved.GetCellData().AddArray(array)
+tissue.MarkModified(tissue)
+n5 = updated_count()
+check(n5 == n4 + 1, "a YoungsModulus cell array starts a new precompute (%d -> %d)" % (n4, n5))
+values = vtk_to_numpy(array)
+values[: len(values) // 2] = 30000.0
+array.Modified()
+tissue.MarkModified(tissue)
+n6 = updated_count()
+check(n6 == n5 + 1, "YoungsModulus values changed in place start a new precompute (%d -> %d)" % (n5, n6))
+u_stiff = displacement(fem)
+fresh = CondensedFEMDeform(Input=tissue, Bone=cut, OutputMode="Surface", Backend="CPU")
+fresh.UpdatePipeline()
+check(np.abs(u_stiff - displacement(fresh)).max() <= 1e-10 * np.abs(u_stiff).max(),
+      "after the changes the result equals a fresh filter's")
+
+# After a changed input an edit again reuses the new precompute.
+cut.CurveU, cut.CurveV = curves(0.1)
+check(updated_count() == n6, "an edit after the changes starts no new precompute")
+
+finish("TestCondensedFEMDeformCache")
