@@ -1,6 +1,7 @@
 #include "vtkBezierCut.h"
 
 #include "BezierCut/BezierCut.h"
+#include "BezierCut/DefaultCurves.h"
 #include "FacePlanVTKConvert.h"
 
 #include <vtkCellArray.h>
@@ -52,19 +53,39 @@ std::vector<Eigen::Vector3d> ToCurve(const std::vector<double>& c) {
 vtkBezierCut::vtkBezierCut() {
   this->SetNumberOfInputPorts(1);
   this->SetNumberOfOutputPorts(2);
-  // A unit square in z = 0 until the caller (or the GUI's defaults) places the curves.
-  const double u[12] = {-0.5, -0.5, 0, -1.0 / 6, -0.5, 0, 1.0 / 6, -0.5, 0, 0.5, -0.5, 0};
-  const double v[12] = {-0.5, -0.5, 0, -0.5, -1.0 / 6, 0, -0.5, 1.0 / 6, 0, -0.5, 0.5, 0};
+  // A unit square in z = 0; until the user places the curves RequestData replaces it with a patch
+  // over the input's ROI (DefaultCutCurves). The values are Plugin/BezierCut.xml's default_values
+  // digit for digit, so that the GUI's initial push of them does not count as placing the curves.
+  const double u[12] = {-0.5, -0.5, 0, -0.1666667, -0.5, 0, 0.1666667, -0.5, 0, 0.5, -0.5, 0};
+  const double v[12] = {-0.5, -0.5, 0, -0.5, -0.1666667, 0, -0.5, 0.1666667, 0, -0.5, 0.5, 0};
   this->CurveU.assign(u, u + 12);
   this->CurveV.assign(v, v + 12);
 }
 
 vtkBezierCut::~vtkBezierCut() = default;
 
-void vtkBezierCut::SetNumberOfCurveUPoints(vtkIdType n) { Resize(this->CurveU, n, this); }
-void vtkBezierCut::SetNumberOfCurveVPoints(vtkIdType n) { Resize(this->CurveV, n, this); }
-void vtkBezierCut::SetCurveUPoint(vtkIdType i, double x, double y, double z) { SetPoint(this->CurveU, i, x, y, z, this); }
-void vtkBezierCut::SetCurveVPoint(vtkIdType i, double x, double y, double z) { SetPoint(this->CurveV, i, x, y, z, this); }
+// A control point set to a value other than the current one counts as placed by the user; the
+// GUI's initial push of the XML defaults (equal to the constructor's) does not.
+void vtkBezierCut::SetNumberOfCurveUPoints(vtkIdType n) {
+  const auto before = this->GetMTime();
+  Resize(this->CurveU, n, this);
+  this->CurvesPlaced = this->CurvesPlaced || this->GetMTime() != before;
+}
+void vtkBezierCut::SetNumberOfCurveVPoints(vtkIdType n) {
+  const auto before = this->GetMTime();
+  Resize(this->CurveV, n, this);
+  this->CurvesPlaced = this->CurvesPlaced || this->GetMTime() != before;
+}
+void vtkBezierCut::SetCurveUPoint(vtkIdType i, double x, double y, double z) {
+  const auto before = this->GetMTime();
+  SetPoint(this->CurveU, i, x, y, z, this);
+  this->CurvesPlaced = this->CurvesPlaced || this->GetMTime() != before;
+}
+void vtkBezierCut::SetCurveVPoint(vtkIdType i, double x, double y, double z) {
+  const auto before = this->GetMTime();
+  SetPoint(this->CurveV, i, x, y, z, this);
+  this->CurvesPlaced = this->CurvesPlaced || this->GetMTime() != before;
+}
 void vtkBezierCut::GetCurveUPoint(vtkIdType i, double p[3]) const { GetPoint(this->CurveU, i, p); }
 void vtkBezierCut::GetCurveVPoint(vtkIdType i, double p[3]) const { GetPoint(this->CurveV, i, p); }
 
@@ -140,6 +161,19 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   for (vtkIdType i = 0; i < n; ++i) {
     mask[static_cast<std::size_t>(i)] = maskArray->GetComponent(i, 0) != 0.0;
     boundary[static_cast<std::size_t>(i)] = boundaryArray->GetComponent(i, 0) != 0.0;
+  }
+  if (!this->CurvesPlaced) {
+    std::vector<Eigen::Vector3d> u, v;
+    if (faceplan::DefaultCutCurves(mesh.points, mask, boundary, u, v)) {
+      // Kept without Modified(): they follow the input until the user sets control points.
+      this->CurveU.clear();
+      this->CurveV.clear();
+      for (int k = 0; k < 4; ++k)
+        for (int c = 0; c < 3; ++c) {
+          this->CurveU.push_back(u[k][c]);
+          this->CurveV.push_back(v[k][c]);
+        }
+    }
   }
   faceplan::BezierCutOptions options;
   options.operation = this->Operation == FILL ? faceplan::CutOperation::Fill : faceplan::CutOperation::Cut;

@@ -36,7 +36,11 @@ public:
   enum OperationType { CUT = 0, FILL = 1 };
 
   ///@{
-  /// Control points of CurveU (3k+1 points).
+  /// Control points of CurveU (3k+1 points). Until a control point of either curve is set to a new
+  /// value, the filter places both curves itself: a flat patch over the bounding box of the input's
+  /// ROI (ROIMask != 0; the whole input when it selects nothing), normal to the box's shortest axis
+  /// and three quarters of the way along it, so that a new cut meets the bone. The Get methods
+  /// report the curves of the last run.
   void SetNumberOfCurveUPoints(vtkIdType n);
   vtkIdType GetNumberOfCurveUPoints() const { return static_cast<vtkIdType>(this->CurveU.size() / 3); }
   void SetCurveUPoint(vtkIdType i, double x, double y, double z);
@@ -85,6 +89,7 @@ protected:
   vtkTypeBool FlipNormal = false;
   int SurfaceResolution = 16;
   std::string LastError;
+  bool CurvesPlaced = false; // by the user; until then RequestData places them over the ROI
 
 private:
   vtkBezierCut(const vtkBezierCut&) = delete;

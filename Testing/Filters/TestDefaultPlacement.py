@@ -1,0 +1,71 @@
+"""Filters that start where the anatomy is (pvpython, headless): ROIExtract's region starts on the
+input's bounds, and a Bezier Cut whose control points were never set places them over the ROI, so a
+default-constructed cut on the face's mandible cuts something; control points set by the user win.
+argv[1] is the plugin, argv[2] the Data folder.
+"""
+import sys
+
+import numpy as np
+from paraview.simple import *
+from vtkmodules.util.numpy_support import vtk_to_numpy
+
+from faceplan_test_util import check, fetch, finish
+
+LoadPlugin(sys.argv[1], ns=globals())
+data = sys.argv[2]
+
+mandible = XMLPolyDataReader(FileName=[data + "/face/mandible.vtp"])
+mandible.UpdatePipeline()
+b = mandible.GetDataInformation().GetBounds()
+centre = [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2]
+
+roi = ROIExtract(Input=mandible)
+check(np.allclose(roi.Region.Center, centre), "the default sphere region is centred on the input")
+check(roi.Region.Radius > 0.25 * max(b[1] - b[0], b[3] - b[2], b[5] - b[4]),
+      "the default sphere region spans the input")
+roi.Region = "Box"
+check(np.allclose(roi.Region.Position, [b[0], b[2], b[4]]) and
+      np.allclose(roi.Region.Length, [b[1] - b[0], b[3] - b[2], b[5] - b[4]]),
+      "the default box region is the input's bounding box")
+
+
+def moved(cut):
+    cut.UpdatePipeline()
+    out = fetch(cut)
+    if out.GetNumberOfPoints() == 0:
+        return 0, 0.0
+    u = vtk_to_numpy(out.GetPointData().GetArray("Displacement"))
+    return int(np.count_nonzero(np.linalg.norm(u, axis=1) > 0)), float(np.linalg.norm(u, axis=1).max())
+
+
+def roi_box(source):
+    out = fetch(source)
+    p = vtk_to_numpy(out.GetPoints().GetData())
+    m = vtk_to_numpy(out.GetPointData().GetArray("ROIMask")) != 0
+    return p[m].min(axis=0), p[m].max(axis=0)
+
+
+for region in ("Sphere", "Chin", "Box"):
+    roi.Region = "Box" if region == "Box" else "Sphere"
+    if region == "Chin":  # as in the main pipeline
+        roi.Region.Center = [70.0, 0.0, 58.0]
+        roi.Region.Radius = 22.0
+    cut = BezierCut(Input=roi)
+    n, largest = moved(cut)
+    print("default cut on the %s ROI: %d points moved, largest %.2f mm" % (region, n, largest))
+    check(n > 0 and largest > 0.0, "a default Bezier Cut on the %s ROI cuts something (%d points moved, "
+          "largest %.2f mm)" % (region, n, largest))
+    lo, hi = roi_box(roi)
+    u = np.array(cut.GetClientSideObject().GetOutputDataObject(1).GetBounds()).reshape(3, 2)
+    check(np.all(u[:, 0] <= hi + 1e-9) and np.all(u[:, 1] >= lo - 1e-9),
+          "the default operative surface lies over the %s ROI" % region)
+    Delete(cut)
+
+# Control points set by the user are kept: a patch far from the bone cuts nothing.
+cut = BezierCut(Input=roi)
+cut.CurveU = [500, 500, 500, 501, 500, 500, 502, 500, 500, 503, 500, 500]
+cut.CurveV = [500, 500, 500, 500, 501, 500, 500, 502, 500, 500, 503, 500]
+n, _ = moved(cut)
+check(n == 0, "control points set by the user are used (a patch away from the bone moves nothing)")
+
+finish("TestDefaultPlacement")
