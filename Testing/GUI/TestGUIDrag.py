@@ -1,0 +1,106 @@
+"""Runs inside the real ParaView GUI (`paraview --script=TestGUIDrag.py`), started by
+run_gui_test.py --script TestGUIDrag.py (inputs in the environment as for TestGUIUndoRedo.py).
+
+Dragging a Bezier Cut control point, as the GUI does it with Auto Apply on: each move of a handle
+sets the CurveU property (the handle widget is linked to it), Apply brings the pipeline up to date
+and the render view redraws. The script builds the face pipeline (CondensedFEMDeform with Surface
+output, the interactive setting), shows bone, operative surface and face, then makes 12 moves of
+control point 1 of CurveU and records, for each, the frame time: from setting the property to the
+end of the render (BezierCut + CondensedFEMDeform updates + the render in the GUI's view).
+Checks: every move changes the face, no move starts a new precompute. The frame times go into the
+result's info (the wrapper prints them; BENCHMARKS.md records them); they are not checked, since a
+test must not depend on the machine's speed.
+"""
+import json
+import os
+import statistics
+import sys
+import time
+import traceback
+
+result = {"checks": [], "failures": [], "error": None, "info": {}}
+
+
+def check(cond, what):
+    result["checks"].append(what)
+    if not cond:
+        result["failures"].append(what)
+    return bool(cond)
+
+
+def write_result():
+    path = os.environ.get("FACEPLAN_GUI_RESULT", "faceplan_gui_result.json")
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(result, f, indent=1)
+    os.replace(tmp, path)  # the wrapper polls for the file: never let it see half of it
+
+
+try:
+    import numpy as np
+    from paraview import simple
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    sys.path.insert(0, os.environ["FACEPLAN_GUI_SCRIPTS"])
+    import faceplan_pipeline
+
+    simple.LoadPlugin(os.environ["FACEPLAN_GUI_PLUGIN"])  # into paraview.simple
+    tissue, mandible, roi, cut, fem = faceplan_pipeline.build(os.environ["FACEPLAN_GUI_DATA"])
+    fem.OutputMode = "Surface"
+    fem.Backend = "CPU"
+
+    view = simple.GetActiveViewOrCreate("RenderView")
+    face = simple.Show(simple.OutputPort(fem, 0), view)
+    simple.ColorBy(face, ("POINTS", "Displacement", "Magnitude"))
+    # Opaque surfaces: translucency means depth peeling, several passes per frame in software.
+    bone = simple.Show(simple.OutputPort(cut, 0), view)
+    surface = simple.Show(simple.OutputPort(cut, 1), view)
+    view.CameraFocalPoint = [85.0, 0.0, 92.0]
+    view.CameraPosition = [-260.0, -250.0, 10.0]
+    view.CameraViewUp = [0.0, 0.0, 1.0]
+    simple.Render(view)
+
+    def face_displacement():
+        out = fem.GetClientSideObject().GetOutputDataObject(0)
+        return vtk_to_numpy(out.GetPointData().GetArray("Displacement")).copy()
+
+    def precomputes():
+        fem.UpdatePropertyInformation()
+        return fem.GetPropertyValue("PrecomputeCount")
+
+    start = time.perf_counter()
+    fem.UpdatePipeline()
+    simple.Render(view)
+    result["info"]["first_update_s"] = time.perf_counter() - start
+    before = precomputes()
+    previous = face_displacement()
+    curve = list(cut.CurveU)
+    frames_ms, update_ms, changed = [], [], []
+    moves = 12
+    for k in range(1, moves + 1):
+        curve[5] = faceplan_pipeline.CUT_Z - 0.5 - 0.25 * k  # control point 1 dragged down
+        t0 = time.perf_counter()
+        cut.CurveU = curve
+        fem.UpdatePipeline()  # Apply, as Auto Apply does: the shown outputs update, then draw
+        t1 = time.perf_counter()
+        simple.Render(view)
+        frames_ms.append(1e3 * (time.perf_counter() - t0))
+        update_ms.append(1e3 * (t1 - t0))
+        current = face_displacement()
+        changed.append(current.shape == previous.shape and float(np.abs(current - previous).max()) > 1e-4)
+        previous = current
+    check(len(frames_ms) >= 10, "at least 10 widget moves (%d)" % len(frames_ms))
+    check(all(changed), "every move changes the face (%d of %d)" % (sum(changed), len(changed)))
+    check(precomputes() == before, "no move starts a new precompute")
+    median = statistics.median(frames_ms)
+    result["info"]["frame_ms"] = [round(t, 2) for t in frames_ms]
+    result["info"]["frame_ms_median"] = round(median, 2)
+    result["info"]["pipeline_update_ms_median"] = round(statistics.median(update_ms), 2)
+    result["info"]["updates_per_s_median"] = round(1e3 / median, 1)
+    result["info"]["render_view"] = view.GetRenderWindow().GetClassName()
+    simple.SetActiveSource(cut)
+    simple.Render(view)
+except Exception:
+    result["error"] = traceback.format_exc()
+finally:
+    write_result()
