@@ -49,18 +49,23 @@ bone_display = Show(roi, view)
 ColorBy(bone_display, ("POINTS", "ROIMask"))
 lut = GetColorTransferFunction("ROIMask")
 lut.ApplyPreset("Blue Orange (divergent)", True)
+faceplan_pipeline.label_bar(lut, view, "ROI mask (1 = in the ROI)")
 camera([75, 0, 75], [-120, -160, 20])
 images.append(shoot("bone_before.png"))
 Hide(roi, view)
 
 # Bone after: the cut mandible coloured by displacement, with the operative surface.
+GetScalarBar(lut, view).Visibility = 0
+disp_lut = faceplan_pipeline.displacement_colors()
 cut_display = Show(OutputPort(cut, 0), view)
 ColorBy(cut_display, ("POINTS", "Displacement", "Magnitude"))
+cut_display.LookupTable = disp_lut
 surface_display = Show(OutputPort(cut, 1), view)
 surface_display.Opacity = 0.35
 surface_display.AmbientColor = surface_display.DiffuseColor = [0.2, 0.5, 0.9]
 surface_display.ColorArrayName = ["POINTS", ""]
-cut_display.SetScalarBarVisibility(view, True)
+faceplan_pipeline.label_bar(disp_lut, view, "Bone displacement (mm)")
+disp_lut.RescaleTransferFunction(*faceplan_pipeline.DISPLACEMENT_RANGE_MM)  # ColorBy rescales
 images.append(shoot("bone_after.png"))
 Hide(OutputPort(cut, 0), view)
 Hide(OutputPort(cut, 1), view)
@@ -74,9 +79,9 @@ images.append(shoot("face_before.png"))
 Hide(face_before.Input, view)
 face_after = Show(ExtractSurface(Input=OutputPort(fem, 0)), view)
 ColorBy(face_after, ("POINTS", "Displacement", "Magnitude"))
-disp_lut = GetColorTransferFunction("Displacement")
-disp_lut.ApplyPreset("Inferno (matplotlib)", True)
-face_after.SetScalarBarVisibility(view, True)
+face_after.LookupTable = disp_lut
+faceplan_pipeline.label_bar(disp_lut, view, "Soft-tissue displacement (mm)")
+disp_lut.RescaleTransferFunction(*faceplan_pipeline.DISPLACEMENT_RANGE_MM)  # same map as the bone
 images.append(shoot("face_after.png"))
 
 # Stage timings (like the paper's Table 2) and an edit that only re-solves.

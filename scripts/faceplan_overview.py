@@ -18,11 +18,7 @@ LoadPlugin(plugin)
 tissue, mandible, roi, cut, fem = faceplan_pipeline.build(data_dir)
 fem.UpdatePipeline()
 
-lut = GetColorTransferFunction("Displacement")
-lut.ApplyPreset("Turbo", True)
-lut.AutomaticRescaleRangeMode = "Never"
-lut.RescaleTransferFunction(0.0, 6.0)
-lut.VectorMode = "Magnitude"
+lut = faceplan_pipeline.displacement_colors()
 
 
 def make_view():
@@ -66,17 +62,10 @@ face_view.CameraFocalPoint = [80.0, 10.0, 112.0]
 face_view.CameraPosition = [-255.0, -270.0, 10.0]
 face_view.CameraViewUp = [0.0, 0.0, 1.0]
 face_view.CameraViewAngle = 30.0
-bar = GetScalarBar(lut, face_view)
-bar.Title = "Displacement (mm)"
-bar.ComponentTitle = ""
-bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]
-bar.TitleFontSize = bar.LabelFontSize = 18
-bar.AddRangeLabels = 0
-bar.WindowLocation = "Any Location"
-bar.Position = [0.05, 0.15]
-bar.ScalarBarLength = 0.6
-face.SetScalarBarVisibility(face_view, True)
-lut.RescaleTransferFunction(0.0, 6.0)  # ColorBy rescales to the data: back to the fixed scale
+faceplan_pipeline.label_bar(lut, bone_view, "Bone displacement (mm)", position=(0.03, 0.42),
+                            length=0.5)  # above the operative surface
+faceplan_pipeline.label_bar(lut, face_view, "Soft-tissue displacement (mm)")
+lut.RescaleTransferFunction(*faceplan_pipeline.DISPLACEMENT_RANGE_MM)  # ColorBy rescales to the data: back to the fixed scale
 for v in (bone_view, face_view):
     Render(v)
 

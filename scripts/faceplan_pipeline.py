@@ -26,3 +26,33 @@ def build(data_dir):
     fem = simple.CondensedFEMDeform(registrationName="CondensedFEMDeform", Input=tissue, Bone=cut)
     fem.ContactDistance = 1.0
     return tissue, mandible, roi, cut, fem
+
+
+# One colour map and range for displacement, bone and face alike, so the two can be compared.
+DISPLACEMENT_RANGE_MM = (0.0, 6.0)
+
+
+def displacement_colors():
+    """The shared Displacement colour map (Turbo, magnitude, fixed 0-6 mm)."""
+    lut = simple.GetColorTransferFunction("Displacement")
+    lut.ApplyPreset("Turbo", True)
+    lut.AutomaticRescaleRangeMode = "Never"
+    lut.VectorMode = "Magnitude"
+    lut.RescaleTransferFunction(*DISPLACEMENT_RANGE_MM)
+    return lut
+
+
+def label_bar(lut, view, title, position=(0.05, 0.15), length=0.6):
+    """Shows lut's colour bar in view with a title (name and unit) in dark text for a white
+    background."""
+    bar = simple.GetScalarBar(lut, view)
+    bar.Title = title
+    bar.ComponentTitle = ""
+    bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]
+    bar.TitleFontSize = bar.LabelFontSize = 18
+    bar.AddRangeLabels = 0
+    bar.WindowLocation = "Any Location"
+    bar.Position = list(position)
+    bar.ScalarBarLength = length
+    bar.Visibility = 1
+    return bar
