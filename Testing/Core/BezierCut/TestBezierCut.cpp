@@ -1,6 +1,7 @@
 // BezierCut contract tests: moved vertices on S, the others untouched bit for bit, topology
 // unchanged, no flipped / degenerate / newly intersecting triangles, clear errors for bad curves.
 #include "BezierCut/BezierCut.h"
+#include "BezierCut/DefaultCurves.h"
 #include "BezierCut/MeshIntersection.h"
 #include "Support/FaceplanTestMeshes.h"
 #include "ROIExtract/ROIExtract.h"
@@ -419,4 +420,41 @@ TEST(BezierCut, NothingOnTheSideMovesNothing) {
   EXPECT_EQ(r.numMoved, 0);
   EXPECT_FALSE(r.warnings.empty());
   EXPECT_EQ(std::memcmp(r.points.data(), m.points.data(), sizeof(double) * 3 * m.numPoints()), 0);
+}
+
+// The default curves over a cap ROI: a plane normal to +z between the ROI boundary's top and the
+// pole, covering the ROI across, whose Cut moves only interior ROI vertices above it.
+TEST(BezierCut, DefaultCurvesCutTheCapClearOfTheBoundary) {
+  SurfaceMesh m = testmesh::Icosphere(4);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.3; });
+  Curve U, V;
+  ASSERT_TRUE(DefaultCutCurves(m.points, roi.mask, roi.boundary, U, V));
+  ASSERT_EQ(U.size(), 4u);
+  ASSERT_EQ(V.size(), 4u);
+  EXPECT_EQ(U[0], V[0]);
+  const double h = U[0].z();
+  double boundaryTop = -1.0;
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i)
+    if (roi.boundary[i])
+      boundaryTop = std::max(boundaryTop, m.points(i, 2));
+  EXPECT_GT(h, boundaryTop);
+  EXPECT_LT(h, 1.0);
+  for (const Vector3d& p : U)
+    EXPECT_DOUBLE_EQ(p.z(), h);
+  for (const Vector3d& p : V)
+    EXPECT_DOUBLE_EQ(p.z(), h);
+  EXPECT_GT((U[3] - U[0]).cross(V[3] - V[0]).z(), 0.0); // normal along +z: the pole is cut
+  BezierCutResult r;
+  Status s = BezierCut(m, roi.mask, roi.boundary, U, V, {}, r);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_GT(r.numMoved, 0);
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i)
+    if (r.moved[i]) {
+      EXPECT_TRUE(roi.mask[i] && !roi.boundary[i]) << "vertex " << i;
+      EXPECT_NEAR(r.points(i, 2), h, 1e-12);
+    }
+  // Nothing to cut: an ROI without extent.
+  SurfaceMesh point;
+  point.points = SurfacePoints::Zero(1, 3);
+  EXPECT_FALSE(DefaultCutCurves(point.points, {1}, {0}, U, V));
 }
