@@ -106,6 +106,10 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
                      "bone share one frame and unit");
     return 1;
   }
+  const std::string unfollowed =
+      UnfollowedBoneMotion(contact.movable, bone->GetPointData()->GetArray("Displacement"));
+  if (!unfollowed.empty())
+    vtkWarningMacro(<< unfollowed);
   request.sets = MakeNodeSets(contact, cache.boundary.nodes);
   faceplan::SolveInput input;
   input.movableDisplacement =

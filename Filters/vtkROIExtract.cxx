@@ -37,7 +37,8 @@ std::string RegionProblem(vtkImplicitFunction* region) {
   }
   if (auto* plane = vtkPlane::SafeDownCast(region)) {
     const double* n = plane->GetNormal();
-    if (!(n[0] != 0.0 || n[1] != 0.0 || n[2] != 0.0)) return "the plane Normal is zero (or NaN)";
+    if (!(n[0] != 0.0 || n[1] != 0.0 || n[2] != 0.0))
+      return "the plane Normal is zero (or NaN)";
   }
   if (auto* linear = vtkLinearTransform::SafeDownCast(region->GetTransform())) {
     // ParaView's Box places a unit box with this transform; its determinant is the inverse of
@@ -122,7 +123,8 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
     vtkDataObject* given = vtkDataObject::GetData(inputVector[0], 0);
     vtkErrorMacro(<< "ROI Extract needs a vtkPointSet input (a surface with points and cells), not "
                   << (given ? given->GetClassName() : "nothing"));
-    if (output) output->Initialize();
+    if (output)
+      output->Initialize();
     return 1;
   }
   output->Initialize();
