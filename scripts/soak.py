@@ -2,7 +2,7 @@
 
 On the Badin face scene (scripts/faceplan_pipeline.py) it applies N edits: cut edits (alternately
 CurveU's and CurveV's inner control points move), an ROI change every 100 edits and a material
-change every 250, sampling the process's resident memory after each. Every 50th result is compared
+change every 250 (--roi-every, --material-every), sampling the process's resident memory after each. Every 50th result is compared
 with a fresh pipeline built on the same settings (largest relative difference of the tissue's
 Displacement). Passes when the RSS growth after the first 100 edits is within --max-rss-growth and
 every comparison is within 1e-12; exits 1 otherwise.
@@ -27,6 +27,11 @@ parser.add_argument("--data", required=True)
 parser.add_argument("--edits", type=int, default=1000)
 parser.add_argument("--compare-every", type=int, default=50)
 parser.add_argument("--max-rss-growth", type=float, default=0.05)
+parser.add_argument("--roi-every", type=int, default=100)
+parser.add_argument("--material-every", type=int, default=250)
+parser.add_argument("--malloc-trim", action="store_true",
+                    help="diagnostic: return freed heap memory to the system after each edit (glibc malloc_trim), "
+                         "to tell allocator retention from a leak")
 parser.add_argument("--json", help="write the samples and figures here")
 args = parser.parse_args()
 
@@ -58,7 +63,8 @@ def curves(edit):
 
 
 def settings(edit):
-    return {"radius": RADII[(edit // 100) % 2], "E": MODULI[(edit // 250) % 2], "curves": curves(edit)}
+    return {"radius": RADII[(edit // args.roi_every) % 2], "E": MODULI[(edit // args.material_every) % 2],
+            "curves": curves(edit)}
 
 
 def apply(roi, cut, fem, s):
@@ -100,6 +106,9 @@ class MessageCounter:
         self.warnings += 1
 
 
+if args.malloc_trim:
+    import ctypes
+    libc = ctypes.CDLL("libc.so.6")
 tissue, mandible, roi, cut, fem = pipeline.build(args.data)
 messages = MessageCounter((roi, cut, fem))
 samples, comparisons, times = [], [], []
@@ -110,6 +119,8 @@ for edit in range(args.edits):
     apply(roi, cut, fem, s)
     fem.UpdatePipeline()
     times.append(time.perf_counter() - t0)
+    if args.malloc_trim:
+        libc.malloc_trim(0)
     samples.append(rss_mib())
     if (edit + 1) % args.compare_every == 0:
         u = displacement(fem)
@@ -119,12 +130,17 @@ for edit in range(args.edits):
         print("edit %4d: RSS %.1f MiB, median edit %.1f ms, relative difference to a fresh pipeline %.3g"
               % (edit + 1, samples[-1], 1e3 * float(np.median(times[-args.compare_every:])), diff), flush=True)
 
+def precompute_count():
+    fem.UpdatePropertyInformation()
+    return fem.GetPropertyValue("PrecomputeCount")
+
+
 baseline = samples[min(99, len(samples) - 1)]
 growth = max(samples[100:] or [baseline]) / baseline - 1.0
 worst = max((c["relative_difference"] for c in comparisons), default=0.0)
 figures = {
     "edits": args.edits,
-    "precomputes": fem.GetPropertyValue("PrecomputeCount"),
+    "precomputes": precompute_count(),
     "rss_first_mib": samples[0],
     "rss_after_100_mib": baseline,
     "rss_max_after_100_mib": max(samples[100:] or [baseline]),
