@@ -123,7 +123,7 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   if (!input || !output || !surface) {
     vtkDataObject* given = vtkDataObject::GetData(inputVector[0], 0);
     this->Fail(std::string("needs a vtkPointSet input (the output of ROI Extract), not ") +
-                 (given ? given->GetClassName() : "nothing"),
+                   (given ? given->GetClassName() : "nothing"),
                outputVector);
     return 1;
   }
@@ -137,7 +137,8 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
     return 1;
   }
   if (this->SurfaceResolution < 1 || this->SurfaceResolution > 256) {
-    this->Fail("SurfaceResolution must lie in [1, 256], not " + std::to_string(this->SurfaceResolution),
+    this->Fail("SurfaceResolution must lie in [1, 256], not " +
+                   std::to_string(this->SurfaceResolution),
                outputVector);
     return 1;
   }
@@ -156,15 +157,16 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   }
   for (vtkDataArray* a : {maskArray, boundaryArray}) {
     if (a->GetNumberOfTuples() != n) {
-      this->Fail(std::string("the point array ") + a->GetName() + " has " + std::to_string(a->GetNumberOfTuples()) +
-                   " values; it needs one per point (" + std::to_string(n) + ")",
+      this->Fail(std::string("the point array ") + a->GetName() + " has " +
+                     std::to_string(a->GetNumberOfTuples()) + " values; it needs one per point (" +
+                     std::to_string(n) + ")",
                  outputVector);
       return 1;
     }
     for (vtkIdType i = 0; i < n; ++i)
       if (!std::isfinite(a->GetComponent(i, 0))) {
-        this->Fail(std::string("the point array ") + a->GetName() + " has a NaN or infinite value at point " +
-                     std::to_string(i),
+        this->Fail(std::string("the point array ") + a->GetName() +
+                       " has a NaN or infinite value at point " + std::to_string(i),
                    outputVector);
         return 1;
       }
@@ -179,7 +181,8 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   }
   const vtkIdType skipped = input->GetNumberOfCells() - CountSurfaceCells(input);
   if (mesh.numCells() == 0) {
-    this->Fail("the input has no surface cells (triangles or polygons) to cut; lines and vertices cannot be cut",
+    this->Fail("the input has no surface cells (triangles or polygons) to cut; lines and vertices "
+               "cannot be cut",
                outputVector);
     return 1;
   }

@@ -23,7 +23,8 @@ LiveInstances& Live() {
     auto* instances = new LiveInstances;
     std::atexit([] {
       std::lock_guard<std::mutex> lock(Live().mutex);
-      for (BackgroundPrecompute* b : Live().instances) b->stopForExit();
+      for (BackgroundPrecompute* b : Live().instances)
+        b->stopForExit();
     });
     return instances;
   }();
