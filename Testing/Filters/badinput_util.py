@@ -46,8 +46,13 @@ class Catcher:
         self.errors, self.warnings = [], []
 
 
+def _text(message):
+    """The message without VTK's "ERROR: In <file>, line <n>" header (which would match words)."""
+    return "\n".join(l for l in message.splitlines() if not l.startswith(("ERROR: In ", "Warning: In ")))
+
+
 def _has(messages, words):
-    return any(all(w.lower() in m.lower() for w in words) for m in messages)
+    return any(all(w.lower() in _text(m).lower() for w in words) for m in messages)
 
 
 def _finite_output(ds):
