@@ -11,6 +11,7 @@
 #include "vtkPoints.h"
 #include "vtkUnstructuredGrid.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -176,6 +177,26 @@ Status ValidateBoneValues(vtkPointSet* bone) {
     return Error("the Bone input needs a 3-component point array named Displacement "
                  "(connect the output of BezierCut or Osteotomy)");
   return CheckArray(displacement, "Displacement", "point", bone->GetNumberOfPoints(), 3);
+}
+
+std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
+                                 vtkDataArray* boneDisplacement) {
+  for (char movable : tiedMovable)
+    if (movable)
+      return std::string();
+  double largest = 0.0;
+  for (vtkIdType i = 0; i < boneDisplacement->GetNumberOfTuples(); ++i) {
+    double d[3];
+    boneDisplacement->GetTuple(i, d);
+    largest = std::max(largest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+  }
+  if (largest == 0.0)
+    return std::string();
+  std::ostringstream msg;
+  msg << "the bone moves (largest Displacement " << largest
+      << ") but its ROIMask is 0 at every point where the tissue is tied to it, so the tissue does "
+         "not move: check the ROI (ROI Extract) or the bone's ROIMask";
+  return msg.str();
 }
 
 } // namespace fem_filter

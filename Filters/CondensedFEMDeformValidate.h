@@ -6,6 +6,10 @@
 
 #include "Common/Status.h"
 
+#include <string>
+#include <vector>
+
+class vtkDataArray;
 class vtkPointSet;
 class vtkUnstructuredGrid;
 
@@ -18,6 +22,12 @@ Status ValidateBone(vtkPointSet* bone);
 // The part of ValidateBone that an edit can change (points and Displacement), for a bone whose
 // cells, point count and ROIMask passed ValidateBone before.
 Status ValidateBoneValues(vtkPointSet* bone);
+
+// After contact: a warning when the bone moves but no tied tissue node may follow it (the bone's
+// ROIMask is 0 wherever the tissue is tied), which would otherwise give an all-zero result without
+// a word; "" when there is nothing to say. `tiedMovable` is ContactMap::movable.
+std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
+                                 vtkDataArray* boneDisplacement);
 
 } // namespace fem_filter
 } // namespace faceplan

@@ -9,6 +9,9 @@
 #include <vtkPointSet.h>
 #include <vtkPoints.h>
 
+#include <cmath>
+#include <string>
+
 namespace faceplan {
 namespace vtkconvert {
 
@@ -20,6 +23,10 @@ bool ToSurfaceMesh(vtkPointSet* input, CellPolicy policy, SurfaceMesh& out, std:
   for (vtkIdType i = 0; i < n; ++i) {
     double p[3];
     pts->GetPoint(i, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      why = "point " + std::to_string(i) + " has a NaN or infinite coordinate (not finite)";
+      return false;
+    }
     out.points.row(i) << p[0], p[1], p[2];
   }
   out.offsets.push_back(0);
@@ -31,6 +38,13 @@ bool ToSurfaceMesh(vtkPointSet* input, CellPolicy policy, SurfaceMesh& out, std:
     const int type = input->GetCellType(c);
     input->GetCellPoints(c, ids);
     const vtkIdType m = ids->GetNumberOfIds();
+    // Before any cell is built from them: VTK reads point coordinates by these ids unchecked.
+    for (vtkIdType k = 0; k < m; ++k)
+      if (ids->GetId(k) < 0 || ids->GetId(k) >= n) {
+        why = "cell " + std::to_string(c) + " uses point id " + std::to_string(ids->GetId(k)) +
+              ", out of range [0, " + std::to_string(n) + ")";
+        return false;
+      }
     switch (type) {
       case VTK_EMPTY_CELL:
       case VTK_VERTEX:

@@ -5,6 +5,7 @@
 #include "FacePlanVTKConvert.h"
 
 #include <vtkCellArray.h>
+#include <vtkCellType.h>
 #include <vtkDataArray.h>
 #include <vtkDataObject.h>
 #include <vtkDoubleArray.h>
@@ -17,6 +18,8 @@
 #include <vtkPointSet.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+
+#include <cmath>
 
 vtkStandardNewMacro(vtkBezierCut);
 
@@ -42,6 +45,15 @@ void SetPoint(std::vector<double>& c, vtkIdType i, double x, double y, double z,
 void GetPoint(const std::vector<double>& c, vtkIdType i, double p[3]) {
   for (int k = 0; k < 3; ++k)
     p[k] = (i >= 0 && 3 * i + 3 <= static_cast<vtkIdType>(c.size())) ? c[3 * i + k] : 0.0;
+}
+vtkIdType CountSurfaceCells(vtkPointSet* input) {
+  vtkIdType count = 0;
+  for (vtkIdType c = 0; c < input->GetNumberOfCells(); ++c) {
+    const int type = input->GetCellType(c);
+    count += type == VTK_TRIANGLE || type == VTK_QUAD || type == VTK_POLYGON || type == VTK_PIXEL ||
+             type == VTK_TRIANGLE_STRIP;
+  }
+  return count;
 }
 std::vector<Eigen::Vector3d> ToCurve(const std::vector<double>& c) {
   std::vector<Eigen::Vector3d> out;
@@ -97,11 +109,12 @@ int vtkBezierCut::FillOutputPortInformation(int port, vtkInformation* info) {
 int vtkBezierCut::RequestDataObject(vtkInformation*, vtkInformationVector** inputVector,
                                     vtkInformationVector* outputVector) {
   vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
-  if (!input) return 0;
+  // A wrong input type gets an empty polydata output, so that RequestData names the problem.
+  const char* type = input ? input->GetClassName() : "vtkPolyData";
   vtkInformation* info0 = outputVector->GetInformationObject(0);
   vtkDataObject* out0 = info0->Get(vtkDataObject::DATA_OBJECT());
-  if (!out0 || !out0->IsA(input->GetClassName())) {
-    vtkDataObject* fresh = input->NewInstance();
+  if (!out0 || !out0->IsA(type)) {
+    vtkDataObject* fresh = input ? input->NewInstance() : vtkPolyData::New();
     info0->Set(vtkDataObject::DATA_OBJECT(), fresh);
     fresh->Delete();
   }
@@ -129,13 +142,27 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   vtkPointSet* output = vtkPointSet::GetData(outputVector, 0);
   vtkPolyData* surface = vtkPolyData::GetData(outputVector, 1);
   if (!input || !output || !surface) {
-    this->Fail("needs a vtkPointSet input", outputVector);
+    vtkDataObject* given = vtkDataObject::GetData(inputVector[0], 0);
+    this->Fail(std::string("needs a vtkPointSet input (the output of ROI Extract), not ") +
+                   (given ? given->GetClassName() : "nothing"),
+               outputVector);
     return 1;
   }
   output->Initialize();
   surface->Initialize();
 
   // Validate.
+  if (this->Operation != CUT && this->Operation != FILL) {
+    this->Fail("Operation must be 0 (Cut) or 1 (Fill), not " + std::to_string(this->Operation),
+               outputVector);
+    return 1;
+  }
+  if (this->SurfaceResolution < 1 || this->SurfaceResolution > 256) {
+    this->Fail("SurfaceResolution must lie in [1, 256], not " +
+                   std::to_string(this->SurfaceResolution),
+               outputVector);
+    return 1;
+  }
   const vtkIdType n = input->GetNumberOfPoints();
   if (n == 0) {
     this->Fail("the input has no points", outputVector);
@@ -149,12 +176,35 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
                outputVector);
     return 1;
   }
+  for (vtkDataArray* a : {maskArray, boundaryArray}) {
+    if (a->GetNumberOfTuples() != n) {
+      this->Fail(std::string("the point array ") + a->GetName() + " has " +
+                     std::to_string(a->GetNumberOfTuples()) + " values; it needs one per point (" +
+                     std::to_string(n) + ")",
+                 outputVector);
+      return 1;
+    }
+    for (vtkIdType i = 0; i < n; ++i)
+      if (!std::isfinite(a->GetComponent(i, 0))) {
+        this->Fail(std::string("the point array ") + a->GetName() +
+                       " has a NaN or infinite value at point " + std::to_string(i),
+                   outputVector);
+        return 1;
+      }
+  }
 
   // Convert.
   faceplan::SurfaceMesh mesh;
   std::string why;
   if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly, mesh, why)) {
     this->Fail(why, outputVector);
+    return 1;
+  }
+  const vtkIdType skipped = input->GetNumberOfCells() - CountSurfaceCells(input);
+  if (mesh.numCells() == 0) {
+    this->Fail("the input has no surface cells (triangles or polygons) to cut; lines and vertices "
+               "cannot be cut",
+               outputVector);
     return 1;
   }
   std::vector<std::uint8_t> mask(static_cast<std::size_t>(n)), boundary(static_cast<std::size_t>(n));
@@ -189,6 +239,9 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
     return 1;
   }
   for (const std::string& w : result.warnings) vtkWarningMacro(<< "Bezier Cut: " << w);
+  if (skipped > 0)
+    vtkWarningMacro(<< "Bezier Cut: " << skipped
+                    << " line or vertex cells of the input were ignored (passed through unmoved)");
 
   // Output 0: same cells and arrays, new points. They are always double precision: rounding the
   // moved points to float could flip the tiny triangles that a valid cut may contain (unmoved

@@ -56,8 +56,9 @@ public:
   ///@}
 
   ///@{
-  /// CUT (0) or FILL (1).
-  vtkSetClampMacro(Operation, int, CUT, FILL);
+  /// CUT (0) or FILL (1). Other values are kept as set and rejected with an error by RequestData
+  /// (pvpython bypasses the GUI's domains; a silent clamp would run another operation).
+  vtkSetMacro(Operation, int);
   vtkGetMacro(Operation, int);
   ///@}
 
@@ -69,8 +70,9 @@ public:
   ///@}
 
   ///@{
-  /// Tessellation intervals per Bezier segment of the displayed surface (output port 1).
-  vtkSetClampMacro(SurfaceResolution, int, 1, 256);
+  /// Tessellation intervals per Bezier segment of the displayed surface (output port 1), 1 to 256;
+  /// other values are rejected with an error by RequestData.
+  vtkSetMacro(SurfaceResolution, int);
   vtkGetMacro(SurfaceResolution, int);
   ///@}
 

@@ -7,6 +7,7 @@
 #include "CondensedFEMDeformSolver.h"
 #include "CondensedFEMDeformValidate.h"
 
+#include "vtkAlgorithmOutput.h"
 #include "vtkDataArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -45,6 +46,44 @@ int vtkCondensedFEMDeform::GetPrecomputeCount() {
   return this->State->solver.precomputeCount();
 }
 
+namespace {
+
+// The newest modification time of everything upstream of `algorithm` (its inputs' producers and
+// their parameters, e.g. a cut's control points or an ROI's region).
+vtkMTimeType UpstreamMTime(vtkAlgorithm* algorithm) {
+  vtkMTimeType newest = 0;
+  for (int port = 0; port < algorithm->GetNumberOfInputPorts(); ++port)
+    for (int c = 0; c < algorithm->GetNumberOfInputConnections(port); ++c)
+      if (vtkAlgorithm* up = algorithm->GetInputAlgorithm(port, c))
+        newest = std::max({newest, up->GetMTime(), UpstreamMTime(up)});
+  return newest;
+}
+
+// Marks the filter outdated when its inputs changed while RequestData ran (on every return path).
+class UpstreamEditWatch {
+public:
+  UpstreamEditWatch(vtkAlgorithm* algorithm, bool& changed)
+      : algorithm_(algorithm), changed_(changed) {
+    changed_ = false;
+    started_.Modified();
+  }
+  ~UpstreamEditWatch() { changed_ = UpstreamMTime(algorithm_) > started_.GetMTime(); }
+
+private:
+  vtkAlgorithm* algorithm_;
+  bool& changed_;
+  vtkTimeStamp started_;
+};
+
+} // namespace
+
+vtkMTimeType vtkCondensedFEMDeform::GetMTime() {
+  if (this->InputsChangedWhileRunning)
+    this->OutdatedTime.Modified();
+  return std::max(this->Superclass::GetMTime(),
+                  this->InputsChangedWhileRunning ? this->OutdatedTime.GetMTime() : 0);
+}
+
 int vtkCondensedFEMDeform::FillInputPortInformation(int port, vtkInformation* info) {
   if (port == 0)
     info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
@@ -69,6 +108,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   vtkTable* table = vtkTable::GetData(outputVector, 1);
   Cache& cache = *this->State;
   const Settings settings = this->CurrentSettings();
+  const UpstreamEditWatch watch(this, this->InputsChangedWhileRunning);
 
   // 1. validate and 2. convert: nothing below runs on malformed input. The tissue is validated and
   // converted again only when it or the material properties changed, the bone's cells only when
@@ -105,6 +145,10 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
                      "bone share one frame and unit");
     return 1;
   }
+  const std::string unfollowed =
+      UnfollowedBoneMotion(contact.movable, bone->GetPointData()->GetArray("Displacement"));
+  if (!unfollowed.empty())
+    vtkWarningMacro(<< unfollowed);
   if (!cache.requestValid || cache.requestTissue != tissueGeneration) {
     cache.request = faceplan::PrecomputeRequest();
     cache.request.mesh = cache.tissue.mesh();

@@ -29,6 +29,9 @@
 #include "FacePlanFiltersModule.h"
 #include "vtkUnstructuredGridAlgorithm.h"
 
+#include "vtkTimeStamp.h"
+
+#include <algorithm>
 #include <memory>
 
 namespace faceplan {
@@ -123,6 +126,11 @@ public:
   /// Number of precomputes (factorizations) this filter has started; for tests and the GUI.
   int GetPrecomputeCount();
 
+  /// Newer than the last output while an upstream edit arrived during the last RequestData (from a
+  /// progress callback, while the precompute ran): the pipeline stamps the output after the edit,
+  /// so without this the next update would keep a result of the superseded inputs.
+  vtkMTimeType GetMTime() override;
+
 protected:
   vtkCondensedFEMDeform();
   ~vtkCondensedFEMDeform() override;
@@ -152,6 +160,8 @@ private:
 
   struct Cache;
   std::unique_ptr<Cache> State;
+  bool InputsChangedWhileRunning = false;
+  vtkTimeStamp OutdatedTime;
 };
 
 #endif

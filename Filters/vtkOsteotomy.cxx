@@ -73,6 +73,12 @@ int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   };
 
   // Validate: the input, the planes, and that the cut leaves vertices on both sides.
+  if (this->PivotMode != SEGMENT_CENTROID && this->PivotMode != CUSTOM_PIVOT) {
+    this->Fail("PivotMode must be 0 (SegmentCentroid) or 1 (Custom), not " +
+                   std::to_string(this->PivotMode),
+               outputVector);
+    return 1;
+  }
   if (failed(of::ValidateInput(data)))
     return 1;
   vtkPolyData* input = vtkPolyData::SafeDownCast(data);

@@ -74,7 +74,9 @@ public:
   vtkGetVector3Macro(Rotation, double);
   vtkSetVector3Macro(Pivot, double);
   vtkGetVector3Macro(Pivot, double);
-  vtkSetClampMacro(PivotMode, int, SEGMENT_CENTROID, CUSTOM_PIVOT);
+  // Other values are kept as set and rejected with an error by RequestData (pvpython bypasses the
+  // GUI's domain; a silent clamp would use another pivot).
+  vtkSetMacro(PivotMode, int);
   vtkGetMacro(PivotMode, int);
   ///@}
 

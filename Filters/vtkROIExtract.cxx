@@ -3,15 +3,57 @@
 #include "FacePlanVTKConvert.h"
 #include "ROIExtract/ROIExtract.h"
 
+#include <vtkDataObject.h>
 #include <vtkImplicitFunction.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
+#include <vtkLinearTransform.h>
+#include <vtkMatrix4x4.h>
 #include <vtkObjectFactory.h>
+#include <vtkPlane.h>
 #include <vtkPointData.h>
 #include <vtkPointSet.h>
+#include <vtkPolyData.h>
+#include <vtkSphere.h>
 #include <vtkUnsignedCharArray.h>
 
+#include <cmath>
+#include <sstream>
+
 vtkStandardNewMacro(vtkROIExtract);
+
+namespace {
+
+// The Region's own parameters, checked before it is evaluated: a negative sphere radius or a
+// mirrored box would silently select what their absolute values select.
+std::string RegionProblem(vtkImplicitFunction* region) {
+  std::ostringstream why;
+  if (auto* sphere = vtkSphere::SafeDownCast(region)) {
+    const double r = sphere->GetRadius();
+    if (!(r > 0.0) || !std::isfinite(r)) {
+      why << "the sphere Radius must be positive and finite (got " << r << ")";
+      return why.str();
+    }
+  }
+  if (auto* plane = vtkPlane::SafeDownCast(region)) {
+    const double* n = plane->GetNormal();
+    if (!(n[0] != 0.0 || n[1] != 0.0 || n[2] != 0.0))
+      return "the plane Normal is zero (or NaN)";
+  }
+  if (auto* linear = vtkLinearTransform::SafeDownCast(region->GetTransform())) {
+    // ParaView's Box places a unit box with this transform; its determinant is the inverse of
+    // the product of the box's Lengths.
+    const double det = linear->GetMatrix()->Determinant();
+    if (!(det > 0.0) || !std::isfinite(det)) {
+      why << "the box Length must be positive and finite on every axis (the region's transform "
+          << (det < 0.0 ? "mirrors space" : "is singular or not finite") << ")";
+      return why.str();
+    }
+  }
+  return std::string();
+}
+
+} // namespace
 vtkCxxSetObjectMacro(vtkROIExtract, Region, vtkImplicitFunction);
 
 vtkROIExtract::vtkROIExtract() = default;
@@ -52,6 +94,21 @@ vtkIdType vtkROIExtract::GetPointId(vtkIdType index) const {
   return index >= 0 && index < static_cast<vtkIdType>(this->PointIds.size()) ? this->PointIds[index] : -1;
 }
 
+int vtkROIExtract::RequestDataObject(vtkInformation* request, vtkInformationVector** inputVector,
+                                     vtkInformationVector* outputVector) {
+  vtkDataObject* input = vtkDataObject::GetData(inputVector[0], 0);
+  if (input && !vtkPointSet::SafeDownCast(input)) {
+    // An empty output of a valid type, so that RequestData reports the problem by name.
+    vtkInformation* info = outputVector->GetInformationObject(0);
+    if (!vtkPolyData::SafeDownCast(info->Get(vtkDataObject::DATA_OBJECT()))) {
+      vtkNew<vtkPolyData> empty;
+      info->Set(vtkDataObject::DATA_OBJECT(), empty);
+    }
+    return 1;
+  }
+  return this->Superclass::RequestDataObject(request, inputVector, outputVector);
+}
+
 vtkMTimeType vtkROIExtract::GetMTime() {
   vtkMTimeType t = this->Superclass::GetMTime();
   if (this->Region) t = std::max(t, this->Region->GetMTime());
@@ -63,7 +120,11 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
   vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
   vtkPointSet* output = vtkPointSet::GetData(outputVector, 0);
   if (!input || !output) {
-    vtkErrorMacro(<< "ROI Extract needs a vtkPointSet input");
+    vtkDataObject* given = vtkDataObject::GetData(inputVector[0], 0);
+    vtkErrorMacro(<< "ROI Extract needs a vtkPointSet input (a surface with points and cells), not "
+                  << (given ? given->GetClassName() : "nothing"));
+    if (output)
+      output->Initialize();
     return 1;
   }
   output->Initialize();
@@ -75,6 +136,13 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
   if (this->PointIds.empty() && !this->Region) {
     vtkErrorMacro(<< "ROI Extract: no ROI given (set Region or PointIds)");
     return 1;
+  }
+  if (this->PointIds.empty()) {
+    const std::string problem = RegionProblem(this->Region);
+    if (!problem.empty()) {
+      vtkErrorMacro(<< "ROI Extract: invalid Region: " << problem);
+      return 1;
+    }
   }
 
   faceplan::SurfaceMesh mesh;
@@ -97,7 +165,13 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
     for (vtkIdType i = 0; i < n; ++i) {
       double p[3];
       input->GetPoint(i, p);
-      selected[static_cast<std::size_t>(i)] = this->Region->FunctionValue(p) < 0.0 ? 1 : 0;
+      const double value = this->Region->FunctionValue(p);
+      if (!std::isfinite(value)) {
+        vtkErrorMacro(<< "ROI Extract: the Region gives a NaN or infinite value at point " << i
+                      << ": its parameters (centre, origin, normal, position) must be finite");
+        return 1;
+      }
+      selected[static_cast<std::size_t>(i)] = value < 0.0 ? 1 : 0;
     }
   }
   if (this->InsideOut)

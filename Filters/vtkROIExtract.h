@@ -56,6 +56,7 @@ public:
 protected:
   vtkROIExtract();
   ~vtkROIExtract() override;
+  int RequestDataObject(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   vtkImplicitFunction* Region = nullptr;

@@ -87,6 +87,10 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
   const double L = (hi - lo).matrix().norm();
   if (!(L > 0))
     return Status::Error("degenerate surface: all control points coincide");
+  // Squared coordinates beyond ~1e154 overflow: every distance test below would then fail.
+  if (!std::isfinite(L))
+    return Status::Error("invalid control points: their coordinates are too large (the extent of "
+                         "the control points overflows double precision)");
   if ((curveU[0] - curveV[0]).norm() > 1e-9 * L)
     return Status::Error("first control points not shared: CurveU point 0 " +
                          FormatPoint(curveU[0]) + " differs from CurveV point 0 " +
@@ -96,7 +100,9 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
       if (((*curves[c])[i + 1] - (*curves[c])[i]).norm() <= 1e-9 * L)
         return Status::Error("degenerate surface: " + std::string(names[c]) + " control points " +
                              std::to_string(i) + " and " + std::to_string(i + 1) + " coincide at " +
-                             FormatPoint((*curves[c])[i]));
+                             FormatPoint((*curves[c])[i]) +
+                             " (closer than 1e-9 times the control points' extent, " +
+                             std::to_string(L) + ")");
 
   out.U_ = curveU;
   out.V_ = curveV;

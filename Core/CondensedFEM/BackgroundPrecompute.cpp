@@ -1,8 +1,48 @@
 #include "CondensedFEM/BackgroundPrecompute.h"
 
+#include <cstdlib>
+#include <set>
+
 namespace faceplan {
 
+namespace {
+
+// Every instance with a worker. When the process exits while a precompute runs (the host
+// application quits from a callback, with the owning filter never destroyed), the worker is
+// cancelled and joined before the libraries it uses (BLAS, CHOLMOD) are torn down; otherwise it
+// crashes or hangs inside them.
+struct LiveInstances {
+  std::mutex mutex;
+  std::set<BackgroundPrecompute*> instances;
+};
+
+// Never destroyed: an owner may be destroyed by another library's static teardown after exit's
+// handlers have run.
+LiveInstances& Live() {
+  static LiveInstances* live = [] {
+    auto* instances = new LiveInstances;
+    std::atexit([] {
+      std::lock_guard<std::mutex> lock(Live().mutex);
+      for (BackgroundPrecompute* b : Live().instances)
+        b->stopForExit();
+    });
+    return instances;
+  }();
+  return *live;
+}
+
+} // namespace
+
 BackgroundPrecompute::~BackgroundPrecompute() {
+  {
+    std::lock_guard<std::mutex> lock(Live().mutex);
+    Live().instances.erase(this);
+  }
+  cancel();
+  joinWorker();
+}
+
+void BackgroundPrecompute::stopForExit() {
   cancel();
   joinWorker();
 }
@@ -12,6 +52,10 @@ void BackgroundPrecompute::joinWorker() {
 }
 
 void BackgroundPrecompute::start(PrecomputeRequest request, ProgressCallback progress) {
+  {
+    std::lock_guard<std::mutex> lock(Live().mutex);
+    Live().instances.insert(this);
+  }
   cancel();
   // The old worker sees its cancel flag at its next stage boundary; waiting for it keeps at most
   // one precompute (and its memory) alive.

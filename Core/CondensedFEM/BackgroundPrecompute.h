@@ -27,6 +27,8 @@ public:
   // Cancels the running precompute (wait() then reports "cancelled").
   void cancel();
   std::uint64_t generation() const;
+  // Cancels and joins the worker; called for every instance when the process exits.
+  void stopForExit();
 
 private:
   void joinWorker();
