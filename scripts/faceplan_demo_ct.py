@@ -82,7 +82,7 @@ images.append(shoot("face_before.png"))
 Hide(OutputPort(model, 2), view)
 face_after = Show(ExtractSurface(Input=OutputPort(fem, 0)), view)
 ColorBy(face_after, ("POINTS", "Displacement", "Magnitude"))
-GetColorTransferFunction("Displacement").ApplyPreset("Inferno (matplotlib)", True)
+GetColorTransferFunction("Displacement").ApplyPreset("Reds", True)
 face_after.SetScalarBarVisibility(view, True)
 images.append(shoot("face_after.png"))
 
