@@ -67,7 +67,7 @@ clip_display = Show(clip, view)
 clip_display.SetRepresentationType("Surface With Edges")
 clip_display.AmbientColor = clip_display.DiffuseColor = [0.93, 0.78, 0.68]
 clip_display.ColorArrayName = ["CELLS", ""]
-camera((-420, 60, 40))
+camera((620, 60, 40))  # looking at the cut face
 images.append(shoot("ct_tetrahedra.png"))
 Hide(clip, view)
 Hide(OutputPort(model, 1), view)
