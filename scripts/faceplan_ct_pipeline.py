@@ -4,7 +4,7 @@ soft tissue's deformation. In this CT, z grows towards the chin and the face loo
 from paraview import simple
 
 # The cut: a flat surface across the chin (the bone below it, towards larger z, goes).
-CUT_Z = 126.0
+CUT_Z = 129.0
 CURVE_U = [70, 30, CUT_Z, 85, 30, CUT_Z, 100, 30, CUT_Z, 115, 30, CUT_Z]
 CURVE_V = [70, 30, CUT_Z, 70, 45, CUT_Z, 70, 60, CUT_Z, 70, 75, CUT_Z]
 ROI_CENTER = [92.0, 45.0, 125.0]

@@ -11,6 +11,7 @@ from paraview.simple import *
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import faceplan_ct_pipeline
+import faceplan_pipeline
 
 plugin, data_dir, out_dir = sys.argv[1], sys.argv[2], sys.argv[3]
 cell_size = float(sys.argv[4]) if len(sys.argv) > 4 else 10.0
@@ -67,7 +68,7 @@ clip_display = Show(clip, view)
 clip_display.SetRepresentationType("Surface With Edges")
 clip_display.AmbientColor = clip_display.DiffuseColor = [0.93, 0.78, 0.68]
 clip_display.ColorArrayName = ["CELLS", ""]
-camera((-420, 60, 40))
+camera((620, 60, 40))  # looking at the cut face
 images.append(shoot("ct_tetrahedra.png"))
 Hide(clip, view)
 Hide(OutputPort(model, 1), view)
@@ -82,8 +83,8 @@ images.append(shoot("face_before.png"))
 Hide(OutputPort(model, 2), view)
 face_after = Show(ExtractSurface(Input=OutputPort(fem, 0)), view)
 ColorBy(face_after, ("POINTS", "Displacement", "Magnitude"))
-GetColorTransferFunction("Displacement").ApplyPreset("Inferno (matplotlib)", True)
-face_after.SetScalarBarVisibility(view, True)
+lut = faceplan_pipeline.displacement_colors()  # the demos' shared map and range
+faceplan_pipeline.label_bar(lut, view, "Displacement (mm)")
 images.append(shoot("face_after.png"))
 
 fd = tissue.GetFieldData()

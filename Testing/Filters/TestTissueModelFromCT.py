@@ -87,7 +87,7 @@ roi.Region = "Sphere"
 roi.Region.Center = [92.0, 45.0, 125.0]
 roi.Region.Radius = 25.0
 cut = BezierCut(Input=roi)
-CUT_Z = 126.0
+CUT_Z = 129.0
 cut.CurveU = [70, 30, CUT_Z, 85, 30, CUT_Z, 100, 30, CUT_Z, 115, 30, CUT_Z]
 cut.CurveV = [70, 30, CUT_Z, 70, 45, CUT_Z, 70, 60, CUT_Z, 70, 75, CUT_Z]
 fem = CondensedFEMDeform(Input=OutputPort(model, 0), Bone=cut)
