@@ -5,6 +5,7 @@
 //                      [--reference-repeats N] [--method Auto|DenseResponse|CachedFactor]
 //                      [--ccx WORKDIR] [--ccx-repeats N] [--json FILE]
 #include "CalculixRunner.h"
+#include "Common/RelativeDifference.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "Support/ShellMeshGenerator.h"
 
@@ -130,8 +131,7 @@ int main(int argc, char** argv) {
     }
     referenceMs.push_back(reference.timings[Stage::Total].ms);
   }
-  const double scale = reference.keptDisplacement.cwiseAbs().maxCoeff();
-  const double diffReference = (condensedKept - reference.keptDisplacement).cwiseAbs().maxCoeff() / scale;
+  const double diffReference = RelativeMaxDifference(condensedKept, reference.keptDisplacement);
 
   bench::CalculixResult ccx;
   double diffCcx = -1.0;
@@ -146,8 +146,8 @@ int main(int argc, char** argv) {
     }
     if (ccx.ok)
       ccx.wallMs = Median(ccxMs);
-    if (ccx.ok) diffCcx = (condensedKept - ccx.keptDisplacement).cwiseAbs().maxCoeff() /
-                          ccx.keptDisplacement.cwiseAbs().maxCoeff();
+    if (ccx.ok)
+      diffCcx = RelativeMaxDifference(condensedKept, ccx.keptDisplacement);
     else std::fprintf(stderr, "CalculiX: %s\n", ccx.error.c_str());
   }
 

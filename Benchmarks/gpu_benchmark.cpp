@@ -266,11 +266,11 @@ int main(int argc, char** argv) {
   std::string gpuWhy;
   double deviceBandwidthGBs = NAN, d2hPinnedGBs = NAN, d2hPageableGBs = NAN;
 #if FACEPLAN_HAS_CUDA
-  gpu = cuda::MakeCudaBackend(gpuWhy);
+  gpuWhy = cuda::MakeCudaBackend(gpu).message;
   if (gpu) {
     cuda::Bandwidth bw;
-    std::string error;
-    if (cuda::MeasureBandwidth(bw, error)) {
+    const Status measured = cuda::MeasureBandwidth(bw);
+    if (measured) {
       deviceBandwidthGBs = bw.deviceToDeviceGBs;
       d2hPinnedGBs = bw.deviceToHostPinnedGBs;
       d2hPageableGBs = bw.deviceToHostPageableGBs;
@@ -286,7 +286,7 @@ int main(int argc, char** argv) {
                   bw.deviceToDeviceGBs, bw.hostToDevicePinnedGBs, bw.deviceToHostPinnedGBs,
                   bw.hostToDevicePageableGBs, bw.deviceToHostPageableGBs);
     } else {
-      std::printf("bandwidth measurement failed: %s\n", error.c_str());
+      std::printf("bandwidth measurement failed: %s\n", measured.message.c_str());
     }
     top.str("device", cuda::DeviceDescription());
   }
@@ -340,7 +340,10 @@ int main(int argc, char** argv) {
     std::vector<int> identity(mesh.numPoints());
     std::iota(identity.begin(), identity.end(), 0);
     t0 = NowMs();
-    AssemblyPattern pattern = BuildAssemblyPattern(mesh, identity, static_cast<int>(mesh.numPoints()));
+    AssemblyPattern pattern;
+
+    if (!BuildAssemblyPattern(mesh, identity, static_cast<int>(mesh.numPoints()), pattern))
+      return 1;
     j.num("pattern_build_ms_cpu", NowMs() - t0);
     row.nnz = pattern.upper.nonZeros();
     j.num("upper_nonzeros", double(row.nnz));
@@ -351,9 +354,9 @@ int main(int argc, char** argv) {
     const int repeats = row.tets > 500000 ? std::min(opt.repeats, 10) : opt.repeats;
     for (int r = 0; r < repeats + 1; ++r) {
       ComputeBackend::AssemblyTimings at;
-      std::string error;
       const double w0 = NowMs();
-      cpu->assembleStiffness(mesh, materials, cpuPattern, at, error);
+      if (!cpu->assembleStiffness(mesh, materials, cpuPattern, at))
+        return 1;
       const double wall = NowMs() - w0;
       if (r == 0) continue; // warm-up
       cpuKe.push_back(at.elementStiffnessMs);
@@ -375,13 +378,14 @@ int main(int argc, char** argv) {
       cuda::ReleasePatternCache(*gpu);
       std::vector<double> keK, gaK, up, down, wall, withTransfers;
       cuda::AssemblyDetail first;
+      Status assembled;
       bool ok = true;
-      std::string error;
       for (int r = 0; r < repeats + 2 && ok; ++r) {
         std::fill(gpuPattern.upper.valuePtr(), gpuPattern.upper.valuePtr() + gpuPattern.upper.nonZeros(),
                   std::numeric_limits<double>::quiet_NaN());
         ComputeBackend::AssemblyTimings at;
-        ok = gpu->assembleStiffness(mesh, materials, gpuPattern, at, error);
+        assembled = gpu->assembleStiffness(mesh, materials, gpuPattern, at);
+        ok = assembled.ok;
         cuda::AssemblyDetail d;
         cuda::LastAssemblyDetail(*gpu, d);
         if (r == 0) {
@@ -401,7 +405,8 @@ int main(int argc, char** argv) {
                                                                   cpuPattern.upper.valuePtr(),
                                                                   static_cast<size_t>(row.nnz)));
       }
-      if (!ok) std::printf("GPU assembly failed: %s\n", error.c_str());
+      if (!ok)
+        std::printf("GPU assembly failed: %s\n", assembled.message.c_str());
       cuda::AssemblyDetail last;
       cuda::LastAssemblyDetail(*gpu, last);
       // The same with the transfers straight from/to pageable memory (no staging).
@@ -409,7 +414,8 @@ int main(int argc, char** argv) {
       cuda::SetPinnedTransfers(*gpu, false);
       for (int r = 0; r < repeats && ok; ++r) {
         ComputeBackend::AssemblyTimings at;
-        ok = gpu->assembleStiffness(mesh, materials, gpuPattern, at, error);
+        assembled = gpu->assembleStiffness(mesh, materials, gpuPattern, at);
+        ok = assembled.ok;
         cuda::AssemblyDetail d;
         cuda::LastAssemblyDetail(*gpu, d);
         pageableWall.push_back(d.wallMs);
@@ -553,8 +559,7 @@ int main(int argc, char** argv) {
           for (int threads : counts) {
             BlasThreadSetter()(threads);
             cuda::SupernodalCholesky cpuFactor;
-            std::string ferr;
-            const bool fok = cpuFactor.factor(coreGpuSystem->kff, ferr);
+            const bool fok = cpuFactor.factor(coreGpuSystem->kff).ok;
             std::printf("CPU CHOLMOD factorization with %2d OpenBLAS threads: analyze %.0f ms, factorize %.0f ms%s\n",
                         threads, cpuFactor.analyzeMs(), cpuFactor.factorizeMs(), fok ? "" : " FAILED");
             std::fflush(stdout);
@@ -591,8 +596,9 @@ int main(int argc, char** argv) {
           v.resize(response->cols());
           for (Eigen::Index i = 0; i < v.size(); ++i) v[i] = normal(rng);
         }
-        std::string error;
-        auto cpuOp = cpu->makeResponseOperator(*response, error);
+        std::unique_ptr<ResponseOperator> cpuOp;
+        if (!cpu->makeResponseOperator(*response, cpuOp))
+          return 1;
         std::vector<Eigen::VectorXd> cpuOut(edits.size());
         std::vector<double> cpuMs;
         double spent = 0.0;
@@ -600,7 +606,8 @@ int main(int argc, char** argv) {
           const auto& roi = edits[r % edits.size()];
           Eigen::VectorXd kept;
           const double w0 = NowMs();
-          cpuOp->apply(roi, kept, error);
+          if (!cpuOp->apply(roi, kept))
+            return 1;
           const double ms = NowMs() - w0;
           if (r < static_cast<int>(edits.size())) cpuOut[r] = kept;
           if (r == 0) continue;
@@ -619,19 +626,22 @@ int main(int argc, char** argv) {
         if (gpuOp) {
           std::vector<double> gpuMs;
           double worst = 0.0;
+          Status applied;
           bool ok = true;
           for (int r = 0; r < opt.editRepeats + 3 && ok; ++r) {
             const auto& roi = edits[r % edits.size()];
             Eigen::VectorXd kept;
             const double w0 = NowMs();
-            ok = gpuOp->apply(roi, kept, error);
+            applied = gpuOp->apply(roi, kept);
+            ok = applied.ok;
             const double ms = NowMs() - w0;
             if (!ok) break;
             if (r < static_cast<int>(edits.size()))
               worst = std::max(worst, RelativeMaxDifference(kept.data(), cpuOut[r].data(), kept.size()));
             if (r >= 3) gpuMs.push_back(ms);
           }
-          if (!ok) std::printf("GPU apply failed: %s\n", error.c_str());
+          if (!ok)
+            std::printf("GPU apply failed: %s\n", applied.message.c_str());
           row.gpuEditMs = Median(gpuMs);
           row.gpuEditRepeats = static_cast<int>(gpuMs.size());
           row.editDiff = worst;

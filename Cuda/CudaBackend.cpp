@@ -83,33 +83,39 @@ public:
 
   std::string name() const override { return name_; }
 
-  bool assembleStiffness(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
-                         AssemblyTimings& timings, std::string& error) override {
+  Status assembleStiffness(const TetMesh& mesh, const Materials& materials,
+                           AssemblyPattern& pattern, AssemblyTimings& timings) override {
     std::lock_guard<std::mutex> lock(mutex_);
     StageClock clock;
     AssemblyDetail detail;
+    std::string error;
     const bool ok = assemble(mesh, materials, pattern, timings, detail, error);
     detail.wallMs = clock.elapsedMs();
     if (ok) last_ = detail;
     if (!ok) releasePattern(); // a failed call leaves nothing half-cached
-    return ok;
+    return ok ? Status::Ok() : Status::Error(error);
   }
 
-  std::unique_ptr<ResponseOperator> makeResponseOperator(const Eigen::MatrixXd& response,
-                                                         std::string& error) override {
-    auto op = std::make_unique<CudaResponse>();
-    if (!op->init(response, error)) return nullptr;
-    return op;
+  Status makeResponseOperator(const Eigen::MatrixXd& response,
+                              std::unique_ptr<ResponseOperator>& op) override {
+    auto device = std::make_unique<CudaResponse>();
+    std::string error;
+    if (!device->init(response, error))
+      return Status::Error(error);
+    op = std::move(device);
+    return Status::Ok();
   }
 
   // Numeric factorization and dense response on the GPU (CudaDenseResponse.h). Not under mutex_:
   // it uses its own stream and handles, and assemblies may run meanwhile.
   bool providesFactorAndResponse() const override { return true; }
-  bool factorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr, Eigen::Index keptDofs,
-                              CholmodFactor& factor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
-                              FactorResponseReport& report, std::string& error) override {
+  Status factorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr,
+                                Eigen::Index keptDofs, CholmodFactor& factor,
+                                Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
+                                FactorResponseReport& report) override {
     FactorAndResponseDetail detail;
-    const bool ok = FactorAndBuildResponse(kffUpper, kfr, keptDofs, factor, response, op, detail, error);
+    const Status status =
+        FactorAndBuildResponse(kffUpper, kfr, keptDofs, factor, response, op, detail);
     report.factorizationMs = detail.factorizeMs + detail.factorDownloadMs;
     report.worstRelativeResidual = detail.response.worstRelativeResidual;
     std::ostringstream line;
@@ -120,10 +126,10 @@ public:
          << detail.response.worstRelativeResidual << ")";
     report.detail = line.str();
     std::lock_guard<std::mutex> lock(factorMutex_);
-    detail.succeeded = ok;
+    detail.succeeded = status.ok;
     detail.call = ++factorCalls_;
     lastFactor_ = detail;
-    return ok;
+    return status;
   }
   bool lastFactorDetail(FactorAndResponseDetail& detail) const {
     std::lock_guard<std::mutex> lock(factorMutex_);
@@ -452,11 +458,14 @@ std::string DeviceDescription() {
   return out.str();
 }
 
-std::shared_ptr<ComputeBackend> MakeCudaBackend(std::string& error) {
-  if (!DeviceAvailable(&error)) return nullptr;
-  auto backend = std::make_shared<CudaBackendImpl>();
-  if (!backend->init(error)) return nullptr;
-  return backend;
+Status MakeCudaBackend(std::shared_ptr<ComputeBackend>& backend) {
+  backend.reset();
+  std::string error;
+  if (!DeviceAvailable(&error)) return Status::Error(error);
+  auto made = std::make_shared<CudaBackendImpl>();
+  if (!made->init(error)) return Status::Error(error);
+  backend = std::move(made);
+  return Status::Ok();
 }
 
 namespace {
@@ -483,8 +492,10 @@ bool TimeCopies(void* dst, const void* src, size_t bytes, cudaMemcpyKind kind, i
 
 } // namespace
 
-bool MeasureBandwidth(Bandwidth& bw, std::string& error, size_t bytes, int repeats) {
-  if (!DeviceAvailable(&error)) return false;
+Status MeasureBandwidth(Bandwidth& bw, size_t bytes, int repeats) {
+  std::string error;
+  if (!DeviceAvailable(&error))
+    return Status::Error(error);
   repeats = std::max(repeats, 1);
   DeviceArray a, b;
   PinnedArray pinned;
@@ -514,7 +525,7 @@ bool MeasureBandwidth(Bandwidth& bw, std::string& error, size_t bytes, int repea
   if (start) cudaEventDestroy(start);
   if (stop) cudaEventDestroy(stop);
   if (stream) cudaStreamDestroy(stream);
-  return ok;
+  return ok ? Status::Ok() : Status::Error(error);
 }
 
 bool LastAssemblyDetail(const ComputeBackend& backend, AssemblyDetail& detail) {

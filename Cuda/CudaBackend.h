@@ -27,9 +27,9 @@ bool DeviceAvailable(std::string* why = nullptr);
 // "NVIDIA H200 (sm_90, 132 SMs, 139.8 GiB)"; empty when no device.
 std::string DeviceDescription();
 
-// The CUDA backend on device 0; null with `error` set when no usable device is present.
+// The CUDA backend on device 0; fails (backend null) when no usable device is present.
 // Its name() starts with "CUDA".
-std::shared_ptr<ComputeBackend> MakeCudaBackend(std::string& error);
+Status MakeCudaBackend(std::shared_ptr<ComputeBackend>& backend);
 
 // Breakdown of the most recent assembleStiffness call of a backend made by MakeCudaBackend
 // (device times from CUDA events, wall time from the host clock).
@@ -59,8 +59,7 @@ struct Bandwidth {
   double hostToDevicePageableGBs = 0.0;
   double deviceToHostPageableGBs = 0.0;
 };
-bool MeasureBandwidth(Bandwidth& bandwidth, std::string& error, size_t bytes = size_t(1) << 30,
-                      int repeats = 10);
+Status MeasureBandwidth(Bandwidth& bandwidth, size_t bytes = size_t(1) << 30, int repeats = 10);
 
 // Forget the cached pattern and free the assembly's device memory; the next assembly uploads
 // the pattern again.

@@ -1,7 +1,9 @@
 #pragma once
 // Error checking for CUDA runtime and cuBLAS calls inside functions that return bool and have a
 // `std::string& error` in scope: a failure sets `error` (call, file, line, CUDA's message) and
-// returns false. Nothing here aborts or throws, so errors never cross the backend interface.
+// returns false. This bool + error form stays inside Cuda/ (the macros need a plain early return);
+// every function Cuda/ exposes to Core, the filters, tests and benchmarks turns it into a Status.
+// Nothing here aborts or throws, so errors never cross the backend interface.
 #include <cublas_v2.h>
 #include <cuda_runtime_api.h>
 

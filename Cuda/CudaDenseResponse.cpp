@@ -53,57 +53,50 @@ template <class T> bool Upload(DeviceArray& dst, const T* src, size_t count, cud
 }
 } // namespace
 
-// ---------------------------------------------------------------------------------------------
-// SupernodalCholesky: CHOLMOD on the CPU with the settings of Core's CholmodFactor.
+// SupernodalCholesky: Core's CholmodFactor (ordering, symbolic analysis, CPU factorization and
+// solves) plus the GPU copy of its numeric factor.
 
 struct SupernodalCholesky::Impl {
-  QuietCholmodCommon quiet;
-  cholmod_common& common = quiet.common;
-  cholmod_factor* factor = nullptr;
-  double analyzeMs = 0.0, factorizeMs = 0.0, downloadMs = 0.0;
+  CholmodFactor factor;
   DeviceArray deviceX; // numeric factor on the GPU (factorOnGpu)
+  double analyzeMs = 0.0, factorizeMs = 0.0, downloadMs = 0.0;
   bool hostNumeric = false;
-  Impl() { common.supernodal = CHOLMOD_SUPERNODAL; }
-  ~Impl() { cholmod_free_factor(&factor, &common); }
 };
 
 SupernodalCholesky::SupernodalCholesky() : impl_(std::make_unique<Impl>()) {}
 SupernodalCholesky::~SupernodalCholesky() = default;
 
+namespace {
 
-bool SupernodalCholesky::factor(const SparseMatrix& upper, std::string& error) {
-  if (!upper.isCompressed() || upper.rows() != upper.cols()) {
-    error = "SupernodalCholesky: the matrix must be square and compressed";
-    return false;
-  }
-  cholmod_sparse view = ViewUpper(upper);
-  cholmod_free_factor(&impl_->factor, &impl_->common);
+Status CheckSquareCompressed(const SparseMatrix& upper) {
+  if (!upper.isCompressed() || upper.rows() != upper.cols())
+    return Status::Error("SupernodalCholesky: the matrix must be square and compressed");
+  return Status::Ok();
+}
+
+} // namespace
+
+Status SupernodalCholesky::factor(const SparseMatrix& upper) {
+  Status status = CheckSquareCompressed(upper);
+  if (!status)
+    return status;
   impl_->deviceX.release();
   impl_->hostNumeric = false;
+  impl_->downloadMs = 0.0;
   StageClock clock;
-  impl_->factor = cholmod_analyze(&view, &impl_->common);
+  status = impl_->factor.analyze(upper);
   impl_->analyzeMs = clock.lapMs();
-  if (!impl_->factor || impl_->common.status < CHOLMOD_OK) {
-    error = "CHOLMOD ordering failed (status " + std::to_string(impl_->common.status) + ")";
-    return false;
-  }
-  const int ok = cholmod_factorize(&view, impl_->factor, &impl_->common);
+  if (!status)
+    return status;
+  status = impl_->factor.factorize(upper);
   impl_->factorizeMs = clock.lapMs();
-  if (!ok || impl_->common.status == CHOLMOD_OUT_OF_MEMORY) {
-    error = "CHOLMOD factorization ran out of memory";
-    return false;
-  }
-  if (impl_->common.status == CHOLMOD_NOT_POSDEF || impl_->factor->minor < impl_->factor->n) {
-    error = "matrix is not positive definite (CHOLMOD stopped at column " +
-            std::to_string(impl_->factor->minor) + ")";
-    return false;
-  }
-  if (!impl_->factor->is_super || !impl_->factor->is_ll || impl_->factor->itype != CHOLMOD_INT) {
-    error = "CHOLMOD did not return a supernodal LL^T factor with 32-bit indices";
-    return false;
-  }
+  if (!status)
+    return status;
+  const cholmod_factor* L = impl_->factor.cholmodFactor();
+  if (!L->is_super || !L->is_ll || L->itype != CHOLMOD_INT)
+    return Status::Error("CHOLMOD did not return a supernodal LL^T factor with 32-bit indices");
   impl_->hostNumeric = true;
-  return true;
+  return Status::Ok();
 }
 
 #define FP_CUSOLVER_TRY(expr)                                                                      \
@@ -128,29 +121,32 @@ struct FactorResources {
 };
 } // namespace
 
-bool SupernodalCholesky::factorOnGpu(const SparseMatrix& upper, std::string& error, bool hostCopy) {
-  if (!upper.isCompressed() || upper.rows() != upper.cols()) {
-    error = "SupernodalCholesky: the matrix must be square and compressed";
-    return false;
-  }
-  if (!detail::InitDevice(error)) return false;
-  cholmod_sparse view = ViewUpper(upper);
-  cholmod_free_factor(&impl_->factor, &impl_->common);
+Status SupernodalCholesky::factorOnGpu(const SparseMatrix& upper, bool hostCopy) {
+  Status status = CheckSquareCompressed(upper);
+  if (!status)
+    return status;
+  std::string error;
+  if (!detail::InitDevice(error))
+    return Status::Error(error);
   impl_->deviceX.release();
   impl_->hostNumeric = false;
   impl_->downloadMs = 0.0;
   StageClock clock;
-  impl_->factor = cholmod_analyze(&view, &impl_->common);
+  status = impl_->factor.analyze(upper);
   impl_->analyzeMs = clock.lapMs();
-  if (!impl_->factor || impl_->common.status < CHOLMOD_OK) {
-    error = "CHOLMOD ordering failed (status " + std::to_string(impl_->common.status) + ")";
-    return false;
-  }
-  if (!detail::FactorAnalysedOnGpu(upper, impl_->factor, &impl_->common, impl_->deviceX, hostCopy,
+  if (!status)
+    return status;
+  if (!detail::FactorAnalysedOnGpu(upper, impl_->factor.cholmodFactor(),
+                                   impl_->factor.cholmodCommon(), impl_->deviceX, hostCopy,
                                    impl_->factorizeMs, impl_->downloadMs, error))
-    return false;
+    return Status::Error(error);
+  if (hostCopy) {
+    status = impl_->factor.markFactorized();
+    if (!status)
+      return status;
+  }
   impl_->hostNumeric = hostCopy;
-  return true;
+  return Status::Ok();
 }
 
 namespace detail {
@@ -266,38 +262,14 @@ bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_c
 
 void SupernodalCholesky::releaseDevice() { impl_->deviceX.release(); }
 
-bool SupernodalCholesky::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, std::string& error) const {
-  if (!impl_->factor || !impl_->hostNumeric) {
-    error = "SupernodalCholesky: no numeric factor on the host";
-    return false;
-  }
-  if (static_cast<size_t>(b.rows()) != impl_->factor->n) {
-    error = "SupernodalCholesky: right-hand side has the wrong size";
-    return false;
-  }
-  cholmod_dense rhs{};
-  rhs.nrow = b.rows();
-  rhs.ncol = b.cols();
-  rhs.nzmax = b.size();
-  rhs.d = b.rows();
-  rhs.x = const_cast<double*>(b.data());
-  rhs.xtype = CHOLMOD_REAL;
-  rhs.dtype = CHOLMOD_DOUBLE;
-  cholmod_dense* result = cholmod_solve(CHOLMOD_A, impl_->factor, &rhs, &impl_->common);
-  if (!result) {
-    error = "CHOLMOD solve failed";
-    return false;
-  }
-  x.resize(b.rows(), b.cols());
-  for (Eigen::Index c = 0; c < b.cols(); ++c)
-    std::copy(static_cast<const double*>(result->x) + c * result->d,
-              static_cast<const double*>(result->x) + c * result->d + b.rows(), x.col(c).data());
-  cholmod_free_dense(&result, &impl_->common);
-  return true;
+Status SupernodalCholesky::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
+  if (!impl_->hostNumeric)
+    return Status::Error("SupernodalCholesky: no numeric factor on the host");
+  return impl_->factor.solve(b, x);
 }
 
 SupernodalFactorView SupernodalCholesky::view() const {
-  const cholmod_factor* L = impl_->factor;
+  const cholmod_factor* L = impl_->factor.cholmodFactor();
   if (!L || !L->is_super) return SupernodalFactorView();
   SupernodalFactorView v = ViewOfFactor(L);
   if (!impl_->hostNumeric) v.x = nullptr;
@@ -308,7 +280,9 @@ SupernodalFactorView SupernodalCholesky::view() const {
 double SupernodalCholesky::analyzeMs() const { return impl_->analyzeMs; }
 double SupernodalCholesky::factorizeMs() const { return impl_->factorizeMs; }
 double SupernodalCholesky::downloadMs() const { return impl_->downloadMs; }
-double SupernodalCholesky::factorNonzeros() const { return impl_->common.lnz; }
+double SupernodalCholesky::factorNonzeros() const {
+  return impl_->factor.factorNonzeros();
+}
 
 // ---------------------------------------------------------------------------------------------
 // BuildDenseResponse
@@ -598,42 +572,43 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
 
 } // namespace
 
-bool BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix* kffUpper, const SparseMatrix& kfr,
-                        Eigen::Index keptRows, Eigen::MatrixXd* responseHost, std::unique_ptr<ResponseOperator>* op,
-                        DenseResponseDetail& detail, std::string& error, int maxColumnsPerPass) {
+Status BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix* kffUpper,
+                          const SparseMatrix& kfr, Eigen::Index keptRows,
+                          Eigen::MatrixXd* responseHost, std::unique_ptr<ResponseOperator>* op,
+                          DenseResponseDetail& detail, int maxColumnsPerPass) {
   detail = DenseResponseDetail{};
   StageClock clock;
+  std::string error;
   const bool ok = Build(factor, kffUpper, kfr, keptRows, responseHost, op, detail, error, maxColumnsPerPass);
   detail.wallMs = clock.elapsedMs();
-  return ok;
+  return ok ? Status::Ok() : Status::Error(error);
 }
 
-bool FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr, Eigen::Index keptDofs,
-                            CholmodFactor& factor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
-                            FactorAndResponseDetail& detail, std::string& error) {
+Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr,
+                              Eigen::Index keptDofs, CholmodFactor& factor,
+                              Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
+                              FactorAndResponseDetail& detail) {
   detail = FactorAndResponseDetail{};
   StageClock clock;
   cholmod_factor* L = factor.cholmodFactor();
-  if (!L) {
-    error = "FactorAndBuildResponse: the factor has not been analysed";
-    return false;
-  }
+  if (!L)
+    return Status::Error("FactorAndBuildResponse: the factor has not been analysed");
   detail.factorNonzeros = factor.factorNonzeros();
   DeviceArray deviceX;
+  std::string error;
   if (!detail::FactorAnalysedOnGpu(kffUpper, L, factor.cholmodCommon(), deviceX, true, detail.factorizeMs,
                                    detail.factorDownloadMs, error))
-    return false;
+    return Status::Error(error);
   const Status marked = factor.markFactorized();
-  if (!marked) {
-    error = marked.message;
-    return false;
-  }
+  if (!marked)
+    return marked;
   SupernodalFactorView view = ViewOfFactor(L);
   view.deviceX = deviceX.as<double>();
-  const bool ok = BuildDenseResponse(view, &kffUpper, kfr, keptDofs, &response, &op, detail.response, error);
+  const Status built =
+      BuildDenseResponse(view, &kffUpper, kfr, keptDofs, &response, &op, detail.response);
   deviceX.release();
   detail.wallMs = clock.elapsedMs();
-  return ok;
+  return built;
 }
 
 } // namespace faceplan::cuda

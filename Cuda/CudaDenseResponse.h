@@ -1,5 +1,5 @@
 #pragma once
-// The dense response of a condensed system, built on the GPU (issue 4, precompute):
+// The dense response of a condensed system, built on the GPU (precompute):
 //
 //   response = -(rows [0, keptRows) of K_FF^-1 K_FR)        (kept DOFs x ROI DOFs)
 //
@@ -12,10 +12,11 @@
 //
 // The numeric factorization runs on the GPU too (FactorAndBuildResponse below, on Core's own
 // CholmodFactor after its CPU analysis; that is what Precompute() uses with the CUDA backend), or
-// on the CPU with CHOLMOD (SupernodalCholesky::factor, for comparisons).
-#include "SparseSolver/CholmodFactor.h"
+// on the CPU (SupernodalCholesky::factor, for comparisons).
 #include "Backend/ComputeBackend.h"
+#include "Common/Status.h"
 #include "Element/StiffnessAssembly.h"
+#include "SparseSolver/CholmodFactor.h"
 
 #include <Eigen/Core>
 #include <memory>
@@ -37,8 +38,9 @@ struct SupernodalFactorView {
   const double* deviceX = nullptr; // x already in GPU memory (SupernodalCholesky::factorOnGpu), or null
 };
 
-// CHOLMOD analyze + supernodal factorize of a symmetric positive definite matrix given by its
-// upper triangle (CPU; BLAS threads as configured). Owns the factor.
+// Core's CholmodFactor (ordering, symbolic analysis, CPU factorization and solves) of a symmetric
+// positive definite matrix given by its upper triangle, with its numeric factorization optionally
+// on the GPU and the GPU copy of the factor kept for BuildDenseResponse.
 class SupernodalCholesky {
 public:
   SupernodalCholesky();
@@ -46,18 +48,18 @@ public:
   SupernodalCholesky(const SupernodalCholesky&) = delete;
   SupernodalCholesky& operator=(const SupernodalCholesky&) = delete;
 
-  // CHOLMOD ordering, symbolic and numeric factorization on the CPU.
-  bool factor(const SparseMatrix& upper, std::string& error);
+  // Ordering, symbolic and numeric factorization on the CPU (CholmodFactor).
+  Status factor(const SparseMatrix& upper);
   // CHOLMOD ordering and symbolic analysis on the CPU, numeric factorization on the GPU
   // (right-looking supernodal: cuSOLVER DPOTRF, cuBLAS DTRSM and DSYRK per supernode, updates
   // scattered into the ancestors). The factor stays in GPU memory (view().deviceX); with
   // `hostCopy` it is also copied into the CHOLMOD factor, so that CPU solves work as after factor().
-  bool factorOnGpu(const SparseMatrix& upper, std::string& error, bool hostCopy = true);
+  Status factorOnGpu(const SparseMatrix& upper, bool hostCopy = true);
   // Frees the GPU copy (the host factor, if any, stays).
   void releaseDevice();
   SupernodalFactorView view() const;
-  // x = A^-1 b on the CPU with CHOLMOD (needs the host factor).
-  bool solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, std::string& error) const;
+  // x = A^-1 b on the CPU (needs the host factor).
+  Status solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
   double analyzeMs() const;
   double factorizeMs() const;   // numeric factorization (GPU: including uploads)
   double downloadMs() const;    // GPU factor to the CHOLMOD factor (factorOnGpu with hostCopy)
@@ -86,12 +88,12 @@ struct DenseResponseDetail {
 // Builds the response on the GPU. `kffUpper` (the matrix `factor` factors, upper triangle) is
 // used for the residual check; pass null to skip it. With `responseHost`, the response is also
 // copied to the host; with `op`, a ResponseOperator that keeps the device copy is returned.
-// False with `error` set on any device failure (the caller then uses the CPU path).
+// Fails on any device failure (the caller then uses the CPU path).
 // maxColumnsPerPass > 0 caps the right-hand sides per pass (otherwise: as many as fit).
-bool BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix* kffUpper,
-                        const SparseMatrix& kfr, Eigen::Index keptRows, Eigen::MatrixXd* responseHost,
-                        std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail,
-                        std::string& error, int maxColumnsPerPass = 0);
+Status BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix* kffUpper,
+                          const SparseMatrix& kfr, Eigen::Index keptRows,
+                          Eigen::MatrixXd* responseHost, std::unique_ptr<ResponseOperator>* op,
+                          DenseResponseDetail& detail, int maxColumnsPerPass = 0);
 
 // The CUDA backend's ComputeBackend::factorAndBuildResponse (what Precompute() runs for
 // DenseResponse with the CUDA backend): numeric factorization of `factor` (after
@@ -108,9 +110,10 @@ struct FactorAndResponseDetail {
   bool succeeded = false;
   long long call = 0; // the backend's count of factorAndBuildResponse calls, this one included
 };
-bool FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr, Eigen::Index keptDofs,
-                            CholmodFactor& factor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
-                            FactorAndResponseDetail& detail, std::string& error);
+Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr,
+                              Eigen::Index keptDofs, CholmodFactor& factor,
+                              Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
+                              FactorAndResponseDetail& detail);
 
 // The detail of the most recent factorAndBuildResponse call of a backend made by MakeCudaBackend
 // (see `succeeded` and `call`); false when it has had none or `backend` is not a CUDA backend.

@@ -145,12 +145,16 @@ public:
     return setUp(error);
   }
 
-  bool apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept, std::string& error) override {
-    if (roi.size() != cols_) {
-      error = "ROI vector does not match the response";
-      return false;
-    }
+  Status apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept) override {
+    if (roi.size() != cols_)
+      return Status::Error("ROI vector does not match the response");
     std::lock_guard<std::mutex> lock(mutex_);
+    std::string error;
+    return applyOnDevice(roi, kept, error) ? Status::Ok() : Status::Error(error);
+  }
+
+private:
+  bool applyOnDevice(const Eigen::VectorXd& roi, Eigen::VectorXd& kept, std::string& error) {
     kept.resize(rows_);
     if (rows_ == 0) return true;
     if (cols_ == 0) {
@@ -171,7 +175,6 @@ public:
     return true;
   }
 
-private:
   size_t matrixBytes() const { return sizeof(double) * static_cast<size_t>(rows_) * static_cast<size_t>(cols_); }
 
   bool checkDims(Eigen::Index rows, Eigen::Index cols, std::string& error) {

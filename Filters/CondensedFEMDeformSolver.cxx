@@ -46,10 +46,9 @@ void Solver::chooseBackend(const Settings& settings, PrecomputeRequest& request,
   if (!cudaProbed_) {
     cudaProbed_ = true;
 #ifdef FACEPLAN_HAS_CUDA
-    std::string error;
-    cudaBackend_ = cuda::MakeCudaBackend(error);
-    if (!cudaBackend_)
-      cudaUnavailable_ = error;
+    const Status made = cuda::MakeCudaBackend(cudaBackend_);
+    if (!made)
+      cudaUnavailable_ = made.message;
 #else
     cudaUnavailable_ = "this build has no CUDA backend";
 #endif

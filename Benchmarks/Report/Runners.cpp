@@ -1,3 +1,4 @@
+#include "Common/RelativeDifference.h"
 #include "Report/Report.h"
 
 #include "CalculixRunner.h"
@@ -43,7 +44,7 @@ Errors Compare(const Displacements& u, const Displacements& reference) {
   e.maxAbs = diff.maxCoeff();
   e.rmsAbs = std::sqrt(diff.squaredNorm() / n);
   const double refMax = ref.maxCoeff(), refRms = std::sqrt(ref.squaredNorm() / n);
-  e.maxRel = refMax > 0 ? e.maxAbs / refMax : kNaN;
+  e.maxRel = refMax > 0 ? RelativeMaxNodeDifference(u, reference) : kNaN;
   e.rmsRel = refRms > 0 ? e.rmsAbs / refRms : kNaN;
   return e;
 }
@@ -499,10 +500,10 @@ void Report::runCuda(Scene& s) {
   std::string why;
   if (!cuda::DeviceAvailable(&why))
     return notRun(s, "CUDA (condensed, GPU backend)", "no GPU: " + why);
-  std::string error;
-  auto backend = cuda::MakeCudaBackend(error);
-  if (!backend)
-    return notRun(s, "CUDA (condensed, GPU backend)", error);
+  std::shared_ptr<ComputeBackend> backend;
+  const Status made = cuda::MakeCudaBackend(backend);
+  if (!made)
+    return notRun(s, "CUDA (condensed, GPU backend)", made.message);
   SolveInput input;
   input.movableDisplacement = s.edit;
   for (SolveMethod method : {SolveMethod::CachedFactor, SolveMethod::DenseResponse}) {

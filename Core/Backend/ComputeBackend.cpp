@@ -10,13 +10,11 @@ namespace {
 class CpuResponse final : public ResponseOperator {
 public:
   explicit CpuResponse(const Eigen::MatrixXd& response) : response_(response) {}
-  bool apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept, std::string& error) override {
-    if (response_.cols() != roi.size()) {
-      error = "ROI vector does not match the response";
-      return false;
-    }
+  Status apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept) override {
+    if (response_.cols() != roi.size())
+      return Status::Error("ROI vector does not match the response");
     kept.noalias() = response_ * roi;
-    return true;
+    return Status::Ok();
   }
 
 private:
@@ -27,20 +25,21 @@ class CpuBackend final : public ComputeBackend {
 public:
   std::string name() const override { return "CPU"; }
 
-  bool assembleStiffness(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
-                         AssemblyTimings& timings, std::string&) override {
+  Status assembleStiffness(const TetMesh& mesh, const Materials& materials,
+                           AssemblyPattern& pattern, AssemblyTimings& timings) override {
     StageClock clock;
     std::vector<double> packed;
     ComputePackedElementStiffness(mesh, materials, packed);
     timings.elementStiffnessMs = clock.lapMs();
     AssembleFromPacked(packed, pattern);
     timings.assemblyMs = clock.lapMs();
-    return true;
+    return Status::Ok();
   }
 
-  std::unique_ptr<ResponseOperator> makeResponseOperator(const Eigen::MatrixXd& response,
-                                                         std::string&) override {
-    return std::make_unique<CpuResponse>(response);
+  Status makeResponseOperator(const Eigen::MatrixXd& response,
+                              std::unique_ptr<ResponseOperator>& op) override {
+    op = std::make_unique<CpuResponse>(response);
+    return Status::Ok();
   }
 };
 

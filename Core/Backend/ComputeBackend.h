@@ -1,6 +1,7 @@
 #pragma once
 // The compute steps that have a second (CUDA) implementation. Core runs the CPU one; Cuda/
 // provides another behind this same interface, and the caller chooses which to pass in.
+#include "Common/Status.h"
 #include "Element/StiffnessAssembly.h"
 #include "Mesh/TetMesh.h"
 
@@ -24,18 +25,17 @@ public:
     double assemblyMs = 0.0; // includes moving the values back to the host
   };
   // Element stiffness for every tetrahedron and assembly into pattern.upper's values.
-  // Returns false with `error` set when the device fails; the caller then falls back to the CPU.
-  virtual bool assembleStiffness(const TetMesh& mesh, const Materials& materials,
-                                 AssemblyPattern& pattern, AssemblyTimings& timings,
-                                 std::string& error) = 0;
+  // Fails when the device fails; the caller then falls back to the CPU.
+  virtual Status assembleStiffness(const TetMesh& mesh, const Materials& materials,
+                                   AssemblyPattern& pattern, AssemblyTimings& timings) = 0;
 
   // Per-edit update with the dense response held where the backend computes (the GPU's memory
-  // for CUDA): the precompute makes one operator, each edit applies it. Null (with `error` set)
+  // for CUDA): the precompute makes one operator, each edit applies it. Fails (op stays null)
   // when the backend cannot hold it; the caller then falls back to the CPU.
-  virtual std::unique_ptr<ResponseOperator>
-  makeResponseOperator(const Eigen::MatrixXd& response, std::string& error) = 0;
+  virtual Status makeResponseOperator(const Eigen::MatrixXd& response,
+                                      std::unique_ptr<ResponseOperator>& op) = 0;
 
-  // ---- optional: numeric factorization + dense response in one step (the CUDA backend) ----
+  // Optional: numeric factorization and dense response in one step (the CUDA backend).
   // True when the backend implements factorAndBuildResponse. The CPU backend keeps the default:
   // Precompute then runs CholmodFactor::factorize and its own blocked CPU response.
   virtual bool providesFactorAndResponse() const { return false; }
@@ -50,15 +50,15 @@ public:
   // it usable for CPU solves, factor.isFactorized()), the dense response
   //   response = -(rows [0, keptDofs) of K_FF^-1 K_FR)      (host copy, keptDofs x ROI DOFs)
   // and the per-edit operator holding it (`op`, may stay null: the caller then makes one).
-  // False with `error` set on failure; `factor` may be factorized or not then, and the caller does
-  // on the CPU whatever is missing (with a warning).
-  virtual bool factorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr,
-                                      Eigen::Index keptDofs, CholmodFactor& factor,
-                                      Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
-                                      FactorResponseReport& report, std::string& error) {
+  // On failure `factor` may be factorized or not, and the caller does on the CPU whatever is
+  // missing (with a warning).
+  virtual Status factorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& kfr,
+                                        Eigen::Index keptDofs, CholmodFactor& factor,
+                                        Eigen::MatrixXd& response,
+                                        std::unique_ptr<ResponseOperator>& op,
+                                        FactorResponseReport& report) {
     (void)kffUpper, (void)kfr, (void)keptDofs, (void)factor, (void)response, (void)op, (void)report;
-    error = "unsupported";
-    return false;
+    return Status::Error("unsupported");
   }
 };
 
@@ -66,7 +66,7 @@ public:
 class ResponseOperator {
 public:
   virtual ~ResponseOperator() = default;
-  virtual bool apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept, std::string& error) = 0;
+  virtual Status apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept) = 0;
 };
 
 // The CPU implementation (OpenMP-free: std::thread for element stiffness, Eigen for GEMV).

@@ -1,5 +1,6 @@
 #include "Comparison/ConjugateGradientSolve.h"
 
+#include "Common/ExceptionBoundary.h"
 #include <Eigen/IterativeLinearSolvers>
 #include <cmath>
 #include <variant>
@@ -42,7 +43,7 @@ Status Compute(Solver& solver, const Mat& matrix) {
 } // namespace
 
 Status ConjugateGradientSolver::setup(const FreeSystem& system, const CGOptions& options) {
-  try {
+  return ReturnStatusOnException("the CG setup", [&]() -> Status {
     StageClock clock;
     Impl& m = *impl_;
     m.system = &system;
@@ -51,20 +52,20 @@ Status ConjugateGradientSolver::setup(const FreeSystem& system, const CGOptions&
     Status s;
     const bool ichol = options.preconditioner == CGPreconditioner::IncompleteCholesky;
     if (options.precision == CGPrecision::Double) {
-      if (ichol) s = Compute(m.cg.emplace<IcholCG<double>>(), system.kff);
-      else s = Compute(m.cg.emplace<JacobiCG<double>>(), system.kff);
+      if (ichol)
+        s = Compute(m.cg.emplace<IcholCG<double>>(), system.kff);
+      else
+        s = Compute(m.cg.emplace<JacobiCG<double>>(), system.kff);
     } else {
       m.kffSingle = system.kff.cast<float>();
-      if (ichol) s = Compute(m.cg.emplace<IcholCG<float>>(), m.kffSingle);
-      else s = Compute(m.cg.emplace<JacobiCG<float>>(), m.kffSingle);
+      if (ichol)
+        s = Compute(m.cg.emplace<IcholCG<float>>(), m.kffSingle);
+      else
+        s = Compute(m.cg.emplace<JacobiCG<float>>(), m.kffSingle);
     }
     m.setupMs = clock.elapsedMs();
     return s;
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory in the CG setup");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("CG setup failed: ") + e.what());
-  }
+  });
 }
 
 namespace {
@@ -88,12 +89,15 @@ void Run(Solver& solver, const Eigen::VectorXd& b, double tolerance, const Eigen
 
 Status ConjugateGradientSolver::solve(const Eigen::VectorXd& b, double tolerance, const Eigen::VectorXd* guess,
                                       Eigen::VectorXd& x, CGReport& report) const {
-  try {
+  return ReturnStatusOnException("the CG solve", [&]() -> Status {
     report = CGReport();
     const Impl& m = *impl_;
-    if (!m.system) return Status::Error("CG solve before setup");
-    if (b.size() != m.system->freeDofs()) return Status::Error("CG right-hand side has the wrong size");
-    if (!(tolerance > 0.0)) return Status::Error("CG tolerance must be positive");
+    if (!m.system)
+      return Status::Error("CG solve before setup");
+    if (b.size() != m.system->freeDofs())
+      return Status::Error("CG right-hand side has the wrong size");
+    if (!(tolerance > 0.0))
+      return Status::Error("CG tolerance must be positive");
     StageClock clock;
     if (b.squaredNorm() == 0.0) {
       x = Eigen::VectorXd::Zero(b.size());
@@ -108,14 +112,11 @@ Status ConjugateGradientSolver::solve(const Eigen::VectorXd& b, double tolerance
         },
         cg);
     report.solveMs = clock.elapsedMs();
-    if (!x.allFinite()) return Status::Error("CG produced non-finite values");
+    if (!x.allFinite())
+      return Status::Error("CG produced non-finite values");
     report.relativeResidual = FreeRelativeResidual(*m.system, x, b);
     return Status::Ok();
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory in the CG solve");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("CG solve failed: ") + e.what());
-  }
+  });
 }
 
 } // namespace faceplan

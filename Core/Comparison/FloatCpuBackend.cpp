@@ -7,15 +7,13 @@ namespace {
 class FloatCpuResponse final : public ResponseOperator {
 public:
   explicit FloatCpuResponse(const Eigen::MatrixXd& response) : response_(response.cast<float>()) {}
-  bool apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept, std::string& error) override {
-    if (response_.cols() != roi.size()) {
-      error = "ROI vector does not match the response";
-      return false;
-    }
+  Status apply(const Eigen::VectorXd& roi, Eigen::VectorXd& kept) override {
+    if (response_.cols() != roi.size())
+      return Status::Error("ROI vector does not match the response");
     const Eigen::VectorXf roiF = roi.cast<float>();
     const Eigen::VectorXf keptF = response_ * roiF;
     kept = keptF.cast<double>();
-    return true;
+    return Status::Ok();
   }
 
 private:
@@ -25,13 +23,14 @@ private:
 class FloatCpuBackend final : public ComputeBackend {
 public:
   std::string name() const override { return "CPU-float"; }
-  bool assembleStiffness(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
-                         AssemblyTimings& timings, std::string& error) override {
-    return cpu_->assembleStiffness(mesh, materials, pattern, timings, error);
+  Status assembleStiffness(const TetMesh& mesh, const Materials& materials,
+                           AssemblyPattern& pattern, AssemblyTimings& timings) override {
+    return cpu_->assembleStiffness(mesh, materials, pattern, timings);
   }
-  std::unique_ptr<ResponseOperator> makeResponseOperator(const Eigen::MatrixXd& response,
-                                                         std::string&) override {
-    return std::make_unique<FloatCpuResponse>(response);
+  Status makeResponseOperator(const Eigen::MatrixXd& response,
+                              std::unique_ptr<ResponseOperator>& op) override {
+    op = std::make_unique<FloatCpuResponse>(response);
+    return Status::Ok();
   }
 
 private:

@@ -1,8 +1,10 @@
 #include "Comparison/FreeSystem.h"
 
-#include "Element/ElementStiffness.h"
-#include "Mesh/MeshValidation.h"
+#include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/NodeLayout.h"
+#include "Element/ElementStiffness.h"
+#include "Mesh/InputValidation.h"
+#include "Mesh/MeshValidation.h"
 #include "Mesh/NodeSetValidation.h"
 
 namespace faceplan {
@@ -26,18 +28,20 @@ void MakeFreeLayout(const TetMesh& mesh, const NodeSets& sets, FreeSystem& s) {
 } // namespace
 
 Status BuildFreeSystem(const PrecomputeRequest& request, FreeSystem& s) {
-  try {
+  return ReturnStatusOnException("assembling the free system", [&]() -> Status {
     s = FreeSystem();
-    Status status = ValidateMeshAndMaterials(request.mesh, request.materials);
-    if (status) status = ValidateNodeSets(request.mesh, request.sets);
-    if (status) status = CheckEveryComponentConstrained(request.mesh, request.sets.constrained);
-    if (!status) return status;
+    Status status = ValidateSolveInputs(request.mesh, request.materials, request.sets);
+    if (!status)
+      return status;
     s.numMeshNodes = request.mesh.numPoints();
     s.kept = request.sets.kept;
     MakeFreeLayout(request.mesh, request.sets, s);
     StageClock clock;
-    AssemblyPattern pattern =
-        BuildAssemblyPattern(request.mesh, s.dofNode, static_cast<int>(s.meshNode.size()));
+    AssemblyPattern pattern;
+    status =
+        BuildAssemblyPattern(request.mesh, s.dofNode, static_cast<int>(s.meshNode.size()), pattern);
+    if (!status)
+      return status;
     const double patternMs = clock.lapMs();
     std::vector<double> packed;
     ComputePackedElementStiffness(request.mesh, request.materials, packed);
@@ -51,11 +55,7 @@ Status BuildFreeSystem(const PrecomputeRequest& request, FreeSystem& s) {
     s.kfr.makeCompressed();
     s.assemblyMs = patternMs + clock.lapMs();
     return status;
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory while assembling the free system");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("assembling the free system failed: ") + e.what());
-  }
+  });
 }
 
 Status RoiVector(const FreeSystem& s, const Displacements& movable, Eigen::VectorXd& roi) {

@@ -1,6 +1,8 @@
 #include "Comparison/MassSpringSolve.h"
 
+#include "Common/ExceptionBoundary.h"
 #include "Element/ElementStiffness.h"
+#include "Mesh/InputValidation.h"
 #include "Mesh/MeshValidation.h"
 #include "Mesh/NodeSetValidation.h"
 
@@ -9,28 +11,32 @@
 namespace faceplan {
 
 Status MassSpringModel::build(const PrecomputeRequest& request) {
-  try {
+  return ReturnStatusOnException("building the mass-spring model", [&]() -> Status {
     ready_ = false;
     const TetMesh& mesh = request.mesh;
-    Status status = ValidateMeshAndMaterials(mesh, request.materials);
-    if (status) status = ValidateNodeSets(mesh, request.sets);
-    if (status) status = CheckEveryComponentConstrained(mesh, request.sets.constrained);
-    if (!status) return status;
+    Status status = ValidateSolveInputs(mesh, request.materials, request.sets);
+    if (!status)
+      return status;
     StageClock clock;
     const Eigen::Index n = mesh.numPoints();
     numNodes_ = n;
     kept_ = request.sets.kept;
     std::vector<char> constrained(n, 0), used(n, 0);
-    for (int i : request.sets.constrained) constrained[i] = 1;
+    for (int i : request.sets.constrained)
+      constrained[i] = 1;
     for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
-      for (int k = 0; k < 4; ++k) used[mesh.tets(e, k)] = 1;
+      for (int k = 0; k < 4; ++k)
+        used[mesh.tets(e, k)] = 1;
     freeIndex_.assign(n, -1);
     prescribedIndex_.assign(n, -1);
     numFree_ = numPrescribed_ = 0;
     for (Eigen::Index i = 0; i < n; ++i) {
-      if (!used[i]) continue;
-      if (constrained[i]) prescribedIndex_[i] = numPrescribed_++;
-      else freeIndex_[i] = numFree_++;
+      if (!used[i])
+        continue;
+      if (constrained[i])
+        prescribedIndex_[i] = numPrescribed_++;
+      else
+        freeIndex_[i] = numFree_++;
     }
     movableToPrescribed_.assign(request.sets.movable.size(), -1);
     for (size_t k = 0; k < request.sets.movable.size(); ++k)
@@ -41,11 +47,13 @@ Status MassSpringModel::build(const PrecomputeRequest& request) {
     TetCorners corners;
     static const int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
     for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-      for (int k = 0; k < 4; ++k) corners.row(k) = mesh.points.row(mesh.tets(e, k));
+      for (int k = 0; k < 4; ++k)
+        corners.row(k) = mesh.points.row(mesh.tets(e, k));
       const double volume = TetVolume(corners);
       for (const auto& edge : edges) {
         int a = mesh.tets(e, edge[0]), b = mesh.tets(e, edge[1]);
-        if (a > b) std::swap(a, b);
+        if (a > b)
+          std::swap(a, b);
         edgeStiffness[{a, b}] += request.materials.E(e) * volume;
       }
     }
@@ -80,33 +88,34 @@ Status MassSpringModel::build(const PrecomputeRequest& request) {
     buildMs_ = clock.lapMs();
     if (numFree_ > 0) {
       status = factor_.analyze(kffUpper_);
-      if (status) status = factor_.factorize(kffUpper_);
-      if (!status) return Status::Error("mass-spring stiffness: " + status.message);
+      if (status)
+        status = factor_.factorize(kffUpper_);
+      if (!status)
+        return Status::Error("mass-spring stiffness: " + status.message);
     }
     factorizeMs_ = clock.lapMs();
     ready_ = true;
     return Status::Ok();
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory building the mass-spring model");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("mass-spring build failed: ") + e.what());
-  }
+  });
 }
 
 Status MassSpringModel::solve(const Displacements& movable, Displacements& kept, Displacements* all) const {
-  try {
-    if (!ready_) return Status::Error("mass-spring solve before a successful build");
+  return ReturnStatusOnException("the mass-spring solve", [&]() -> Status {
+    if (!ready_)
+      return Status::Error("mass-spring solve before a successful build");
     if (movable.rows() != static_cast<Eigen::Index>(movableToPrescribed_.size()))
       return Status::Error("expected one ROI displacement per movable node");
     Eigen::VectorXd up = Eigen::VectorXd::Zero(3 * numPrescribed_);
     for (size_t k = 0; k < movableToPrescribed_.size(); ++k)
-      if (movableToPrescribed_[k] >= 0) up.segment<3>(3 * movableToPrescribed_[k]) = movable.row(k).transpose();
+      if (movableToPrescribed_[k] >= 0)
+        up.segment<3>(3 * movableToPrescribed_[k]) = movable.row(k).transpose();
     Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * numFree_);
     if (numFree_ > 0) {
       const Eigen::VectorXd rhs = -(kfp_ * up);
       Eigen::MatrixXd solution;
       Status s = factor_.solve(rhs, solution);
-      if (!s) return s;
+      if (!s)
+        return s;
       x = solution.col(0);
     }
     auto valueOf = [&](int node) -> Eigen::RowVector3d {
@@ -115,16 +124,17 @@ Status MassSpringModel::solve(const Displacements& movable, Displacements& kept,
       return Eigen::RowVector3d::Zero();
     };
     kept.resize(static_cast<Eigen::Index>(kept_.size()), 3);
-    for (size_t k = 0; k < kept_.size(); ++k) kept.row(k) = valueOf(kept_[k]);
+    for (size_t k = 0; k < kept_.size(); ++k)
+      kept.row(k) = valueOf(kept_[k]);
     if (all) {
       all->resize(numNodes_, 3);
-      for (Eigen::Index i = 0; i < numNodes_; ++i) all->row(i) = valueOf(static_cast<int>(i));
+      for (Eigen::Index i = 0; i < numNodes_; ++i)
+        all->row(i) = valueOf(static_cast<int>(i));
     }
-    if (!kept.allFinite()) return Status::Error("mass-spring solve produced non-finite values");
+    if (!kept.allFinite())
+      return Status::Error("mass-spring solve produced non-finite values");
     return Status::Ok();
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("mass-spring solve failed: ") + e.what());
-  }
+  });
 }
 
 } // namespace faceplan

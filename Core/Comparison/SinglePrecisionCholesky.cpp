@@ -1,5 +1,6 @@
 #include "Comparison/SinglePrecisionCholesky.h"
 
+#include "Common/ExceptionBoundary.h"
 #include <Eigen/SparseCholesky>
 
 namespace faceplan {
@@ -15,7 +16,7 @@ SinglePrecisionCholesky::~SinglePrecisionCholesky() = default;
 double SinglePrecisionCholesky::factorizeMs() const { return impl_->factorizeMs; }
 
 Status SinglePrecisionCholesky::factorize(const FreeSystem& system) {
-  try {
+  return ReturnStatusOnException("the single-precision factorization", [&]() -> Status {
     StageClock clock;
     impl_->system = nullptr;
     const Eigen::SparseMatrix<float, Eigen::ColMajor, int> single = system.kff.cast<float>();
@@ -25,20 +26,18 @@ Status SinglePrecisionCholesky::factorize(const FreeSystem& system) {
       return Status::Error("single-precision Cholesky failed: K_FF is not positive definite in float");
     impl_->system = &system;
     return Status::Ok();
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory in the single-precision factorization");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("single-precision factorization failed: ") + e.what());
-  }
+  });
 }
 
 Status SinglePrecisionCholesky::solve(const Eigen::VectorXd& b, int refinementSteps, Eigen::VectorXd& x,
                                       SinglePrecisionReport& report) const {
-  try {
+  return ReturnStatusOnException("the single-precision solve", [&]() -> Status {
     report = SinglePrecisionReport();
-    if (!impl_->system) return Status::Error("single-precision solve before a successful factorization");
+    if (!impl_->system)
+      return Status::Error("single-precision solve before a successful factorization");
     const FreeSystem& s = *impl_->system;
-    if (b.size() != s.freeDofs()) return Status::Error("right-hand side has the wrong size");
+    if (b.size() != s.freeDofs())
+      return Status::Error("right-hand side has the wrong size");
     StageClock clock;
     x = impl_->llt.solve(Eigen::VectorXf(b.cast<float>())).cast<double>();
     for (int k = 0; k < refinementSteps; ++k) {
@@ -46,14 +45,11 @@ Status SinglePrecisionCholesky::solve(const Eigen::VectorXd& b, int refinementSt
       x += impl_->llt.solve(Eigen::VectorXf(r.cast<float>())).cast<double>();
     }
     report.solveMs = clock.elapsedMs();
-    if (!x.allFinite()) return Status::Error("single-precision solve produced non-finite values");
+    if (!x.allFinite())
+      return Status::Error("single-precision solve produced non-finite values");
     report.relativeResidual = FreeRelativeResidual(s, x, b);
     return Status::Ok();
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory in the single-precision solve");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("single-precision solve failed: ") + e.what());
-  }
+  });
 }
 
 } // namespace faceplan

@@ -1,10 +1,12 @@
 #include "Comparison/TraditionalBandSolve.h"
 
 #include "Common/BlasThreads.h"
+#include "Common/ExceptionBoundary.h"
+#include "Comparison/ReverseCuthillMcKee.h"
 #include "Element/ElementStiffness.h"
+#include "Mesh/InputValidation.h"
 #include "Mesh/MeshValidation.h"
 #include "Mesh/NodeSetValidation.h"
-#include "Comparison/ReverseCuthillMcKee.h"
 
 #include <algorithm>
 #include <cmath>
@@ -53,9 +55,7 @@ Status TraditionalImpl(const PrecomputeRequest& request, const Displacements& mo
   if (!lapack.pbtrf) return Status::Error(lapack.why);
   const TetMesh& mesh = request.mesh;
   const NodeSets& sets = request.sets;
-  Status status = ValidateMeshAndMaterials(mesh, request.materials);
-  if (status) status = ValidateNodeSets(mesh, sets);
-  if (status) status = CheckEveryComponentConstrained(mesh, sets.constrained);
+  Status status = ValidateSolveInputs(mesh, request.materials, sets);
   if (!status) return status;
   if (movable.rows() != static_cast<Eigen::Index>(sets.movable.size()))
     return Status::Error("expected one ROI displacement per movable node");
@@ -228,13 +228,9 @@ bool BandLapackAvailable(std::string* why) {
 
 Status SolveTraditionalBand(const PrecomputeRequest& request, const Displacements& movable,
                             TraditionalBandResult& result, const TraditionalBandOptions& options) {
-  try {
+  return ReturnStatusOnException("the band solve", [&]() -> Status {
     return TraditionalImpl(request, movable, result, options);
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory in the band solve");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("band solve failed: ") + e.what());
-  }
+  });
 }
 
 } // namespace faceplan

@@ -20,15 +20,17 @@ Status AssembleStiffness(PrecomputeState& state) {
   const Materials& stiffnessMaterials = state.nodalPressure ? cellMaterials : request.materials;
 
   AssemblyPattern& pattern = state.pattern;
-  pattern =
+  const Status patternBuilt =
       state.quadratic
           ? BuildCellAssemblyPattern(qmesh.cells.data(), qmesh.cells.rows(), 10, layout.dofNode,
-                                     static_cast<int>(layout.meshNode.size()))
-          : BuildAssemblyPattern(mesh, layout.dofNode, static_cast<int>(layout.meshNode.size()));
+                                     static_cast<int>(layout.meshNode.size()), pattern)
+          : BuildAssemblyPattern(mesh, layout.dofNode, static_cast<int>(layout.meshNode.size()),
+                                 pattern);
+  if (!patternBuilt)
+    return patternBuilt;
   const double patternMs = clock.lapMs();
   state.backend = options.backend ? options.backend : MakeCpuBackend();
   ComputeBackend::AssemblyTimings at;
-  std::string error;
   if (state.quadratic) {
     // The backends implement 4-node cells; 10-node cells are computed and assembled on the CPU.
     std::vector<double> packed;
@@ -45,18 +47,24 @@ Status AssembleStiffness(PrecomputeState& state) {
     at.elementStiffnessMs = clock.lapMs();
     AssembleFromPacked(packed, pattern);
     at.assemblyMs = clock.lapMs();
-  } else if (!state.backend->assembleStiffness(mesh, request.materials, pattern, at, error)) {
-    state.status.warnings.push_back(state.backend->name() + " backend failed (" + error +
-                                    "); used the CPU");
+  } else if (const Status assembled =
+                 state.backend->assembleStiffness(mesh, request.materials, pattern, at);
+             !assembled) {
+    state.status.warnings.push_back(state.backend->name() + " backend failed (" +
+                                    assembled.message + "); used the CPU");
     state.backend = MakeCpuBackend();
     at = {};
-    state.backend->assembleStiffness(mesh, request.materials, pattern, at, error);
+    const Status onCpu = state.backend->assembleStiffness(mesh, request.materials, pattern, at);
+    if (!onCpu)
+      return onCpu;
   }
   if (state.nodalPressure) { // the volumetric part, added to the shear part assembled above
     clock.lapMs();
-    AddNodalPressureStiffness(pattern.upper, qmesh.points, qmesh.cells.data(), qmesh.cells.rows(),
-                              10, request.materials, layout.dofNode,
-                              static_cast<int>(layout.meshNode.size()));
+    const Status added = AddNodalPressureStiffness(
+        pattern.upper, qmesh.points, qmesh.cells.data(), qmesh.cells.rows(), 10, request.materials,
+        layout.dofNode, static_cast<int>(layout.meshNode.size()));
+    if (!added)
+      return added;
     at.assemblyMs += clock.lapMs();
   }
   state.sys->backendName = state.backend->name();

@@ -27,8 +27,11 @@ double ProbeResponseOperator(const CondensedSystem& sys, ResponseOperator& op, s
     for (Eigen::Index k = 0; k < roi.size(); ++k)
       roi[k] = uniform(rng);
     Eigen::VectorXd approx;
-    if (!op.apply(roi, approx, error))
+    const Status applied = op.apply(roi, approx);
+    if (!applied) {
+      error = applied.message;
       return std::numeric_limits<double>::infinity();
+    }
     const Eigen::VectorXd exact = sys.response * roi;
     if (approx.size() != exact.size()) {
       error = "operator returned the wrong size";
@@ -148,7 +151,6 @@ Status Condense(PrecomputeState& state) {
   const PrecomputeOptions& options = state.request.options;
   SystemInfo& info = sys.info;
   ComputeBackend& backend = *state.backend;
-  std::string error;
   if (!state.backendResponse) {
     Status rs = BuildResponse(sys, segments ? state.segmentCoupling : sys.kfr, options,
                               state.cancel, state.progress);
@@ -156,12 +158,17 @@ Status Condense(PrecomputeState& state) {
       return rs;
   }
   info.responseBytes = 8.0 * double(sys.response.size());
-  sys.responseOperator = state.backendOperator ? std::move(state.backendOperator)
-                                               : backend.makeResponseOperator(sys.response, error);
-  if (!sys.responseOperator) {
-    state.status.warnings.push_back(backend.name() + " could not hold the response (" + error +
-                                    "); edits run on the CPU");
-    sys.responseOperator = MakeCpuBackend()->makeResponseOperator(sys.response, error);
+  Status held;
+  if (state.backendOperator)
+    sys.responseOperator = std::move(state.backendOperator);
+  else
+    held = backend.makeResponseOperator(sys.response, sys.responseOperator);
+  if (!held || !sys.responseOperator) {
+    state.status.warnings.push_back(backend.name() + " could not hold the response (" +
+                                    held.message + "); edits run on the CPU");
+    const Status onCpu = MakeCpuBackend()->makeResponseOperator(sys.response, sys.responseOperator);
+    if (!onCpu)
+      return onCpu;
   } else if (options.backend) {
     // A backend may hold the response in lower precision: probe it against the double response.
     std::string probeError;
@@ -174,7 +181,10 @@ Status Condense(PrecomputeState& state) {
            << (probeError.empty() ? "" : "; " + probeError)
            << "): edits are redone in double precision on the CPU";
       state.status.warnings.push_back(note.str());
-      sys.responseOperator = MakeCpuBackend()->makeResponseOperator(sys.response, error);
+      const Status onCpu =
+          MakeCpuBackend()->makeResponseOperator(sys.response, sys.responseOperator);
+      if (!onCpu)
+        return onCpu;
       sys.responseRedoneInDouble = info.responseRedoneInDouble = true;
       sys.precisionNote = note.str();
     } else if (info.responseProbeError > 1e-13) {

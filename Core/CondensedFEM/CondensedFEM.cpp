@@ -1,5 +1,6 @@
 #include "CondensedFEM/CondensedFEM.h"
 
+#include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/CondensedSystem.h"
 #include "CondensedFEM/PrecomputeStages.h"
 #include "CondensedFEM/RefinedSolve.h"
@@ -61,13 +62,9 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
 Status Precompute(const PrecomputeRequest& request, std::shared_ptr<const CondensedSystem>& system,
                   const std::atomic<bool>* cancel, const ProgressCallback& progress) {
   system.reset();
-  try {
+  return ReturnStatusOnException("the precompute", [&]() -> Status {
     return PrecomputeImpl(request, system, cancel, progress);
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory during the precompute");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("precompute failed: ") + e.what());
-  }
+  });
 }
 
 namespace {
@@ -139,12 +136,12 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
   if (freeDofs == 0) {
     freeValues.resize(0);
   } else if (!fullSolve) {
-    std::string error;
     const Eigen::VectorXd parameters =
         rigidProduct ? SegmentParameters(sys.segmentSets, input.segmentTransforms, input.movableDisplacement)
                      : roi;
-    if (!sys.responseOperator->apply(parameters, keptFree, error))
-      return Status::Error("dense response update failed: " + error);
+    const Status applied = sys.responseOperator->apply(parameters, keptFree);
+    if (!applied)
+      return Status::Error("dense response update failed: " + applied.message);
     result.relativeResidual = sys.responseResidual;
     result.residualFromPrecompute = true;
     if (hasLoad) {
@@ -247,13 +244,8 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
 } // namespace
 
 Status Solve(const CondensedSystem& system, const SolveInput& input, SolveResult& result) {
-  try {
-    return SolveImpl(system, input, result);
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory during the solve");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("solve failed: ") + e.what());
-  }
+  return ReturnStatusOnException("the solve",
+                                 [&]() -> Status { return SolveImpl(system, input, result); });
 }
 
 SystemInfo Describe(const CondensedSystem& system) { return system.info; }

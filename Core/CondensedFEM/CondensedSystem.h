@@ -1,6 +1,12 @@
 #pragma once
-// Internal layout of a precomputed system (not part of the public interface; shared by
-// the CondensedFEM sources and the report tools that need the assembled blocks).
+// What Precompute() builds and Solve() reads: a documented public struct, not an opaque handle.
+// The assembled blocks, the factor and the dense response are exactly what the comparison paths,
+// the GPU tests and the benchmarks check against, so they read them here rather than through an
+// inspection API that would copy them. Precompute() is the only writer; callers hold it as
+// std::shared_ptr<const CondensedSystem>, so every field is read-only after the precompute (the
+// load cache below is the one mutable part, guarded by its mutex). SystemInfo (Describe()) is the
+// summary for callers that need no more. CHOLMOD stays behind CholmodFactor's pimpl: including
+// this header does not include cholmod.h.
 #include "SparseSolver/CholmodFactor.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "CondensedFEM/NodeLayout.h"
@@ -12,11 +18,11 @@ namespace faceplan {
 
 class CondensedSystem {
 public:
-  SolveMethod method = SolveMethod::CachedFactor;
-  std::string backendName;
-  Eigen::Index numMeshNodes = 0;
-  NodeLayout layout;
-  std::vector<int> kept; // NodeSets::kept as given
+  SolveMethod method = SolveMethod::CachedFactor; // the method chosen (Auto resolved)
+  std::string backendName;                        // the backend that assembled (and condensed)
+  Eigen::Index numMeshNodes = 0;                  // solver nodes (TET10: corners + mid-edge nodes)
+  NodeLayout layout;                              // DOF numbering: kept, interior, ROI blocks
+  std::vector<int> kept;                          // NodeSets::kept as given
 
   SparseMatrix kff; // upper triangle, free x free
   SparseMatrix kfr; // free x ROI DOFs (NodeLayout::roiDofs)
@@ -27,9 +33,8 @@ public:
   double responseResidual = 0.0;
 
   Eigen::VectorXd nodeMass; // lumped rho*V/4 per free node, for gravity
-  SystemInfo info;
+  SystemInfo info;          // what Describe() returns
 
-  // ---- stability additions ----
   // Quadratic elements: the caller's movable list is followed by mid-edge ROI nodes, whose value
   // is the mean of their two ends, given as indices into the caller's movable list (-1: fixed end).
   std::vector<std::array<int, 2>> derivedMovable;

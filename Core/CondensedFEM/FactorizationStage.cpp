@@ -34,9 +34,11 @@ Status Factorize(PrecomputeState& state) {
   // Whatever it does not deliver is done on the CPU, with a warning.
   if (sys.method == SolveMethod::DenseResponse && backend.providesFactorAndResponse()) {
     ComputeBackend::FactorResponseReport fr;
-    std::string hookError;
-    bool ok = backend.factorAndBuildResponse(sys.kff, sys.kfr, 3 * sys.layout.keptFree, sys.factor,
-                                             sys.response, state.backendOperator, fr, hookError);
+    const Status hook =
+        backend.factorAndBuildResponse(sys.kff, sys.kfr, 3 * sys.layout.keptFree, sys.factor,
+                                       sys.response, state.backendOperator, fr);
+    bool ok = hook.ok;
+    std::string hookError = hook.message;
     const bool factored = sys.factor.isFactorized();
     if (ok && !(fr.worstRelativeResidual <= sys.residualTolerance)) {
       std::ostringstream why;

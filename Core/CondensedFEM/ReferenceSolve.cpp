@@ -1,11 +1,13 @@
 // The paper's "traditional FEM": the whole system in the mesh's own numbering, no separation into
 // kept/interior/ROI blocks and no cache. Prescribed DOFs are eliminated element by element, so
 // this path shares only the element stiffness with the condensed one and checks the rest.
-#include "SparseSolver/CholmodFactor.h"
+#include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "Element/ElementStiffness.h"
+#include "Mesh/InputValidation.h"
 #include "Mesh/MeshValidation.h"
 #include "Mesh/NodeSetValidation.h"
+#include "SparseSolver/CholmodFactor.h"
 
 #include <cmath>
 #include <numeric>
@@ -21,9 +23,7 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
   result = SolveResult();
   result.method = SolveMethod::FullReference;
   result.backend = "CPU";
-  Status status = ValidateMeshAndMaterials(mesh, request.materials);
-  if (status) status = ValidateNodeSets(mesh, sets);
-  if (status) status = CheckEveryComponentConstrained(mesh, sets.constrained);
+  Status status = ValidateSolveInputs(mesh, request.materials, sets);
   if (!status) return status;
   if (!sets.sliding.empty())
     return Status::Error("the reference solve ties every constrained node: it does not model sliding nodes");
@@ -46,7 +46,10 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
     if (used[i] && !isConstrained[i]) freeIndex[i] = numFree++;
   result.timings[Stage::Separation].ms = clock.lapMs();
 
-  AssemblyPattern pattern = BuildAssemblyPattern(mesh, freeIndex, numFree);
+  AssemblyPattern pattern;
+  const Status patternBuilt = BuildAssemblyPattern(mesh, freeIndex, numFree, pattern);
+  if (!patternBuilt)
+    return patternBuilt;
   std::vector<double> packed;
   ComputePackedElementStiffness(mesh, request.materials, packed);
   result.timings[Stage::ElementStiffness].ms = clock.lapMs();
@@ -128,13 +131,8 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
 } // namespace
 
 Status SolveFullReference(const PrecomputeRequest& request, const SolveInput& input, SolveResult& result) {
-  try {
-    return ReferenceImpl(request, input, result);
-  } catch (const std::bad_alloc&) {
-    return Status::Error("out of memory during the reference solve");
-  } catch (const std::exception& e) {
-    return Status::Error(std::string("reference solve failed: ") + e.what());
-  }
+  return ReturnStatusOnException("the reference solve",
+                                 [&]() -> Status { return ReferenceImpl(request, input, result); });
 }
 
 } // namespace faceplan

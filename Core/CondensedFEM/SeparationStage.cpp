@@ -3,6 +3,7 @@
 
 #include "CondensedFEM/RigidSegments.h"
 #include "Element/ElementStiffness.h"
+#include "Mesh/InputValidation.h"
 #include "Mesh/MeshValidation.h"
 #include "Mesh/NodeSetValidation.h"
 
@@ -218,11 +219,7 @@ Status ValidatePrecomputeRequest(PrecomputeState& state) {
   const PrecomputeOptions& options = request.options;
   if (options.method == SolveMethod::FullReference)
     return Status::Error("FullReference has no precompute: call SolveFullReference");
-  Status status = ValidateMeshAndMaterials(request.mesh, request.materials);
-  if (status)
-    status = ValidateNodeSets(request.mesh, request.sets);
-  if (status)
-    status = CheckEveryComponentConstrained(request.mesh, request.sets.constrained);
+  Status status = ValidateSolveInputs(request.mesh, request.materials, request.sets);
   if (status)
     status = CheckRigidModesHeld(request.mesh, request.sets.constrained);
   if (!status)
@@ -267,7 +264,9 @@ Status SeparateNodes(PrecomputeState& state) {
   // Quadratic elements: the TET10 mesh and the node sets extended to its mid-edge nodes.
   NodeSets solverSets;
   if (state.quadratic) {
-    state.qmesh = MakeQuadraticMesh(mesh, options.midEdgeProjection);
+    const Status built = MakeQuadraticMesh(mesh, state.qmesh, options.midEdgeProjection);
+    if (!built)
+      return built;
     if (!state.qmesh.points.allFinite())
       return Status::Error("the mid-edge projection returned non-finite coordinates");
     solverSets = QuadraticNodeSets(state.qmesh, request.sets, sys.derivedMovable);

@@ -8,7 +8,6 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 
 namespace faceplan {
 
@@ -47,9 +46,9 @@ bool CellPressureCoupling(const Points& points, const int* cell, Eigen::Matrix<d
   return true;
 }
 
-void BuildCoupling(const Points& points, const int* cells, Eigen::Index numCells, const Materials& materials,
-                   const std::vector<int>& dofNode, std::vector<Eigen::Triplet<double, int>>& triplets,
-                   Eigen::VectorXd& mass) {
+bool BuildCoupling(const Points& points, const int* cells, Eigen::Index numCells,
+                   const Materials& materials, const std::vector<int>& dofNode,
+                   std::vector<Eigen::Triplet<double, int>>& triplets, Eigen::VectorXd& mass) {
   constexpr int Nodes = 10;
   triplets.reserve(static_cast<size_t>(numCells) * 4 * 3 * Nodes);
   Eigen::Matrix<double, 4, 3 * Nodes> D;
@@ -59,7 +58,7 @@ void BuildCoupling(const Points& points, const int* cells, Eigen::Index numCells
     if (!(lambda > 0.0)) continue; // keeps its own volumetric term (see ShearOnlyMaterials)
     const int* cell = cells + e * Nodes;
     if (!CellPressureCoupling(points, cell, D, P))
-      throw std::invalid_argument("nodal pressure: cell with a non-positive Jacobian");
+      return false;
     for (int k = 0; k < 4; ++k) {
       mass[cell[k]] += P[k] / lambda;
       for (int a = 0; a < Nodes; ++a) {
@@ -69,6 +68,7 @@ void BuildCoupling(const Points& points, const int* cells, Eigen::Index numCells
       }
     }
   }
+  return true;
 }
 
 } // namespace
@@ -88,14 +88,17 @@ Materials ShearOnlyMaterials(const Materials& materials) {
   return out;
 }
 
-SparseMatrix NodalPressureStiffness(const Points& points, const int* cells, Eigen::Index numCells,
-                                    int nodesPerCell, const Materials& materials,
-                                    const std::vector<int>& dofNode, int numDofNodes) {
+Status NodalPressureStiffness(const Points& points, const int* cells, Eigen::Index numCells,
+                              int nodesPerCell, const Materials& materials,
+                              const std::vector<int>& dofNode, int numDofNodes,
+                              SparseMatrix& upper) {
   const Eigen::Index pressureNodes = points.rows();
   std::vector<Eigen::Triplet<double, int>> triplets;
   Eigen::VectorXd mass = Eigen::VectorXd::Zero(pressureNodes); // sum of int phi_n / lambda
-  if (nodesPerCell != 10) throw std::invalid_argument("nodal pressure: 10-node cells only");
-  BuildCoupling(points, cells, numCells, materials, dofNode, triplets, mass);
+  if (nodesPerCell != 10)
+    return Status::Error("nodal pressure: 10-node cells only");
+  if (!BuildCoupling(points, cells, numCells, materials, dofNode, triplets, mass))
+    return Status::Error("nodal pressure: cell with a non-positive Jacobian");
   const int n = 3 * numDofNodes;
   SparseMatrix G(static_cast<int>(pressureNodes), n);
   G.setFromTriplets(triplets.begin(), triplets.end());
@@ -105,18 +108,24 @@ SparseMatrix NodalPressureStiffness(const Points& points, const int* cells, Eige
   const SparseMatrix WG = weight.asDiagonal() * G;
   const SparseMatrix Gt = G.transpose();
   SparseMatrix full = Gt * WG;
-  SparseMatrix upper = full.triangularView<Eigen::Upper>();
+  upper = full.triangularView<Eigen::Upper>();
   upper.makeCompressed();
-  return upper;
+  return Status::Ok();
 }
 
-void AddNodalPressureStiffness(SparseMatrix& upper, const Points& points, const int* cells,
-                               Eigen::Index numCells, int nodesPerCell, const Materials& materials,
-                               const std::vector<int>& dofNode, int numDofNodes) {
-  SparseMatrix sum = upper + NodalPressureStiffness(points, cells, numCells, nodesPerCell, materials,
-                                                    dofNode, numDofNodes);
+Status AddNodalPressureStiffness(SparseMatrix& upper, const Points& points, const int* cells,
+                                 Eigen::Index numCells, int nodesPerCell,
+                                 const Materials& materials, const std::vector<int>& dofNode,
+                                 int numDofNodes) {
+  SparseMatrix pressure;
+  const Status s = NodalPressureStiffness(points, cells, numCells, nodesPerCell, materials, dofNode,
+                                          numDofNodes, pressure);
+  if (!s)
+    return s;
+  SparseMatrix sum = upper + pressure;
   sum.makeCompressed();
   upper.swap(sum);
+  return Status::Ok();
 }
 
 } // namespace faceplan

@@ -31,14 +31,16 @@ Materials ShearOnlyMaterials(const Materials& materials);
 // BuildCellAssemblyPattern (DOF 3 dofNode[i] + c of mesh node i; nodes with dofNode < 0 carry no
 // DOFs and are dropped), size 3 numDofNodes. `cells` holds numCells x nodesPerCell ids row by row
 // (nodesPerCell must be 10, VTK order, corners first); `points` the solver mesh's points. Pressure
-// nodes are the cells' corner nodes. Throws std::invalid_argument on a non-positive Jacobian.
-SparseMatrix NodalPressureStiffness(const Points& points, const int* cells, Eigen::Index numCells,
-                                    int nodesPerCell, const Materials& materials,
-                                    const std::vector<int>& dofNode, int numDofNodes);
+// nodes are the cells' corner nodes. Fails on a cell with a non-positive Jacobian.
+Status NodalPressureStiffness(const Points& points, const int* cells, Eigen::Index numCells,
+                              int nodesPerCell, const Materials& materials,
+                              const std::vector<int>& dofNode, int numDofNodes,
+                              SparseMatrix& upper);
 
 // Adds K_vol to an assembled upper triangle (same numbering) in place.
-void AddNodalPressureStiffness(SparseMatrix& upper, const Points& points, const int* cells,
-                               Eigen::Index numCells, int nodesPerCell, const Materials& materials,
-                               const std::vector<int>& dofNode, int numDofNodes);
+Status AddNodalPressureStiffness(SparseMatrix& upper, const Points& points, const int* cells,
+                                 Eigen::Index numCells, int nodesPerCell,
+                                 const Materials& materials, const std::vector<int>& dofNode,
+                                 int numDofNodes);
 
 } // namespace faceplan

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <limits>
 #include <mutex>
-#include <stdexcept>
 
 namespace faceplan {
 
@@ -54,9 +53,10 @@ const Rule& QuadratureRule() {
 
 } // namespace
 
-QuadraticMesh MakeQuadraticMesh(const TetMesh& mesh, const MidEdgeProjection& projection) {
+Status MakeQuadraticMesh(const TetMesh& mesh, QuadraticMesh& out,
+                         const MidEdgeProjection& projection) {
   const Eigen::Index n = mesh.numPoints(), m = mesh.numTets();
-  QuadraticMesh out;
+  out = QuadraticMesh{};
   out.numCorners = n;
   out.cells.resize(m, 10);
 
@@ -79,7 +79,7 @@ QuadraticMesh MakeQuadraticMesh(const TetMesh& mesh, const MidEdgeProjection& pr
   for (Eigen::Index c = 0; c < m; ++c)
     for (int k = 0; k < 4; ++k) out.cells(c, k) = mesh.tets(c, k);
   if (n + static_cast<Eigen::Index>(out.edges.size()) > std::numeric_limits<int>::max())
-    throw std::length_error("mesh too large for a quadratic mesh with 32-bit ids");
+    return Status::Error("mesh too large for a quadratic mesh with 32-bit ids");
 
   // Boundary faces appear in one cell only; their edges are boundary edges.
   out.boundaryEdge.assign(out.edges.size(), 0);
@@ -119,7 +119,7 @@ QuadraticMesh MakeQuadraticMesh(const TetMesh& mesh, const MidEdgeProjection& pr
     if (projection && out.boundaryEdge[e]) mid = projection(mid, a, b);
     out.points.row(n + static_cast<Eigen::Index>(e)) = mid.transpose();
   }
-  return out;
+  return Status::Ok();
 }
 
 Tet10Matrix Tet10Stiffness(const Tet10Nodes& x, double E, double nu, double* minJacobian,
@@ -189,80 +189,6 @@ void ComputePackedTet10Stiffness(const QuadraticMesh& mesh, const Materials& mat
     invalidCells.insert(invalidCells.end(), bad.begin(), bad.end());
   });
   std::sort(invalidCells.begin(), invalidCells.end());
-}
-
-AssemblyPattern BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
-                                         const std::vector<int>& dofNode, int numDofNodes) {
-  const int dofs = 3 * nodesPerCell;
-  const long long packedSize = static_cast<long long>(dofs) * (dofs + 1) / 2;
-  if (numCells > std::numeric_limits<int>::max() / packedSize)
-    throw std::length_error("mesh too large for 32-bit packed indices");
-  auto node = [&](Eigen::Index e, int k) { return cells[e * nodesPerCell + k]; };
-
-  std::vector<std::vector<int>> rowsOf(numDofNodes);
-  for (Eigen::Index e = 0; e < numCells; ++e)
-    for (int a = 0; a < nodesPerCell; ++a) {
-      const int na = dofNode[node(e, a)];
-      if (na < 0) continue;
-      for (int b = 0; b < nodesPerCell; ++b) {
-        const int nb = dofNode[node(e, b)];
-        if (nb >= 0 && nb <= na) rowsOf[na].push_back(nb);
-      }
-    }
-  for (auto& rows : rowsOf) {
-    std::sort(rows.begin(), rows.end());
-    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-  }
-
-  const int n = 3 * numDofNodes;
-  std::vector<long long> colStart(n + 1, 0);
-  for (int c = 0; c < numDofNodes; ++c) {
-    const long long offDiagonal = 3LL * (static_cast<long long>(rowsOf[c].size()) - 1);
-    for (int j = 0; j < 3; ++j) colStart[3 * c + j + 1] = colStart[3 * c + j] + offDiagonal + j + 1;
-  }
-  if (colStart[n] > std::numeric_limits<int>::max())
-    throw std::length_error("stiffness matrix too large for 32-bit indices");
-  const int nnz = static_cast<int>(colStart[n]);
-  AssemblyPattern pattern;
-  pattern.upper.resize(n, n);
-  pattern.upper.resizeNonZeros(nnz);
-  for (int k = 0; k <= n; ++k) pattern.upper.outerIndexPtr()[k] = static_cast<int>(colStart[k]);
-  int* rowIndex = pattern.upper.innerIndexPtr();
-  for (int c = 0; c < numDofNodes; ++c)
-    for (int j = 0; j < 3; ++j) {
-      long long k = colStart[3 * c + j];
-      for (int r : rowsOf[c]) {
-        const int components = (r == c) ? j + 1 : 3;
-        for (int i = 0; i < components; ++i) rowIndex[k++] = 3 * r + i;
-      }
-    }
-  std::fill(pattern.upper.valuePtr(), pattern.upper.valuePtr() + nnz, 0.0);
-
-  std::vector<int> rowStart(dofs); // packed position of (p, p)
-  for (int p = 0, pos = 0; p < dofs; ++p) {
-    rowStart[p] = pos;
-    pos += dofs - p;
-  }
-  std::vector<int> targetOf(static_cast<size_t>(numCells) * packedSize);
-  for (Eigen::Index e = 0; e < numCells; ++e)
-    for (int p = 0; p < dofs; ++p)
-      for (int q = p; q < dofs; ++q) {
-        int nr = dofNode[node(e, p / 3)], nc = dofNode[node(e, q / 3)];
-        int t = -1;
-        if (nr >= 0 && nc >= 0) {
-          int ir = p % 3, ic = q % 3;
-          if (nr > nc || (nr == nc && ir > ic)) {
-            std::swap(nr, nc);
-            std::swap(ir, ic);
-          }
-          const auto& rows = rowsOf[nc];
-          const int idx = static_cast<int>(std::lower_bound(rows.begin(), rows.end(), nr) - rows.begin());
-          t = static_cast<int>(colStart[3 * nc + ic]) + 3 * idx + ir;
-        }
-        targetOf[e * packedSize + rowStart[p] + (q - p)] = t;
-      }
-  FinishGatherMap(targetOf, pattern);
-  return pattern;
 }
 
 } // namespace faceplan

@@ -6,6 +6,7 @@
 //
 // Node order in a cell (VTK's): corners 0..3, then mid-edge nodes of edges
 // (0,1), (1,2), (0,2), (0,3), (1,3), (2,3).
+#include "Common/Status.h"
 #include "Element/StiffnessAssembly.h"
 #include "Mesh/TetMesh.h"
 
@@ -38,7 +39,9 @@ struct QuadraticMesh {
 };
 
 // Builds the TET10 mesh; `projection` (may be empty) moves the mid-edge nodes of boundary edges.
-QuadraticMesh MakeQuadraticMesh(const TetMesh& mesh, const MidEdgeProjection& projection = {});
+// Fails when the node ids would overflow 32-bit ints.
+Status MakeQuadraticMesh(const TetMesh& mesh, QuadraticMesh& out,
+                         const MidEdgeProjection& projection = {});
 
 using Tet10Nodes = Eigen::Matrix<double, 10, 3>;
 using Tet10Matrix = Eigen::Matrix<double, 30, 30>;
@@ -64,11 +67,5 @@ constexpr int kPackedTet10Size = 30 * 31 / 2; // 465
 void ComputePackedTet10Stiffness(const QuadraticMesh& mesh, const Materials& materials,
                                  std::vector<double>& packed, std::vector<long long>& invalidCells,
                                  bool meanDilatation = false);
-
-// The gather assembly of StiffnessAssembly.h for cells of any node count: `cells` holds
-// numCells x nodesPerCell node ids row by row; each packed element matrix has
-// (3 k)(3 k + 1) / 2 entries. Fill it with AssembleFromPacked.
-AssemblyPattern BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
-                                         const std::vector<int>& dofNode, int numDofNodes);
 
 } // namespace faceplan

@@ -2,6 +2,7 @@
 // Sparse symmetric assembly: the pattern and a gather map are built once per mesh and DOF
 // numbering; assembling new element values into it is then a pure gather (no atomics, no search),
 // which both the CPU and the CUDA backend run.
+#include "Common/Status.h"
 #include "Mesh/TetMesh.h"
 
 #include <Eigen/SparseCore>
@@ -21,14 +22,22 @@ struct AssemblyPattern {
   std::vector<int> packedIndex; // int: up to 27M tetrahedra (checked when built)
 };
 
-// dofNode[i] is the new index of node i (its DOFs are 3*dofNode[i] + c); -1 drops the node.
-// Pass an identity to keep the mesh's own numbering.
-AssemblyPattern BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode,
-                                     int numDofNodes);
+// The pattern of cells with any node count: `cells` holds numCells x nodesPerCell node ids row by
+// row; each packed element matrix is the row-by-row upper triangle of its (3 k) x (3 k) matrix,
+// (3 k)(3 k + 1) / 2 entries. dofNode[i] is the new index of node i (its DOFs are
+// 3*dofNode[i] + c); -1 drops the node. Pass an identity to keep the mesh's own numbering.
+// Fails when the packed indices or the matrix would overflow 32-bit ints.
+Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
+                                const std::vector<int>& dofNode, int numDofNodes,
+                                AssemblyPattern& pattern);
+
+// The same for the 4-node cells of `mesh`.
+Status BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode, int numDofNodes,
+                            AssemblyPattern& pattern);
 
 // Builds gatherStart/packedIndex from the target nonzero of every packed element entry (-1 for
 // none), by a counting sort: each gather list holds its packed indices in increasing order.
-// pattern.upper must already hold the final structure. Shared by the 4- and 10-node assemblies.
+// pattern.upper must already hold the final structure.
 void FinishGatherMap(const std::vector<int>& targetOf, AssemblyPattern& pattern);
 
 // upper.valuePtr()[k] = sum of packed[packedIndex[...]] over its gather range.

@@ -1,6 +1,7 @@
 #pragma once
 // Non-owning CHOLMOD views of Eigen storage (no copies), shared by Core and the CUDA backend, and
-// the quiet cholmod_common every CHOLMOD caller here starts.
+// the quiet cholmod_common every CHOLMOD caller here starts. For .cpp files only: CHOLMOD is a
+// private dependency of FacePlanSparseSolver, so no public Core header includes cholmod.h.
 #include "Element/StiffnessAssembly.h"
 
 #include <Eigen/Core>

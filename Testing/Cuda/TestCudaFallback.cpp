@@ -1,5 +1,6 @@
 // Runs on every machine (label `cuda`): the CUDA backend either works or refuses with a message,
 // so that callers can fall back to the CPU; it never throws or aborts.
+#include "Common/RelativeDifference.h"
 #include "CudaBackend.h"
 #include "CudaDenseResponse.h"
 
@@ -20,10 +21,11 @@ namespace {
 TEST(CudaFallback, BackendIsUsableOrRefusesWithAMessage) {
   std::string why;
   const bool available = cuda::DeviceAvailable(&why);
-  std::string error;
-  auto backend = cuda::MakeCudaBackend(error);
+  std::shared_ptr<ComputeBackend> backend;
+  const Status made = cuda::MakeCudaBackend(backend);
+  const std::string& error = made.message;
   if (available) {
-    ASSERT_TRUE(backend) << error;
+    ASSERT_TRUE(made && backend) << error;
     EXPECT_EQ(backend->name().rfind("CUDA", 0), 0u);
     EXPECT_FALSE(cuda::DeviceDescription().empty());
   } else {
@@ -36,9 +38,11 @@ TEST(CudaFallback, BackendIsUsableOrRefusesWithAMessage) {
 
 TEST(CudaFallback, DisabledByEnvironment) {
   setenv("FACEPLAN_DISABLE_CUDA", "1", 1);
-  std::string error;
-  auto backend = cuda::MakeCudaBackend(error);
+  std::shared_ptr<ComputeBackend> backend;
+  const Status made = cuda::MakeCudaBackend(backend);
+  const std::string& error = made.message;
   unsetenv("FACEPLAN_DISABLE_CUDA");
+  EXPECT_FALSE(made);
   EXPECT_FALSE(backend);
   EXPECT_NE(error.find("FACEPLAN_DISABLE_CUDA"), std::string::npos) << error;
 }
@@ -50,44 +54,45 @@ public:
   enum class Hook { Cuda, FailBeforeFactor, FailAfterFactor, LargeResidual };
   explicit HookBackend(Hook hook) : hook_(hook) {}
   std::string name() const override { return "Hooked"; }
-  bool assembleStiffness(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
-                         AssemblyTimings& timings, std::string& error) override {
-    return cpu_->assembleStiffness(mesh, materials, pattern, timings, error);
+  Status assembleStiffness(const TetMesh& mesh, const Materials& materials,
+                           AssemblyPattern& pattern, AssemblyTimings& timings) override {
+    return cpu_->assembleStiffness(mesh, materials, pattern, timings);
   }
-  std::unique_ptr<ResponseOperator> makeResponseOperator(const Eigen::MatrixXd& response, std::string& error) override {
-    return cpu_->makeResponseOperator(response, error);
+  Status makeResponseOperator(const Eigen::MatrixXd& response,
+                              std::unique_ptr<ResponseOperator>& op) override {
+    return cpu_->makeResponseOperator(response, op);
   }
   bool providesFactorAndResponse() const override { return true; }
-  bool factorAndBuildResponse(const SparseMatrix& kff, const SparseMatrix& kfr, Eigen::Index keptDofs,
-                              CholmodFactor& factor, Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
-                              FactorResponseReport& report, std::string& error) override {
+  Status factorAndBuildResponse(const SparseMatrix& kff, const SparseMatrix& kfr,
+                                Eigen::Index keptDofs, CholmodFactor& factor,
+                                Eigen::MatrixXd& response, std::unique_ptr<ResponseOperator>& op,
+                                FactorResponseReport& report) override {
     ++calls;
     switch (hook_) {
     case Hook::Cuda: {
       cuda::FactorAndResponseDetail detail;
-      const bool ok = cuda::FactorAndBuildResponse(kff, kfr, keptDofs, factor, response, op, detail, error);
+      const Status status =
+          cuda::FactorAndBuildResponse(kff, kfr, keptDofs, factor, response, op, detail);
       report.factorizationMs = detail.factorizeMs + detail.factorDownloadMs;
       report.worstRelativeResidual = detail.response.worstRelativeResidual;
-      return ok;
+      return status;
     }
     case Hook::FailBeforeFactor:
       response = Eigen::MatrixXd::Constant(2, 2, 1.0); // garbage the caller must discard
-      error = "simulated device failure";
-      return false;
+      return Status::Error("simulated device failure");
     case Hook::FailAfterFactor:
     case Hook::LargeResidual: {
       const Status s = factor.factorize(kff);
       EXPECT_TRUE(s.ok) << s.message;
       if (hook_ == Hook::FailAfterFactor) {
-        error = "simulated failure after the factorization";
-        return false;
+        return Status::Error("simulated failure after the factorization");
       }
       response = Eigen::MatrixXd::Zero(keptDofs, kfr.cols()); // wrong values, flagged by the residual
       report.worstRelativeResidual = 1.0;
-      return true;
+      return Status::Ok();
     }
     }
-    return false;
+    return Status::Error("unknown hook");
   }
   int calls = 0;
 
@@ -95,12 +100,6 @@ private:
   Hook hook_;
   std::shared_ptr<ComputeBackend> cpu_ = MakeCpuBackend();
 };
-
-double RelativeMaxDifference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  if (a.rows() != b.rows() || a.cols() != b.cols()) return INFINITY;
-  const double scale = b.cwiseAbs().maxCoeff();
-  return (a - b).cwiseAbs().maxCoeff() / (scale > 0 ? scale : 1.0);
-}
 
 // Precompute with a backend whose factorization/response hook fails (no GPU, or a simulated
 // failure) falls back to the CPU with a warning, and solves exactly as the CPU backend does.

@@ -23,8 +23,4 @@ Displacements SmoothRoiField(const PrecomputeRequest& request, double amplitude)
   return u;
 }
 
-double RelativeMaxError(const Displacements& a, const Displacements& b) {
-  return (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff();
-}
-
 } // namespace faceplan::testing

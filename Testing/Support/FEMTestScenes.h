@@ -11,7 +11,4 @@ PrecomputeRequest ShellRequest(int subdivisions, int layers, double E = 3000.0, 
 // A smooth, non-trivial ROI displacement field (mm) for the request's movable nodes.
 Displacements SmoothRoiField(const PrecomputeRequest& request, double amplitude = 2.0);
 
-// Largest |a - b| over the largest |b|.
-double RelativeMaxError(const Displacements& a, const Displacements& b);
-
 } // namespace faceplan::testing

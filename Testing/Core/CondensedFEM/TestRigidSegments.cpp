@@ -1,5 +1,6 @@
 // The rigid-segment path (SolveMethod::RigidSegments) against the general dense response and the
 // reference full solve, for rigid-only and mixed plans.
+#include "Common/RelativeDifference.h"
 #include "Support/FEMTestScenes.h"
 
 #include <Eigen/Geometry>
@@ -85,8 +86,8 @@ void ExpectRigidEqualsGeneral(Plan plan, int segments, long long generalNodes, b
   ASSERT_TRUE(s.ok) << s.message;
   s = SolveFullReference(plan.request, plan.input, reference);
   ASSERT_TRUE(s.ok) << s.message;
-  EXPECT_LT(RelativeMaxError(fast.keptDisplacement, slow.keptDisplacement), 1e-10);
-  EXPECT_LT(RelativeMaxError(fast.keptDisplacement, reference.keptDisplacement), 1e-10);
+  EXPECT_LT(RelativeMaxDifference(fast.keptDisplacement, slow.keptDisplacement), 1e-10);
+  EXPECT_LT(RelativeMaxDifference(fast.keptDisplacement, reference.keptDisplacement), 1e-10);
 
   // The interior, recovered by a solve with the cached factor of the same system.
   plan.input.recoverInterior = true;
@@ -99,7 +100,7 @@ void ExpectRigidEqualsGeneral(Plan plan, int segments, long long generalNodes, b
   SolveInput input = plan.input;
   input.recoverInterior = true;
   ASSERT_TRUE(SolveFullReference(request, input, referenceAll).ok);
-  EXPECT_LT(RelativeMaxError(all.allDisplacement, referenceAll.allDisplacement), 1e-10);
+  EXPECT_LT(RelativeMaxDifference(all.allDisplacement, referenceAll.allDisplacement), 1e-10);
 }
 
 long long GeneralNodes(const NodeSets& sets) {
