@@ -6,7 +6,7 @@ namespace {
 
 // The sizes the comparisons below were written for (x86-64, libstdc++). A new field changes them:
 // extend the comparison, then the number.
-static_assert(sizeof(NodeSets) == 3 * sizeof(std::vector<int>),
+static_assert(sizeof(NodeSets) == 5 * sizeof(std::vector<int>) + sizeof(std::vector<Eigen::Vector3d>),
               "SameRequest must compare every NodeSets field");
 static_assert(sizeof(Materials) == 3 * sizeof(Eigen::VectorXd),
               "SameRequest must compare every Materials field");
@@ -42,7 +42,9 @@ bool SameRequest(const PrecomputeRequest& a, const PrecomputeRequest& b) {
          SameMatrix(a.materials.poissonRatio, b.materials.poissonRatio) &&
          SameMatrix(a.materials.density, b.materials.density) &&
          a.sets.constrained == b.sets.constrained && a.sets.movable == b.sets.movable &&
-         a.sets.kept == b.sets.kept && SameOptions(a.options, b.options);
+         a.sets.kept == b.sets.kept && a.sets.movableSegment == b.sets.movableSegment &&
+         a.sets.sliding == b.sets.sliding && a.sets.slidingNormal == b.sets.slidingNormal &&
+         SameOptions(a.options, b.options);
 }
 
 } // namespace faceplan
