@@ -99,7 +99,7 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
   const bool rigidProduct = sys.method == SolveMethod::RigidSegments && !input.recoverInterior;
   if (sys.method == SolveMethod::RigidSegments && input.segmentTransforms.empty())
     return Status::Error("RigidSegments needs one transform per segment (SolveInput::segmentTransforms)");
-  if (!input.segmentTransforms.empty()) {
+  if (!input.segmentTransforms.empty() && sys.segments > 0) {
     Status check = CheckSegmentDisplacements(sys.cornerMesh.points, sys.segmentSets,
                                              input.segmentTransforms, input.movableDisplacement);
     if (!check) return check;

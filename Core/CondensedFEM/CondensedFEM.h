@@ -29,11 +29,11 @@ enum class SolveMethod {
   Auto,           // pick the cheapest exact method from the sizes (see ChooseMethod)
   DenseResponse,  // precompute kept x ROI response; an edit is one matrix-vector product
   CachedFactor,   // keep the sparse Cholesky factor of the free block; an edit is one solve
-  RigidSegments,  // precompute the kept response to 12 affine motions per rigid segment (plus the
+  FullReference,  // no condensation, no cache: assemble and factor everything on every solve
+  RigidSegments   // precompute the kept response to 12 affine motions per rigid segment (plus the
                   // general response to the ROI DOFs of segment-0 nodes); an edit is one product
                   // with the 12 s segment parameters and the general part. Auto picks it when
                   // NodeSets::movableSegment names segments and the response fits the budget.
-  FullReference   // no condensation, no cache: assemble and factor everything on every solve
 };
 const char* MethodName(SolveMethod method);
 
@@ -89,9 +89,10 @@ struct SolveInput {
   // |movable| x 3, in NodeSets::movable order. Sliding nodes use only its normal part.
   Displacements movableDisplacement;
   // One [R | t] per rigid segment (segment k uses entry k - 1), or empty. The displacements above
-  // remain the boundary values of every path; when transforms are given, Solve checks that the
-  // segments' displacements follow them (CheckSegmentDisplacements) and RigidSegments takes its
-  // parameters from them. RigidSegments requires them.
+  // remain the boundary values of every path; when transforms are given and the system has
+  // segments, Solve checks that the segments' displacements follow them (CheckSegmentDisplacements)
+  // and RigidSegments takes its parameters from them. RigidSegments requires them; a system
+  // without segments ignores them.
   std::vector<SegmentTransform> segmentTransforms;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero(); // body load density * gravity, if non-zero
   Displacements nodalLoads;          // n x 3 or empty

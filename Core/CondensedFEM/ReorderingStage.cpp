@@ -24,7 +24,10 @@ Status ReorderFreeDofs(PrecomputeState& state) {
   std::vector<FillReducingOrdering> candidates;
   bool settled = false;
   FillReducingOrdering trailingLast;
-  if (sys.kfr.cols() > 0 &&
+  // Rigid segments need a dozen response columns per segment: too few for the trailing block's
+  // cheaper substitutions to pay for its fill, so only the plain ordering is made.
+  const bool fewColumns = state.segmentCoupling.cols() > 0;
+  if (sys.kfr.cols() > 0 && !fewColumns &&
       OrderNodesWithTrailing(sys.kff, 3, NodesCoupledTo(sys.kfr, sys.layout.freeNodes(), 3),
                              trailingLast)
           .ok) {
