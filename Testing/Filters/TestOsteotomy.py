@@ -8,8 +8,9 @@ undeformed output point (point - Displacement) lies on the undeformed input surf
 is exactly the positive side (or the other with InsideOut; the wedge with two planes); the segment
 follows SegmentTransform, the rest does not move; ROIMask/SegmentId; the rotation order and the
 pivot (centroid or custom); chained osteotomies compose (ids 1, 2, transforms from the undeformed
-bone); after BezierCut the Displacement is cumulative and the transform NaN with a note; port 1
-is the plane within the bounds; the input is not modified; bad input gives an empty output and an
+bone) and edits upstream or of the move alone equal a fresh filter's result (the cached split);
+after BezierCut the Displacement is cumulative and the transform NaN with a note; ParaView's plane
+Offset moves the cut; port 1 is the plane within the bounds; the input is not modified; bad input gives an empty output and an
 error naming the problem.
 """
 import math
