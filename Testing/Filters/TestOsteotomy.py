@@ -8,8 +8,9 @@ undeformed output point (point - Displacement) lies on the undeformed input surf
 is exactly the positive side (or the other with InsideOut; the wedge with two planes); the segment
 follows SegmentTransform, the rest does not move; ROIMask/SegmentId; the rotation order and the
 pivot (centroid or custom); chained osteotomies compose (ids 1, 2, transforms from the undeformed
-bone); after BezierCut the Displacement is cumulative and the transform NaN with a note; port 1
-is the plane within the bounds; the input is not modified; bad input gives an empty output and an
+bone) and edits upstream or of the move alone equal a fresh filter's result (the cached split);
+after BezierCut the Displacement is cumulative and the transform NaN with a note; ParaView's plane
+Offset moves the cut; port 1 is the plane within the bounds; the input is not modified; bad input gives an empty output and an
 error naming the problem.
 """
 import math
@@ -321,6 +322,17 @@ o6 = fetch(after)
 Tf = field(o6, "SegmentTransform")
 check(Tf is not None and len(Tf) == 12 and np.all(np.isfinite(Tf)), "bezier: an untouched segment stays rigid")
 check(field(o6, "SegmentNote") == [""], "bezier: no note for a rigid segment")
+
+# ------------------------------------------------------------- ParaView's plane offset moves the cut
+shifted = Osteotomy(Input=sphere, Translation=[0, 0, 1])
+shifted.CutPlane1.Origin, shifted.CutPlane1.Normal, shifted.CutPlane1.Offset = [0, 0, 0.1], [0, 0, 1], 0.2
+shifted.UpdatePipeline()
+o8 = fetch(shifted)
+X0 = points(o8).astype(float) - point_array(o8, "Displacement")
+seg = point_array(o8, "SegmentId")
+check(abs(X0[seg == 1][:, 2].min() - 0.3) < 1e-12 and abs(X0[seg == 0][:, 2].max() - 0.3) < 1e-12,
+      "offset: the cut lies at origin + offset along the normal")
+Delete(shifted)
 
 # ------------------------------------------------------------- the face: default filter cuts it
 mandible = XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")])
