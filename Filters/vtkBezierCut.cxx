@@ -2,6 +2,7 @@
 
 #include "BezierCut/BezierCut.h"
 #include "BezierCut/DefaultCurves.h"
+#include "FacePlanGather.h"
 #include "FacePlanVTKConvert.h"
 
 #include <vtkCellArray.h>
@@ -13,6 +14,8 @@
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkIntArray.h>
+#include <vtkMultiProcessController.h>
+#include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkPointData.h>
 #include <vtkPointSet.h>
@@ -127,10 +130,10 @@ int vtkBezierCut::RequestDataObject(vtkInformation*, vtkInformationVector** inpu
   return 1;
 }
 
-void vtkBezierCut::Fail(const std::string& message, vtkInformationVector* outputVector) {
+void vtkBezierCut::Fail(const std::string& message, vtkDataObject* output, vtkDataObject* surface) {
   this->LastError = message;
-  for (int port = 0; port < 2; ++port)
-    if (vtkDataObject* o = outputVector->GetInformationObject(port)->Get(vtkDataObject::DATA_OBJECT()))
+  for (vtkDataObject* o : {output, surface})
+    if (o)
       o->Initialize();
   vtkErrorMacro(<< "Bezier Cut: " << message);
 }
@@ -145,51 +148,72 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
     vtkDataObject* given = vtkDataObject::GetData(inputVector[0], 0);
     this->Fail(std::string("needs a vtkPointSet input (the output of ROI Extract), not ") +
                    (given ? given->GetClassName() : "nothing"),
-               outputVector);
+               output, surface);
     return 1;
   }
+  // Under MPI the fold and intersection checks need the whole ROI: gather it (FacePlanGather.h).
+  // Rank 0 holds the operative surface; the other ranks' port 1 is empty.
+  if (vtkMultiProcessController* controller = faceplan::gather::DistributedController()) {
+    const bool root = controller->GetLocalProcessId() == 0;
+    vtkNew<vtkPolyData> unused;
+    const bool ok = faceplan::gather::RunOnWhole(
+        controller, input, output, [&](vtkPointSet* in, vtkPointSet* out) {
+          return this->Cut(in, out, root ? surface : unused.Get());
+        });
+    if (!root || !ok)
+      surface->Initialize();
+    // Every rank reports the error; only rank 0 logged it.
+    this->LastError = faceplan::gather::ShareRootMessage(controller, 0, this->LastError);
+    return 1;
+  }
+  this->Cut(input, output, surface);
+  return 1;
+}
+
+bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* surface) {
+  this->LastError.clear();
   output->Initialize();
   surface->Initialize();
 
   // Validate.
   if (this->Operation != CUT && this->Operation != FILL) {
     this->Fail("Operation must be 0 (Cut) or 1 (Fill), not " + std::to_string(this->Operation),
-               outputVector);
-    return 1;
+               output, surface);
+    return false;
   }
   if (this->SurfaceResolution < 1 || this->SurfaceResolution > 256) {
     this->Fail("SurfaceResolution must lie in [1, 256], not " +
                    std::to_string(this->SurfaceResolution),
-               outputVector);
-    return 1;
+               output, surface);
+    return false;
   }
   const vtkIdType n = input->GetNumberOfPoints();
   if (n == 0) {
-    this->Fail("the input has no points", outputVector);
-    return 1;
+    this->Fail("the input has no points", output, surface);
+    return false;
   }
   vtkDataArray* maskArray = input->GetPointData()->GetArray("ROIMask");
   vtkDataArray* boundaryArray = input->GetPointData()->GetArray("ROIBoundary");
   if (!maskArray || !boundaryArray || maskArray->GetNumberOfComponents() != 1 ||
       boundaryArray->GetNumberOfComponents() != 1) {
     this->Fail("the input needs one-component point arrays ROIMask and ROIBoundary; apply ROI Extract first",
-               outputVector);
-    return 1;
+               output, surface);
+    return false;
   }
   for (vtkDataArray* a : {maskArray, boundaryArray}) {
     if (a->GetNumberOfTuples() != n) {
       this->Fail(std::string("the point array ") + a->GetName() + " has " +
                      std::to_string(a->GetNumberOfTuples()) + " values; it needs one per point (" +
                      std::to_string(n) + ")",
-                 outputVector);
-      return 1;
+                 output, surface);
+      return false;
     }
     for (vtkIdType i = 0; i < n; ++i)
       if (!std::isfinite(a->GetComponent(i, 0))) {
         this->Fail(std::string("the point array ") + a->GetName() +
                        " has a NaN or infinite value at point " + std::to_string(i),
-                   outputVector);
-        return 1;
+                   output, surface);
+        return false;
       }
   }
 
@@ -197,15 +221,15 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   faceplan::SurfaceMesh mesh;
   std::string why;
   if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly, mesh, why)) {
-    this->Fail(why, outputVector);
-    return 1;
+    this->Fail(why, output, surface);
+    return false;
   }
   const vtkIdType skipped = input->GetNumberOfCells() - CountSurfaceCells(input);
   if (mesh.numCells() == 0) {
     this->Fail("the input has no surface cells (triangles or polygons) to cut; lines and vertices "
                "cannot be cut",
-               outputVector);
-    return 1;
+               output, surface);
+    return false;
   }
   std::vector<std::uint8_t> mask(static_cast<std::size_t>(n)), boundary(static_cast<std::size_t>(n));
   for (vtkIdType i = 0; i < n; ++i) {
@@ -235,8 +259,8 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   const faceplan::Status status =
     faceplan::BezierCut(mesh, mask, boundary, ToCurve(this->CurveU), ToCurve(this->CurveV), options, result);
   if (!status) {
-    this->Fail(status.message, outputVector);
-    return 1;
+    this->Fail(status.message, output, surface);
+    return false;
   }
   for (const std::string& w : result.warnings) vtkWarningMacro(<< "Bezier Cut: " << w);
   if (skipped > 0)
@@ -309,7 +333,7 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   surface->SetPolys(tris);
   surface->GetPointData()->SetNormals(normals);
   surface->GetPointData()->SetTCoords(uv);
-  return 1;
+  return true;
 }
 
 void vtkBezierCut::PrintSelf(ostream& os, vtkIndent indent) {

@@ -96,7 +96,9 @@ protected:
 private:
   vtkBezierCut(const vtkBezierCut&) = delete;
   void operator=(const vtkBezierCut&) = delete;
-  void Fail(const std::string& message, vtkInformationVector* outputVector);
+  void Fail(const std::string& message, vtkDataObject* output, vtkDataObject* surface);
+  // The serial filter on a whole input; false (after logging the error) when it failed.
+  bool Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* surface);
 };
 
 #endif

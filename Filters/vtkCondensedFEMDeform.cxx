@@ -4,13 +4,16 @@
 #include "CondensedFEMDeformConvert.h"
 #include "CondensedFEMDeformInputCache.h"
 #include "CondensedFEMDeformOutput.h"
+#include "CondensedFEMDeformParallel.h"
 #include "CondensedFEMDeformSolver.h"
 #include "CondensedFEMDeformValidate.h"
+#include "FacePlanGather.h"
 
 #include "vtkAlgorithmOutput.h"
 #include "vtkDataArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
+#include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
@@ -106,6 +109,19 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   vtkPointSet* bone = vtkPointSet::GetData(inputVector[1], 0);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   vtkTable* table = vtkTable::GetData(outputVector, 1);
+  // Under MPI the pieces are gathered and solved once (CondensedFEMDeformParallel.h).
+  if (vtkMultiProcessController* controller = faceplan::gather::DistributedController()) {
+    DeformGathered(controller, this->CurrentSettings().output(), tissue, bone, output, table,
+                   [this](vtkUnstructuredGrid* t, vtkPointSet* b, vtkUnstructuredGrid* o,
+                          vtkTable* tab) { return this->Deform(t, b, o, tab); });
+    return 1;
+  }
+  this->Deform(tissue, bone, output, table);
+  return 1;
+}
+
+bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bone,
+                                   vtkUnstructuredGrid* output, vtkTable* table) {
   Cache& cache = *this->State;
   const Settings settings = this->CurrentSettings();
   const UpstreamEditWatch watch(this, this->InputsChangedWhileRunning);
@@ -121,7 +137,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   if (!status) {
     cache.requestValid = false;
     vtkErrorMacro(<< status.message);
-    return 1;
+    return false;
   }
   const TissueBoundary& boundary = cache.tissue.boundary();
   this->UpdateProgress(0.05);
@@ -133,7 +149,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
     status = cache.contact.update(tissue, boundary.nodes, bone, settings.contactDistance);
     if (!status) {
       vtkErrorMacro(<< status.message);
-      return 1;
+      return false;
     }
     cache.bone.contactBuilt(bone, tissueGeneration, settings.contactDistance);
   }
@@ -143,7 +159,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
                   << settings.contactDistance
                   << " of the undeformed bone: increase ContactDistance or check that tissue and "
                      "bone share one frame and unit");
-    return 1;
+    return false;
   }
   const std::string unfollowed =
       UnfollowedBoneMotion(contact.movable, bone->GetPointData()->GetArray("Displacement"));
@@ -174,7 +190,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
     vtkWarningMacro(<< note);
   if (!status) {
     vtkErrorMacro(<< status.message);
-    return 1;
+    return false;
   }
   this->UpdateProgress(0.95);
 
@@ -183,7 +199,7 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   AddFieldData(outcome, settings, output);
   BuildStageTable(outcome, table);
   this->UpdateProgress(1.0);
-  return 1;
+  return true;
 }
 
 Settings vtkCondensedFEMDeform::CurrentSettings() const {

@@ -34,6 +34,9 @@
 #include <algorithm>
 #include <memory>
 
+class vtkPointSet;
+class vtkTable;
+
 namespace faceplan {
 namespace fem_filter {
 struct Settings;
@@ -157,6 +160,9 @@ private:
   void operator=(const vtkCondensedFEMDeform&) = delete;
 
   faceplan::fem_filter::Settings CurrentSettings() const;
+  // The serial filter on whole inputs; false (after logging the error) when it failed.
+  bool Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bone, vtkUnstructuredGrid* output,
+              vtkTable* table);
 
   struct Cache;
   std::unique_ptr<Cache> State;

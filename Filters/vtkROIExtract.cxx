@@ -1,5 +1,6 @@
 #include "vtkROIExtract.h"
 
+#include "FacePlanGather.h"
 #include "FacePlanVTKConvert.h"
 #include "ROIExtract/ROIExtract.h"
 
@@ -9,6 +10,7 @@
 #include <vtkInformationVector.h>
 #include <vtkLinearTransform.h>
 #include <vtkMatrix4x4.h>
+#include <vtkMultiProcessController.h>
 #include <vtkObjectFactory.h>
 #include <vtkPlane.h>
 #include <vtkPointData.h>
@@ -127,21 +129,33 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
       output->Initialize();
     return 1;
   }
+  // Under MPI the ROI's connectivity needs the whole surface: gather it (FacePlanGather.h).
+  if (vtkMultiProcessController* controller = faceplan::gather::DistributedController()) {
+    faceplan::gather::RunOnWhole(
+        controller, input, output,
+        [this](vtkPointSet* in, vtkPointSet* out) { return this->Extract(in, out); });
+    return 1;
+  }
+  this->Extract(input, output);
+  return 1;
+}
+
+bool vtkROIExtract::Extract(vtkPointSet* input, vtkPointSet* output) {
   output->Initialize();
   const vtkIdType n = input->GetNumberOfPoints();
   if (n == 0) {
     vtkErrorMacro(<< "ROI Extract: the input has no points");
-    return 1;
+    return false;
   }
   if (this->PointIds.empty() && !this->Region) {
     vtkErrorMacro(<< "ROI Extract: no ROI given (set Region or PointIds)");
-    return 1;
+    return false;
   }
   if (this->PointIds.empty()) {
     const std::string problem = RegionProblem(this->Region);
     if (!problem.empty()) {
       vtkErrorMacro(<< "ROI Extract: invalid Region: " << problem);
-      return 1;
+      return false;
     }
   }
 
@@ -149,7 +163,7 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
   std::string why;
   if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::EdgesOfAnyCell, mesh, why)) {
     vtkErrorMacro(<< "ROI Extract: " << why);
-    return 1;
+    return false;
   }
 
   std::vector<std::uint8_t> selected(static_cast<std::size_t>(n), 0);
@@ -157,7 +171,7 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
     for (vtkIdType id : this->PointIds) {
       if (id < 0 || id >= n) {
         vtkErrorMacro(<< "ROI Extract: point id " << id << " out of range [0, " << n << ")");
-        return 1;
+        return false;
       }
       selected[static_cast<std::size_t>(id)] = 1;
     }
@@ -169,7 +183,7 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
       if (!std::isfinite(value)) {
         vtkErrorMacro(<< "ROI Extract: the Region gives a NaN or infinite value at point " << i
                       << ": its parameters (centre, origin, normal, position) must be finite");
-        return 1;
+        return false;
       }
       selected[static_cast<std::size_t>(i)] = value < 0.0 ? 1 : 0;
     }
@@ -181,7 +195,7 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
   const faceplan::Status status = faceplan::ComputeROI(mesh, selected, roi);
   if (!status) {
     vtkErrorMacro(<< "ROI Extract: " << status.message);
-    return 1;
+    return false;
   }
 
   output->ShallowCopy(input);
@@ -199,7 +213,7 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
   output->GetPointData()->AddArray(mask);
   output->GetPointData()->AddArray(boundary);
   if (roi.numROI == 0) vtkWarningMacro(<< "ROI Extract: the ROI is empty");
-  return 1;
+  return true;
 }
 
 void vtkROIExtract::PrintSelf(ostream& os, vtkIndent indent) {

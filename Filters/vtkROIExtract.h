@@ -66,6 +66,8 @@ protected:
 private:
   vtkROIExtract(const vtkROIExtract&) = delete;
   void operator=(const vtkROIExtract&) = delete;
+  // The serial filter on a whole input; false (after logging the error) when it failed.
+  bool Extract(vtkPointSet* input, vtkPointSet* output);
 };
 
 #endif

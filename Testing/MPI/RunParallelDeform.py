@@ -1,0 +1,48 @@
+"""One run of the MPI deformation test (pvbatch, serial or under mpiexec): for each scene and split,
+every process's piece of CondensedFEMDeform's output written to <work dir>/<label>/<scene>_<split>_
+{before,after}.pvtu (before and after one edit of the bone), and the solving rank's precompute
+count; then two runs with a real error (bad YoungsModulus, BezierCut without ROIExtract) whose
+messages the driver counts. servermanager.Fetch under pvbatch returns only the first process's piece, hence the files.
+
+    pvbatch RunParallelDeform.py <FacePlan.so> <Data dir> <work dir> <label> <split>...
+"""
+import json
+import os
+import sys
+
+from paraview.simple import LoadPlugin, SaveData, XMLPolyDataReader
+
+plugin, data_dir, work_dir, label = sys.argv[1:5]
+splits = sys.argv[5:]
+here = os.path.dirname(os.path.abspath(__file__))
+sys.path[:0] = [here, os.path.join(here, "..", "..", "scripts")]
+LoadPlugin(plugin)  # into paraview.simple, where parallel_scenes finds the filters
+import parallel_scenes
+from paraview.simple import BezierCut
+
+if label == "serial":
+    parallel_scenes.write_scene_files(data_dir, work_dir)
+out_dir = os.path.join(work_dir, label)
+os.makedirs(out_dir, exist_ok=True)
+
+precomputes = {}
+for scene in parallel_scenes.SCENES:
+    for split in splits:
+        key = "%s_%s" % (scene, split)
+        fem, edit = parallel_scenes.build(scene, split, data_dir, work_dir)
+        SaveData(os.path.join(out_dir, key + "_before.pvtu"), proxy=fem)
+        edit()
+        SaveData(os.path.join(out_dir, key + "_after.pvtu"), proxy=fem)
+        fem.UpdatePropertyInformation()  # from the solving rank
+        precomputes[key] = fem.GetPropertyValue("PrecomputeCount")
+        print("%s %s: %d precompute(s)" % (label, key, precomputes[key]))
+
+# Two real errors, each to be logged once however many processes run (the driver counts them).
+fem, _ = parallel_scenes.build("sphere", splits[0], data_dir, work_dir)
+fem.YoungsModulus = -1.0
+fem.UpdatePipeline()
+uncut = BezierCut(Input=XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")]))
+uncut.UpdatePipeline()
+
+with open(os.path.join(out_dir, "precomputes.json"), "w") as f:
+    json.dump(precomputes, f)
