@@ -1,7 +1,7 @@
 """The main job's pipeline on the Badin face scene, shared by the demo, the image tests and the GUI
 test: an ROI on the lower border of the mandible (chin), a Bezier cut that reduces it (as in the
 ICAT 2008 paper's Figures 12 and 13) and the soft tissue's deformation."""
-from paraview import simple
+from paraview import servermanager, simple
 
 # The cut: a gently curved surface 6 mm above the chin's lowest point (the bone below it goes).
 CUT_Z = 60.0
@@ -56,3 +56,17 @@ def label_bar(lut, view, title, position=(0.05, 0.15), length=0.6):
     bar.ScalarBarLength = length
     bar.Visibility = 1
     return bar
+
+
+def fetch_whole(proxy, port=0):
+    """The output of `proxy` from every process, appended, on the client (pvpython, pvbatch or a
+    client of pvserver). ParaView 5.11's servermanager.Fetch(proxy) brings only the first
+    process's piece of a vtkUnstructuredGrid (it picks no append filter for it), hence the
+    explicit reduction."""
+    append = {"vtkPolyData": "vtkAppendPolyData"}.get(
+        proxy.GetDataInformation(port).GetDataClassName(), "vtkAppendFilter")
+    reducer = servermanager.filters.ReductionFilter(Input=simple.OutputPort(proxy, port),
+                                                    PostGatherHelperName=append)
+    data = servermanager.Fetch(reducer)
+    simple.Delete(reducer)
+    return data

@@ -92,7 +92,8 @@ for scene in SCENES:
                 key = "%s_%s_%s" % (scene, split, phase)
                 grids = pieces("n%d" % n, key)
                 nonempty = min(n, 2) if split == "pvtu" else n  # the writer skips empty pieces
-                util.check(len(grids) == nonempty, "n%d %s: %d pieces written" % (n, key, len(grids)))
+                if not util.check(len(grids) == nonempty, "n%d %s: %d pieces written" % (n, key, len(grids))):
+                    continue
                 ids, u = displacement_by_id(grids)
                 covered = np.zeros(len(reference), bool)
                 covered[ids] = True
