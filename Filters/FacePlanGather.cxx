@@ -81,9 +81,12 @@ vtkMultiProcessController* DistributedController() {
 
 GatheredPieces::GatheredPieces(vtkMultiProcessController* controller, vtkPointSet* piece, int root)
     : Controller(controller), Root(root), Piece(piece) {
+  // An unconnected input is unconnected on every rank: the gather still runs (it is collective),
+  // and the root's Whole() stays null for the filter's own check to report.
+  vtkNew<vtkUnstructuredGrid> nothing;
   std::vector<vtkSmartPointer<vtkDataObject>> received;
-  controller->Gather(piece, received, root);
-  if (!this->IsRoot())
+  controller->Gather(piece ? static_cast<vtkDataObject*>(piece) : nothing.Get(), received, root);
+  if (!this->IsRoot() || !piece)
     return;
 
   const std::size_t nPieces = received.size();
@@ -268,6 +271,10 @@ void GatheredPieces::ScatterTo(vtkPointSet* wholeResult, vtkPointSet* output) co
     this->Controller->Receive(mine, this->Root, kScatterTag);
   }
 
+  if (!this->Piece) {
+    output->Initialize();
+    return;
+  }
   output->ShallowCopy(this->Piece);
   if (this->Piece->GetNumberOfPoints() == 0) {
     output->GetFieldData()->ShallowCopy(mine->GetFieldData());
@@ -310,9 +317,13 @@ bool RunOnWhole(vtkMultiProcessController* controller, vtkPointSet* piece, vtkPo
   vtkSmartPointer<vtkPointSet> wholeOutput;
   std::string failure;
   if (pieces.IsRoot()) {
-    wholeOutput.TakeReference(pieces.Whole()->NewInstance());
-    if (!run(pieces.Whole(), wholeOutput))
-      failure = "failed on rank 0";
+    if (!pieces.Whole())
+      failure = "no input";
+    else {
+      wholeOutput.TakeReference(pieces.Whole()->NewInstance());
+      if (!run(pieces.Whole(), wholeOutput))
+        failure = "failed on rank 0";
+    }
   }
   if (!ShareRootMessage(controller, root, failure).empty()) {
     output->Initialize();

@@ -196,7 +196,8 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
   vtkDataArray* boundaryArray = input->GetPointData()->GetArray("ROIBoundary");
   if (!maskArray || !boundaryArray || maskArray->GetNumberOfComponents() != 1 ||
       boundaryArray->GetNumberOfComponents() != 1) {
-    this->Fail("the input needs one-component point arrays ROIMask and ROIBoundary; apply ROI Extract first",
+    this->Fail("the input needs one-component point arrays ROIMask and ROIBoundary; apply ROI "
+               "Extract first",
                output, surface);
     return false;
   }

@@ -25,7 +25,7 @@ import parallel_scenes
 
 processes = servermanager.ActiveConnection.GetNumberOfDataPartitions()
 split = "RedistributeDataSet" if processes > 1 else "none"
-fem, edit = parallel_scenes.build("face", split, data_dir, work_dir)
+fem, _, edit = parallel_scenes.build("face", split, data_dir, work_dir)
 
 
 def result():

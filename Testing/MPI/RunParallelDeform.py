@@ -1,6 +1,7 @@
 """One run of the MPI deformation test (pvbatch, serial or under mpiexec): for each scene and split,
 every process's piece of CondensedFEMDeform's output written to <work dir>/<label>/<scene>_<split>_
-{before,after}.pvtu (before and after one edit of the bone), and the solving rank's precompute
+{before,after}.pvtu (before and after one edit of the bone; for the face BezierCut's output as
+<scene>_<split>_<phase>_bone.pvtu or .pvtp too), and the solving rank's precompute
 count; then two runs with a real error (bad YoungsModulus, BezierCut without ROIExtract) whose
 messages the driver counts. servermanager.Fetch under pvbatch returns only the first process's piece, hence the files.
 
@@ -29,16 +30,21 @@ precomputes = {}
 for scene in parallel_scenes.SCENES:
     for split in splits:
         key = "%s_%s" % (scene, split)
-        fem, edit = parallel_scenes.build(scene, split, data_dir, work_dir)
-        SaveData(os.path.join(out_dir, key + "_before.pvtu"), proxy=fem)
-        edit()
-        SaveData(os.path.join(out_dir, key + "_after.pvtu"), proxy=fem)
+        fem, bone, edit = parallel_scenes.build(scene, split, data_dir, work_dir)
+        for phase in ("before", "after"):
+            if phase == "after":
+                edit()
+            SaveData(os.path.join(out_dir, "%s_%s.pvtu" % (key, phase)), proxy=fem)
+            if scene == "face":  # BezierCut's output, gathered and scattered back too
+                bone_type = bone.GetDataInformation().GetDataClassName()
+                extension = ".pvtp" if bone_type == "vtkPolyData" else ".pvtu"
+                SaveData(os.path.join(out_dir, "%s_%s_bone%s" % (key, phase, extension)), proxy=bone)
         fem.UpdatePropertyInformation()  # from the solving rank
         precomputes[key] = fem.GetPropertyValue("PrecomputeCount")
         print("%s %s: %d precompute(s)" % (label, key, precomputes[key]))
 
 # Two real errors, each to be logged once however many processes run (the driver counts them).
-fem, _ = parallel_scenes.build("sphere", splits[0], data_dir, work_dir)
+fem, _, _ = parallel_scenes.build("sphere", splits[0], data_dir, work_dir)
 fem.YoungsModulus = -1.0
 fem.UpdatePipeline()
 uncut = BezierCut(Input=XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")]))

@@ -165,15 +165,17 @@ def tissue_file(scene, data_dir, work_dir):
 
 
 def _split(source, split):
-    if split == "RedistributeDataSet":
-        return simple.RedistributeDataSet(Input=source)
+    if split == "RedistributeDataSet":  # cell GlobalIds, no point GlobalIds: merge by coordinates
+        return simple.RedistributeDataSet(Input=source, GenerateGlobalCellIds=1)
+    # D3 adds point GlobalIds and ghost cells; the .pvtu has neither.
     if split == "D3":
         return simple.D3(Input=source)
     return source
 
 
 def build(scene, split, data_dir, work_dir):
-    """(fem, edit): the pipeline's CondensedFEMDeform and a function making one edit of the bone."""
+    """(fem, bone, edit): the pipeline's CondensedFEMDeform, its Bone input and a function making one
+    edit of the bone. The face's bone (BezierCut's output) carries serial point ids too."""
     if split == "pvtu":
         tissue = simple.XMLPartitionedUnstructuredGridReader(
             FileName=[os.path.join(work_dir, scene + "_tissue.pvtu")])
@@ -185,6 +187,7 @@ def build(scene, split, data_dir, work_dir):
     if scene == "face":
         import faceplan_pipeline
         mandible = simple.XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")])
+        mandible = simple.GenerateIds(Input=mandible, PointIdsArrayName=SERIAL_ID, GenerateCellIds=0)
         bone_piece = mandible if split == "pvtu" else _split(mandible, split)
         roi = simple.ROIExtract(Input=bone_piece)
         roi.Region = "Sphere"
@@ -211,4 +214,4 @@ def build(scene, split, data_dir, work_dir):
             scaled.Function = "0.5*Displacement"
     fem = simple.CondensedFEMDeform(Input=tissue, Bone=bone)
     fem.ContactDistance = 1.0
-    return fem, edit
+    return fem, bone, edit
