@@ -2,10 +2,11 @@
 
 #include "FacePlanGather.h"
 
-#include "vtkFieldData.h"
+#include "vtkDataArray.h"
+#include "vtkIdList.h"
 #include "vtkMultiProcessController.h"
 #include "vtkNew.h"
-#include "vtkPolyData.h"
+#include "vtkPointData.h"
 #include "vtkTable.h"
 #include "vtkUnstructuredGrid.h"
 
@@ -39,16 +40,24 @@ void DeformGathered(vtkMultiProcessController* controller, OutputMode mode,
     tissues.ScatterTo(wholeOutput, output);
     return;
   }
-  vtkNew<vtkPolyData> fieldCarrier;
+  // Surface: each boundary triangle goes to the rank that owns the tetrahedron it bounds.
+  std::vector<int> owner;
   if (tissues.IsRoot()) {
-    output->ShallowCopy(wholeOutput);
-    fieldCarrier->GetFieldData()->ShallowCopy(wholeOutput->GetFieldData());
+    auto* whole = vtkUnstructuredGrid::SafeDownCast(tissues.Whole());
+    vtkDataArray* wholeIds = wholeOutput->GetPointData()->GetArray("vtkOriginalPointIds");
+    whole->BuildLinks();
+    vtkNew<vtkIdList> points, cells;
+    owner.assign(static_cast<std::size_t>(wholeOutput->GetNumberOfCells()), root);
+    for (vtkIdType c = 0; wholeIds && c < wholeOutput->GetNumberOfCells(); ++c) {
+      wholeOutput->GetCellPoints(c, points);
+      for (vtkIdType k = 0; k < points->GetNumberOfIds(); ++k)
+        points->SetId(k, static_cast<vtkIdType>(wholeIds->GetComponent(points->GetId(k), 0)));
+      whole->GetCellNeighbors(-1, points, cells);
+      if (cells->GetNumberOfIds() > 0)
+        owner[static_cast<std::size_t>(c)] = tissues.CellOwner(cells->GetId(0));
+    }
   }
-  gather::BroadcastFromRoot(controller, root, fieldCarrier);
-  if (!tissues.IsRoot()) {
-    output->Initialize();
-    output->GetFieldData()->ShallowCopy(fieldCarrier->GetFieldData());
-  }
+  tissues.ScatterCells(wholeOutput, owner, output);
 }
 
 } // namespace fem_filter

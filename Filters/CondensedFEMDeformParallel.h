@@ -3,10 +3,9 @@
 // bone pieces are gathered on the solving rank (FacePlanGather), which runs the serial steps on
 // the whole and keeps the precompute cached there, so an edit re-solves exactly as in serial.
 // Volume output: every rank gets its own piece back (its points and cells, moved, with their
-// Displacement). Surface output: the solving rank holds the whole boundary surface, the other
-// ranks an empty grid. Field data and the stage table are the same on every rank. An error is
-// logged once, by the solving rank; every rank's outputs are then empty. Private to
-// FacePlan::Filters.
+// Displacement). Surface output: every rank gets the boundary triangles of its own tetrahedra.
+// Field data and the stage table are the same on every rank. An error is logged once, by the
+// solving rank; every rank's outputs are then empty. Private to FacePlan::Filters.
 #include "CondensedFEMDeformSettings.h"
 
 #include <functional>

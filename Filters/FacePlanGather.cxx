@@ -3,6 +3,7 @@
 #include "vtkCellData.h"
 #include "vtkDataSetAttributes.h"
 #include "vtkDataSetAttributesFieldList.h"
+#include "vtkExtractCells.h"
 #include "vtkFieldData.h"
 #include "vtkIdList.h"
 #include "vtkIdTypeArray.h"
@@ -226,6 +227,7 @@ GatheredPieces::GatheredPieces(vtkMultiProcessController* controller, vtkPointSe
     for (vtkIdType j = 0; j < ids->GetNumberOfIds(); ++j)
       ids->SetId(j, this->PointMap[r][static_cast<std::size_t>(ids->GetId(j))]);
     InsertCell(whole, p->GetCellType(c), ids);
+    this->CellOwners.push_back(static_cast<int>(r));
     whole->GetCellData()->CopyData(cellFields, p->GetCellData(), static_cast<int>(r), c,
                                    static_cast<vtkIdType>(k));
   }
@@ -292,6 +294,36 @@ void GatheredPieces::ScatterTo(vtkPointSet* wholeResult, vtkPointSet* output) co
   if (vtkDataArray* vectors = received->GetVectors())
     output->GetPointData()->SetActiveVectors(vectors->GetName());
   output->GetFieldData()->ShallowCopy(mine->GetFieldData());
+}
+
+int GatheredPieces::CellOwner(vtkIdType wholeCell) const {
+  return wholeCell >= 0 && wholeCell < static_cast<vtkIdType>(this->CellOwners.size())
+             ? this->CellOwners[static_cast<std::size_t>(wholeCell)]
+             : this->Root;
+}
+
+void GatheredPieces::ScatterCells(vtkUnstructuredGrid* wholeResult, const std::vector<int>& owner,
+                                  vtkUnstructuredGrid* output) const {
+  if (!this->IsRoot()) {
+    this->Controller->Receive(output, this->Root, kScatterTag);
+    return;
+  }
+  const int processes = this->Controller->GetNumberOfProcesses();
+  std::vector<vtkNew<vtkIdList>> cells(static_cast<std::size_t>(processes));
+  for (vtkIdType c = 0; c < static_cast<vtkIdType>(owner.size()); ++c)
+    cells[static_cast<std::size_t>(owner[static_cast<std::size_t>(c)])]->InsertNextId(c);
+  for (int r = 0; r < processes; ++r) {
+    vtkNew<vtkExtractCells> extract;
+    extract->SetInputData(wholeResult);
+    extract->SetCellList(cells[static_cast<std::size_t>(r)]);
+    extract->Update();
+    vtkUnstructuredGrid* part = extract->GetOutput();
+    part->GetFieldData()->ShallowCopy(wholeResult->GetFieldData());
+    if (r == this->Root)
+      output->ShallowCopy(part);
+    else
+      this->Controller->Send(part, r, kScatterTag);
+  }
 }
 
 std::string ShareRootMessage(vtkMultiProcessController* controller, int root,

@@ -14,6 +14,7 @@
 class vtkDataObject;
 class vtkMultiProcessController;
 class vtkPointSet;
+class vtkUnstructuredGrid;
 
 namespace faceplan {
 namespace gather {
@@ -42,6 +43,14 @@ public:
   // arrays and field data of `wholeResult` at its own points.
   void ScatterTo(vtkPointSet* wholeResult, vtkPointSet* output) const;
 
+  // On the root: the process whose piece holds cell `wholeCell` of Whole().
+  int CellOwner(vtkIdType wholeCell) const;
+
+  // Collective. `output` becomes the cells of `wholeResult` (read on the root only) that
+  // `owner[c]` gives to this process, with their points and arrays, and its field data.
+  void ScatterCells(vtkUnstructuredGrid* wholeResult, const std::vector<int>& owner,
+                    vtkUnstructuredGrid* output) const;
+
 private:
   vtkMultiProcessController* Controller;
   int Root;
@@ -51,6 +60,7 @@ private:
   // point only ghost cells use, when no other piece owns it).
   std::vector<std::vector<vtkIdType>> PointMap;
   std::vector<vtkSmartPointer<vtkPointSet>> Pieces;
+  std::vector<int> CellOwners; // on the root, per cell of Whole()
 };
 
 // Collective. The root's message (empty when it succeeded) on every process, so that every

@@ -1,7 +1,8 @@
 """One run of the MPI deformation test (pvbatch, serial or under mpiexec): for each scene and split,
 every process's piece of CondensedFEMDeform's output written to <work dir>/<label>/<scene>_<split>_
 {before,after}.pvtu (before and after one edit of the bone; for the face BezierCut's output as
-<scene>_<split>_<phase>_bone.pvtu or .pvtp too), and the solving rank's precompute
+<scene>_<split>_<phase>_bone.pvtu or .pvtp too; for the sphere the Surface output as
+<scene>_<split>_surface.pvtu), and the solving rank's precompute
 count; then two runs with a real error (bad YoungsModulus, BezierCut without ROIExtract) whose
 messages the driver counts. servermanager.Fetch under pvbatch returns only the first process's piece, hence the files.
 
@@ -41,6 +42,9 @@ for scene in parallel_scenes.SCENES:
                 SaveData(os.path.join(out_dir, "%s_%s_bone%s" % (key, phase, extension)), proxy=bone)
         fem.UpdatePropertyInformation()  # from the solving rank
         precomputes[key] = fem.GetPropertyValue("PrecomputeCount")
+        if scene == "sphere":  # the boundary surface only: each rank its own triangles
+            fem.OutputMode = "Surface"
+            SaveData(os.path.join(out_dir, "%s_surface.pvtu" % key), proxy=fem)
         print("%s %s: %d precompute(s)" % (label, key, precomputes[key]))
 
 # Two real errors, each to be logged once however many processes run (the driver counts them).

@@ -80,38 +80,42 @@ run("serial", [], ["none"])
 for n in ranks:
     run("n%d" % n, mpiexec + ["-n", str(n)], SPLITS)
 
-# The results: the tissue of both scenes, and the face's cut bone (BezierCut's output).
-for scene in SCENES + ["face_bone"]:
-    for phase in ("before", "after"):
-        suffix = "_bone" if scene.endswith("_bone") else ""
-        base = scene[: len(scene) - len(suffix)]
-        serial = pieces("serial", "%s_none_%s%s" % (base, phase, suffix))
-        ref_ids, ref_u = displacement_by_id(serial)
-        reference = np.full((ref_ids.max() + 1, 3), np.nan)
-        reference[ref_ids] = ref_u
-        scale = np.abs(ref_u).max()
-        for n in ranks:
-            precomputes = json.load(open(os.path.join(work_dir, "n%d" % n, "precomputes.json")))
-            for split in SPLITS:
-                key = "%s_%s_%s%s" % (base, split, phase, suffix)
-                grids = pieces("n%d" % n, key)
-                # The writer skips empty pieces: a 2-piece tissue file, a 1-piece bone file.
-                nonempty = n if split != "pvtu" else (1 if suffix else min(n, 2))
-                if not util.check(len(grids) == nonempty, "n%d %s: %d pieces written" % (n, key, len(grids))):
-                    continue
-                ids, u = displacement_by_id(grids)
-                covered = np.zeros(len(reference), bool)
-                covered[ids] = True
-                util.check(covered[ref_ids].all(), "n%d %s: every serial point is in a piece" % (n, key))
-                diff = np.abs(u - reference[ids]).max() / scale
-                util.check(diff <= TOLERANCE, "n%d %s: max |dDisplacement| %.2e relative (<= %.0e)"
-                           % (n, key, diff, TOLERANCE))
-                print("n%d %s: %d pieces, max |dDisplacement| %.2e relative" % (n, key, len(grids), diff))
-                fields = [field_values(g) for g in grids]
-                util.check(all(f == fields[0] for f in fields), "n%d %s: same field data on every rank" % (n, key))
-                if phase == "after" and not suffix:
-                    util.check(fields[0].get("PrecomputeReused") == "1",
-                               "n%d %s: the edit reused the precompute" % (n, key))
-                    util.check(precomputes["%s_%s" % (scene, split)] == 1,
-                               "n%d %s: one precompute on the solving rank" % (n, key))
+# The results: the tissue of both scenes before and after the edit, the face's cut bone
+# (BezierCut's output) and the sphere's Surface output.
+results = [(scene, phase) for scene in SCENES for phase in ("before", "after")]
+results += [("face", "before_bone"), ("face", "after_bone"), ("sphere", "surface")]
+for scene, tag in results:
+    serial = pieces("serial", "%s_none_%s" % (scene, tag))
+    ref_ids, ref_u = displacement_by_id(serial)
+    reference = np.full((ref_ids.max() + 1, 3), np.nan)
+    reference[ref_ids] = ref_u
+    scale = np.abs(ref_u).max()
+    for n in ranks:
+        precomputes = json.load(open(os.path.join(work_dir, "n%d" % n, "precomputes.json")))
+        for split in SPLITS:
+            key = "%s_%s_%s" % (scene, split, tag)
+            grids = pieces("n%d" % n, key)
+            # The writer skips empty pieces: a 2-piece tissue file, a 1-piece bone file.
+            nonempty = n if split != "pvtu" else (1 if tag.endswith("bone") else min(n, 2))
+            if not util.check(len(grids) == nonempty, "n%d %s: %d pieces written" % (n, key, len(grids))):
+                continue
+            ids, u = displacement_by_id(grids)
+            covered = np.zeros(len(reference), bool)
+            covered[ids] = True
+            util.check(covered[ref_ids].all(), "n%d %s: every serial point is in a piece" % (n, key))
+            diff = np.abs(u - reference[ids]).max() / scale
+            util.check(diff <= TOLERANCE, "n%d %s: max |dDisplacement| %.2e relative (<= %.0e)"
+                       % (n, key, diff, TOLERANCE))
+            print("n%d %s: %d pieces, max |dDisplacement| %.2e relative" % (n, key, len(grids), diff))
+            fields = [field_values(g) for g in grids]
+            util.check(all(f == fields[0] for f in fields), "n%d %s: same field data on every rank" % (n, key))
+            if tag == "surface":
+                cells = sum(g.GetNumberOfCells() for g in grids)
+                util.check(cells == sum(g.GetNumberOfCells() for g in serial),
+                           "n%d %s: the pieces hold each boundary triangle once" % (n, key))
+            if tag == "after":
+                util.check(fields[0].get("PrecomputeReused") == "1",
+                           "n%d %s: the edit reused the precompute" % (n, key))
+                util.check(precomputes["%s_%s" % (scene, split)] == 1,
+                           "n%d %s: one precompute on the solving rank" % (n, key))
 util.finish("TestParallelDeform")
