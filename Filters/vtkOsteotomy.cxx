@@ -1,5 +1,6 @@
 #include "vtkOsteotomy.h"
 
+#include "FacePlanGather.h"
 #include "FacePlanVTKConvert.h"
 #include "Osteotomy/CutPlanes.h"
 #include "Osteotomy/Osteotomy.h"
@@ -13,6 +14,7 @@
 #include <vtkImplicitFunction.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
+#include <vtkMultiProcessController.h>
 #include <vtkObjectFactory.h>
 #include <vtkPolyData.h>
 
@@ -48,27 +50,42 @@ int vtkOsteotomy::FillInputPortInformation(int, vtkInformation* info) {
   return 1;
 }
 
-void vtkOsteotomy::Fail(const std::string& message, vtkInformationVector* outputVector) {
+void vtkOsteotomy::Fail(const std::string& message, vtkDataObject* output,
+                        vtkDataObject* planesOutput) {
   this->LastError = message;
-  for (int port = 0; port < 2; ++port)
-    if (vtkDataObject* o =
-            outputVector->GetInformationObject(port)->Get(vtkDataObject::DATA_OBJECT()))
-      o->Initialize();
+  output->Initialize();
+  planesOutput->Initialize();
   vtkErrorMacro(<< "Osteotomy: " << message);
 }
 
 int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVector,
                               vtkInformationVector* outputVector) {
-  namespace of = faceplan::osteotomy_filter;
   this->LastError.clear();
   vtkDataSet* data = vtkDataSet::GetData(inputVector[0], 0);
   vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);
   vtkPolyData* planesOutput = vtkPolyData::GetData(outputVector, 1);
+  // Under MPI the cut needs the whole bone: it is gathered on rank 0 (FacePlanGather.h), which
+  // holds both outputs; the cut makes new cells, so no piece maps back to a rank.
+  if (vtkMultiProcessController* controller = faceplan::gather::DistributedController()) {
+    const faceplan::gather::GatheredPieces bone(controller, vtkPointSet::SafeDownCast(data), 0);
+    output->Initialize();
+    planesOutput->Initialize();
+    if (bone.IsRoot())
+      this->Cut(bone.Whole() ? bone.Whole() : data, output, planesOutput);
+    this->LastError = faceplan::gather::ShareRootMessage(controller, 0, this->LastError);
+    return 1;
+  }
+  this->Cut(data, output, planesOutput);
+  return 1;
+}
+
+void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* planesOutput) {
+  namespace of = faceplan::osteotomy_filter;
   output->Initialize();
   planesOutput->Initialize();
   auto failed = [&](const faceplan::Status& s) {
     if (!s)
-      this->Fail(s.message, outputVector);
+      this->Fail(s.message, output, planesOutput);
     return !s;
   };
 
@@ -80,25 +97,25 @@ int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVecto
     return 1;
   }
   if (failed(of::ValidateInput(data)))
-    return 1;
+    return;
   vtkPolyData* input = vtkPolyData::SafeDownCast(data);
   std::vector<vtkImplicitFunction*> functions{this->CutPlane1};
   if (this->UseSecondPlane)
     functions.push_back(this->CutPlane2);
   std::vector<faceplan::CutPlane> planes;
   if (failed(of::ToCutPlanes(functions, planes)))
-    return 1;
+    return;
   faceplan::SurfaceMesh inputMesh;
   std::string why;
   if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly,
                                            inputMesh, why)) {
-    this->Fail(why, outputVector);
-    return 1;
+    this->Fail(why, output, planesOutput);
+    return;
   }
   std::vector<std::uint8_t> inputSides;
   if (failed(
           faceplan::ClassifyCutSides(inputMesh.points, planes, this->InsideOut != 0, inputSides)))
-    return 1;
+    return;
 
   // Convert: split the bone with VTK's clipping, both sides capped, the bookkeeping interpolated.
   std::vector<double> key{this->InsideOut ? 1.0 : 0.0};
@@ -118,7 +135,7 @@ int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   vtkPolyData* split = this->Split.split;
   faceplan::OsteotomyBone bone;
   if (failed(of::ToOsteotomyBone(split, this->Split.moves, input->GetFieldData(), bone)))
-    return 1;
+    return;
   faceplan::OsteotomyMove move;
   move.move.translation = Eigen::Vector3d(this->Translation);
   move.move.rotationDegrees = Eigen::Vector3d(this->Rotation);
@@ -129,7 +146,7 @@ int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   // Core: move the segment, keep the bookkeeping.
   faceplan::OsteotomyResult result;
   if (failed(faceplan::MoveSegment(bone, move, result)))
-    return 1;
+    return;
   std::copy(result.pivot.data(), result.pivot.data() + 3, this->UsedPivot);
 
   // Outputs.
@@ -137,7 +154,6 @@ int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVecto
   std::array<double, 6> box;
   input->GetBounds(box.data());
   of::BuildCutPlaneOutput(planes, box, planesOutput);
-  return 1;
 }
 
 void vtkOsteotomy::PrintSelf(ostream& os, vtkIndent indent) {

@@ -118,7 +118,9 @@ protected:
 private:
   vtkOsteotomy(const vtkOsteotomy&) = delete;
   void operator=(const vtkOsteotomy&) = delete;
-  void Fail(const std::string& message, vtkInformationVector* outputVector);
+  void Fail(const std::string& message, vtkDataObject* output, vtkDataObject* planesOutput);
+  // The serial filter on a whole input (errors through Fail).
+  void Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* planesOutput);
 };
 
 #endif

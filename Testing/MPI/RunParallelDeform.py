@@ -28,24 +28,25 @@ out_dir = os.path.join(work_dir, label)
 os.makedirs(out_dir, exist_ok=True)
 
 precomputes = {}
-for scene in parallel_scenes.SCENES:
-    for split in splits:
-        key = "%s_%s" % (scene, split)
-        fem, bone, edit = parallel_scenes.build(scene, split, data_dir, work_dir)
-        for phase in ("before", "after"):
-            if phase == "after":
-                edit()
-            SaveData(os.path.join(out_dir, "%s_%s.pvtu" % (key, phase)), proxy=fem)
-            if scene == "face":  # BezierCut's output, gathered and scattered back too
-                bone_type = bone.GetDataInformation().GetDataClassName()
-                extension = ".pvtp" if bone_type == "vtkPolyData" else ".pvtu"
-                SaveData(os.path.join(out_dir, "%s_%s_bone%s" % (key, phase, extension)), proxy=bone)
-        fem.UpdatePropertyInformation()  # from the solving rank
-        precomputes[key] = fem.GetPropertyValue("PrecomputeCount")
-        if scene == "sphere":  # the boundary surface only: each rank its own triangles
-            fem.OutputMode = "Surface"
-            SaveData(os.path.join(out_dir, "%s_surface.pvtu" % key), proxy=fem)
-        print("%s %s: %d precompute(s)" % (label, key, precomputes[key]))
+runs = [(scene, split) for scene in parallel_scenes.SCENES for split in splits]
+runs += [("osteotomy", split) for split in splits if split in ("none", parallel_scenes.OSTEOTOMY_SPLIT)]
+for scene, split in runs:
+    key = "%s_%s" % (scene, split)
+    fem, bone, edit = parallel_scenes.build(scene, split, data_dir, work_dir)
+    for phase in ("before", "after"):
+        if phase == "after":
+            edit()
+        SaveData(os.path.join(out_dir, "%s_%s.pvtu" % (key, phase)), proxy=fem)
+        if scene == "face":  # BezierCut's output, gathered and scattered back too
+            bone_type = bone.GetDataInformation().GetDataClassName()
+            extension = ".pvtp" if bone_type == "vtkPolyData" else ".pvtu"
+            SaveData(os.path.join(out_dir, "%s_%s_bone%s" % (key, phase, extension)), proxy=bone)
+    fem.UpdatePropertyInformation()  # from the solving rank
+    precomputes[key] = fem.GetPropertyValue("PrecomputeCount")
+    if scene == "sphere":  # the boundary surface only: each rank its own triangles
+        fem.OutputMode = "Surface"
+        SaveData(os.path.join(out_dir, "%s_surface.pvtu" % key), proxy=fem)
+    print("%s %s: %d precompute(s)" % (label, key, precomputes[key]))
 
 # Two real errors, each to be logged once however many processes run (the driver counts them).
 fem, _, _ = parallel_scenes.build("sphere", splits[0], data_dir, work_dir)

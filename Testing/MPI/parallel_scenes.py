@@ -1,6 +1,7 @@
 """The scenes of the MPI tests, built and split the same way in every run (serial or mpiexec).
 
 face:   the demo's pipeline on the Badin face (ROIExtract -> BezierCut -> CondensedFEMDeform).
+osteotomy: the face with a BSSO (Osteotomy on the mandible, maxilla and cranium fixed).
 sphere: a hollow sphere whose inner wall is pulled by a bone surface (half of it in the ROI).
 A run's tissue (and, except for the .pvtu split, the mandible) goes through one split:
 none, RedistributeDataSet, D3 (with ghost cells) or a 2-piece .pvtu written beforehand by
@@ -24,6 +25,7 @@ from vtkmodules.vtkIOXML import (vtkXMLPolyDataWriter,
 SPLITS = ["RedistributeDataSet", "D3", "pvtu"]
 SERIAL_ID = "SerialPointId"
 SCENES = ["face", "sphere"]
+OSTEOTOMY_SPLIT = "RedistributeDataSet"  # the osteotomy scene runs with this split only
 INNER, OUTER, LAYERS, CELLS_PER_EDGE = 10.0, 20.0, 4, 10
 
 
@@ -159,7 +161,7 @@ def _write_two_pieces(source_file, stem):
 
 
 def tissue_file(scene, data_dir, work_dir):
-    if scene == "face":
+    if scene in ("face", "osteotomy"):
         return os.path.join(data_dir, "face", "face_tissue.vtu")
     return os.path.join(work_dir, "sphere_tissue.vtu")
 
@@ -203,6 +205,21 @@ def build(scene, split, data_dir, work_dir):
             lower = lambda curve: [c - (0.5 if k % 3 == 2 else 0.0) for k, c in enumerate(curve)]
             cut.CurveU = lower(faceplan_pipeline.CURVE_U)
             cut.CurveV = lower(faceplan_pipeline.CURVE_V)
+    elif scene == "osteotomy":  # BSSO: the mandible's body moved, maxilla and cranium fixed
+        import osteotomy_scenes
+        _, planes, translation, _ = osteotomy_scenes.SCENES["bsso"]
+        mandible = simple.XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")])
+        if split != "none":  # Osteotomy takes triangles as vtkPolyData
+            mandible = simple.ExtractSurface(Input=_split(mandible, split))
+        osteotomy = simple.Osteotomy(Input=mandible)
+        osteotomy.CutPlane1.Origin, osteotomy.CutPlane1.Normal = planes[0]
+        osteotomy.Translation = translation
+        fixed = [osteotomy_scenes.unmoved(simple.XMLPolyDataReader(
+            FileName=[os.path.join(data_dir, "face", name + ".vtp")])) for name in ("maxilla", "cranium")]
+        bone = simple.AppendGeometry(Input=[osteotomy] + fixed)
+
+        def edit():
+            osteotomy.Translation = [t * 0.5 for t in translation]
     else:
         reader = simple.XMLPolyDataReader(FileName=[os.path.join(work_dir, "sphere_bone.vtp")])
         scaled = simple.Calculator(Input=_split(reader, split) if split != "pvtu" else reader)
