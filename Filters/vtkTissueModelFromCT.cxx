@@ -1,6 +1,7 @@
 #include "vtkTissueModelFromCT.h"
 
 #include "Copyleft/CGAL/LabeledImageMesher.h"
+#include "FacePlanGather.h"
 #include "TissueModelFromCT/TissueModel.h"
 
 #include <vtkCellArray.h>
@@ -14,11 +15,13 @@
 #include <vtkInformationVector.h>
 #include <vtkIntArray.h>
 #include <vtkMatrix3x3.h>
+#include <vtkMultiProcessController.h>
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkStreamingDemandDrivenPipeline.h>
 #include <vtkUnstructuredGrid.h>
 
 #include <atomic>
@@ -92,6 +95,23 @@ int vtkTissueModelFromCT::FillOutputPortInformation(int port, vtkInformation* in
   return 1;
 }
 
+int vtkTissueModelFromCT::RequestUpdateExtent(vtkInformation* request,
+                                              vtkInformationVector** inputVector,
+                                              vtkInformationVector* outputVector) {
+  // Under MPI the whole CT is meshed once, on rank 0: ask for the whole image, not this rank's
+  // slab of it (FacePlanGather.h says how the other filters gather).
+  if (faceplan::gather::DistributedController()) {
+    vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+    inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
+    inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
+    if (inInfo->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
+      inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT(),
+                  inInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()), 6);
+    return 1;
+  }
+  return this->Superclass::RequestUpdateExtent(request, inputVector, outputVector);
+}
+
 int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** inputVector,
                                       vtkInformationVector* outputVector) {
   vtkUnstructuredGrid* tissueOut = vtkUnstructuredGrid::GetData(outputVector, 0);
@@ -100,6 +120,10 @@ int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** in
   tissueOut->Initialize();
   boneOut->Initialize();
   skinOut->Initialize();
+  // Under MPI rank 0 meshes the whole CT and holds the model; the other ranks' outputs are empty.
+  if (vtkMultiProcessController* controller = faceplan::gather::DistributedController())
+    if (controller->GetLocalProcessId() != 0)
+      return 1;
 
   vtkDataObject* inputObject = vtkDataObject::GetData(inputVector[0], 0);
   vtkImageData* input = vtkImageData::SafeDownCast(inputObject);
