@@ -80,6 +80,11 @@ vtkMultiProcessController* DistributedController() {
   return controller && controller->GetNumberOfProcesses() > 1 ? controller : nullptr;
 }
 
+bool LogsErrors() {
+  vtkMultiProcessController* controller = DistributedController();
+  return !controller || controller->GetLocalProcessId() == 0;
+}
+
 GatheredPieces::GatheredPieces(vtkMultiProcessController* controller, vtkPointSet* piece, int root)
     : Controller(controller), Root(root), Piece(piece) {
   // An unconnected input is unconnected on every rank: the gather still runs (it is collective),

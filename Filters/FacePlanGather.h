@@ -23,6 +23,10 @@ namespace gather {
 // and on a client (which runs no filters).
 vtkMultiProcessController* DistributedController();
 
+// False on the ranks other than 0 of a distributed run: an error that every rank meets alike (a
+// wrong input type) is logged once.
+bool LogsErrors();
+
 // One dataset split across the processes, whole on the root. Collective: every process builds it
 // with its own piece (which may be empty), in the same order as the other gathers.
 //

@@ -135,7 +135,8 @@ void vtkBezierCut::Fail(const std::string& message, vtkDataObject* output, vtkDa
   for (vtkDataObject* o : {output, surface})
     if (o)
       o->Initialize();
-  vtkErrorMacro(<< "Bezier Cut: " << message);
+  if (faceplan::gather::LogsErrors())
+    vtkErrorMacro(<< "Bezier Cut: " << message);
 }
 
 int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVector,

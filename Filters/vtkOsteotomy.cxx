@@ -93,8 +93,8 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
   if (this->PivotMode != SEGMENT_CENTROID && this->PivotMode != CUSTOM_PIVOT) {
     this->Fail("PivotMode must be 0 (SegmentCentroid) or 1 (Custom), not " +
                    std::to_string(this->PivotMode),
-               outputVector);
-    return 1;
+               output, planesOutput);
+    return;
   }
   if (failed(of::ValidateInput(data)))
     return;

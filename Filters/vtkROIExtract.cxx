@@ -123,7 +123,8 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
   vtkPointSet* output = vtkPointSet::GetData(outputVector, 0);
   if (!input || !output) {
     vtkDataObject* given = vtkDataObject::GetData(inputVector[0], 0);
-    vtkErrorMacro(<< "ROI Extract needs a vtkPointSet input (a surface with points and cells), not "
+    if (faceplan::gather::LogsErrors())
+      vtkErrorMacro(<< "ROI Extract needs a vtkPointSet input (a surface with points and cells), not "
                   << (given ? given->GetClassName() : "nothing"));
     if (output)
       output->Initialize();
