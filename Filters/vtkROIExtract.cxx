@@ -124,8 +124,9 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
   if (!input || !output) {
     vtkDataObject* given = vtkDataObject::GetData(inputVector[0], 0);
     if (faceplan::gather::LogsErrors())
-      vtkErrorMacro(<< "ROI Extract needs a vtkPointSet input (a surface with points and cells), not "
-                  << (given ? given->GetClassName() : "nothing"));
+      vtkErrorMacro(
+          << "ROI Extract needs a vtkPointSet input (a surface with points and cells), not "
+          << (given ? given->GetClassName() : "nothing"));
     if (output)
       output->Initialize();
     return 1;
