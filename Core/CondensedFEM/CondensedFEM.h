@@ -151,6 +151,7 @@ Status Solve(const CondensedSystem& system, const SolveInput& input, SolveResult
 
 // The paper's "traditional FEM": no condensation and no cache, the whole free system is assembled,
 // factored and solved from scratch. Used for verification and comparison.
+// Linear cells only: request.options (elementOrder included) are not used.
 Status SolveFullReference(const PrecomputeRequest& request, const SolveInput& input,
                           SolveResult& result);
 
