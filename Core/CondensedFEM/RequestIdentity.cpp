@@ -28,9 +28,8 @@ bool SameOptions(const PrecomputeOptions& a, const PrecomputeOptions& b) {
   if (a.midEdgeProjection || b.midEdgeProjection)
     return false;
   return a.method == b.method && a.denseResponseBudgetBytes == b.denseResponseBudgetBytes &&
-         a.memoryBudgetBytes == b.memoryBudgetBytes &&
-         a.backend == b.backend && a.responseBlockColumns == b.responseBlockColumns &&
-         a.elementOrder == b.elementOrder &&
+         a.memoryBudgetBytes == b.memoryBudgetBytes && a.backend == b.backend &&
+         a.responseBlockColumns == b.responseBlockColumns && a.elementOrder == b.elementOrder &&
          a.quadraticMeanDilatation == b.quadraticMeanDilatation &&
          a.sliverQualityThreshold == b.sliverQualityThreshold &&
          a.residualTolerance == b.residualTolerance &&
