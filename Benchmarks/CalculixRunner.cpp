@@ -19,6 +19,13 @@ std::string Num(double v) {
   return buffer;
 }
 
+// One shell word whatever the path holds (spaces, quotes): '...' with each ' written as '\''.
+std::string ShellQuoted(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
 void WriteInput(const PrecomputeRequest& r, const Displacements& movable, const std::string& path) {
   std::ofstream out(path);
   out << "*HEADING\nFacePlan benchmark peer\n*NODE, NSET=NALL\n";
@@ -74,7 +81,7 @@ CalculixResult RunCalculix(const PrecomputeRequest& request, const Displacements
     return result;
   }
   WriteInput(request, movable, workDir + "/job.inp");
-  const std::string command = "cd '" + workDir + "' && OMP_NUM_THREADS=" + std::to_string(threads) +
+  const std::string command = "cd " + ShellQuoted(workDir) + " && OMP_NUM_THREADS=" + std::to_string(threads) +
                               " CCX_NPROC_STIFFNESS=" + std::to_string(threads) +
                               " ccx -i job > ccx.log 2>&1";
   StageClock clock;

@@ -44,7 +44,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
     Status s = stage(state);
     if (!s) return s;
   }
-  ChooseSolveMethod(state);
+  if (Status s = ChooseSolveMethod(state); !s) return s;
   for (Status (*stage)(PrecomputeState&) : {Factorize, Condense}) {
     Status s = stage(state);
     if (!s) return s;

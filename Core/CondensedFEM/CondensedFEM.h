@@ -54,6 +54,12 @@ struct PrecomputeOptions {
   SolveMethod method = SolveMethod::Auto;
   // Largest dense response Auto may build, in bytes.
   double denseResponseBudgetBytes = 2.0e9;
+  // Memory the precompute may use for the sparse factor and the dense response, in bytes; 0 takes
+  // the available memory (MemAvailable in /proc/meminfo) when the precompute starts. Checked after
+  // the symbolic analysis, before either is allocated: a factor over the budget is an error; a
+  // dense response that does not fit beside the factor makes Auto keep the factor instead, and is
+  // an error when DenseResponse was requested.
+  double memoryBudgetBytes = 0.0;
   // Compute backend for element stiffness, assembly and the dense per-edit update; null = CPU.
   std::shared_ptr<ComputeBackend> backend;
   // Columns of the response solved per block (bounds the precompute's transient memory).
@@ -145,6 +151,7 @@ Status Solve(const CondensedSystem& system, const SolveInput& input, SolveResult
 
 // The paper's "traditional FEM": no condensation and no cache, the whole free system is assembled,
 // factored and solved from scratch. Used for verification and comparison.
+// Linear cells only: request.options (elementOrder included) are not used.
 Status SolveFullReference(const PrecomputeRequest& request, const SolveInput& input,
                           SolveResult& result);
 
@@ -154,7 +161,9 @@ struct SystemInfo {
   std::string backend;
   long long freeDofs = 0, keptDofs = 0, roiDofs = 0, interiorDofs = 0;
   double factorNonzeros = 0.0;
+  double factorBytes = 0.0;  // the numeric factor's estimated size (from the symbolic analysis)
   double responseBytes = 0.0;
+  double memoryBudgetBytes = 0.0; // the budget the precompute was checked against
   std::string choiceReason;
   std::string ordering;     // fill-reducing ordering of the free block ("METIS", "AMD", ...)
   std::string responsePath; // how the dense response was computed and checked (DenseResponse)

@@ -1,6 +1,7 @@
 // Method choice and the Factorization stage.
 #include "CondensedFEM/PrecomputeStages.h"
 
+#include "CondensedFEM/MemoryBudget.h"
 #include "CondensedFEM/MethodChoice.h"
 
 #include <algorithm>
@@ -9,17 +10,39 @@
 
 namespace faceplan {
 
-void ChooseSolveMethod(PrecomputeState& state) {
+Status ChooseSolveMethod(PrecomputeState& state) {
   CondensedSystem& sys = *state.sys;
   SystemInfo& info = sys.info;
+  const PrecomputeOptions& options = state.request.options;
   // The method needs only the analysis (the factor's size), so it is chosen before the numeric
-  // factorization, which a backend may then do together with the response.
-  sys.method = ChooseMethod(state.request.options, double(info.keptDofs), double(info.roiDofs),
+  // factorization, which a backend may then do together with the response. Both large
+  // allocations are checked against the memory budget first.
+  info.memoryBudgetBytes = MemoryBudgetBytes(options.memoryBudgetBytes);
+  info.factorBytes = info.freeDofs > 0 ? sys.factor.factorBytes() : 0.0;
+  if (info.factorBytes > info.memoryBudgetBytes)
+    return Status::Error("the sparse factor would need about " + MegabyteText(info.factorBytes) +
+                         ", more than the memory budget of " + MegabyteText(info.memoryBudgetBytes) +
+                         " (available memory unless memoryBudgetBytes is set): use a coarser mesh");
+  PrecomputeOptions fitted = options;
+  fitted.denseResponseBudgetBytes =
+      std::min(options.denseResponseBudgetBytes, info.memoryBudgetBytes - info.factorBytes);
+  sys.method = ChooseMethod(fitted, double(info.keptDofs), double(info.roiDofs),
                             double(state.segmentCoupling.cols()), info.factorNonzeros,
                             double(sys.factor.trailingDofs()), info.choiceReason);
   if (info.freeDofs == 0)
     sys.method = SolveMethod::CachedFactor;
+  const double columns = sys.method == SolveMethod::DenseResponse   ? double(info.roiDofs)
+                         : sys.method == SolveMethod::RigidSegments ? double(state.segmentCoupling.cols())
+                                                                    : 0.0;
+  const double responseBytes = 8.0 * double(info.keptDofs) * columns;
+  if (info.factorBytes + responseBytes > info.memoryBudgetBytes)
+    return Status::Error("the " + std::string(MethodName(sys.method)) + " response would need " +
+                         MegabyteText(responseBytes) + " beside the factor's " +
+                         MegabyteText(info.factorBytes) + ", more than the memory budget of " +
+                         MegabyteText(info.memoryBudgetBytes) +
+                         ": use the CachedFactor or Auto method, or a smaller ROI or kept set");
   info.method = sys.method;
+  return Status::Ok();
 }
 
 Status Factorize(PrecomputeState& state) {

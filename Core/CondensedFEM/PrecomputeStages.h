@@ -59,8 +59,9 @@ Status SeparateBlocks(PrecomputeState& state);
 // Reordering: the fill-reducing ordering of K_FF and its symbolic analysis.
 Status ReorderFreeDofs(PrecomputeState& state);
 
-// Picks the solve method from the sizes (needs only the analysis). Untimed: it is arithmetic.
-void ChooseSolveMethod(PrecomputeState& state);
+// Picks the solve method from the sizes (needs only the analysis), within the memory budget: an
+// error when the factor or a requested response would not fit. Untimed: it is arithmetic.
+Status ChooseSolveMethod(PrecomputeState& state);
 
 // Factorization of K_FF (a backend may build the dense response in the same call).
 Status Factorize(PrecomputeState& state);

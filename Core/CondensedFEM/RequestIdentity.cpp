@@ -13,7 +13,7 @@ static_assert(sizeof(Materials) == 3 * sizeof(Eigen::VectorXd),
               "SameRequest must compare every Materials field");
 static_assert(sizeof(TetMesh) == sizeof(Points) + sizeof(Tets),
               "SameRequest must compare every TetMesh field");
-static_assert(sizeof(PrecomputeOptions) == 120,
+static_assert(sizeof(PrecomputeOptions) == 128,
               "SameOptions must compare every PrecomputeOptions field");
 
 template <class Matrix> bool SameMatrix(const Matrix& a, const Matrix& b) {
@@ -28,8 +28,8 @@ bool SameOptions(const PrecomputeOptions& a, const PrecomputeOptions& b) {
   if (a.midEdgeProjection || b.midEdgeProjection)
     return false;
   return a.method == b.method && a.denseResponseBudgetBytes == b.denseResponseBudgetBytes &&
-         a.backend == b.backend && a.responseBlockColumns == b.responseBlockColumns &&
-         a.elementOrder == b.elementOrder &&
+         a.memoryBudgetBytes == b.memoryBudgetBytes && a.backend == b.backend &&
+         a.responseBlockColumns == b.responseBlockColumns && a.elementOrder == b.elementOrder &&
          a.quadraticMeanDilatation == b.quadraticMeanDilatation &&
          a.sliverQualityThreshold == b.sliverQualityThreshold &&
          a.residualTolerance == b.residualTolerance &&

@@ -330,6 +330,16 @@ double CholmodFactor::factorNonzeros() const {
   return impl_->common.lnz;
 }
 
+double CholmodFactor::factorBytes() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  const cholmod_factor* L = impl_->factor;
+  if (!L) return 0.0;
+  const double trailing = double(impl_->trailing);
+  const double sparse = L->is_super ? 8.0 * double(L->xsize) + sizeof(int) * double(L->ssize)
+                                    : (8.0 + sizeof(int)) * impl_->common.lnz;
+  return sparse + 8.0 * trailing * trailing;
+}
+
 double CholmodFactor::factorFlops() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   return impl_->common.fl;

@@ -86,6 +86,9 @@ public:
   Status markFactorized();
 
   double factorNonzeros() const;
+  // Bytes the numeric factor will hold, known after analyze() (before factorize() allocates it):
+  // CHOLMOD's value and index arrays plus the trailing block's dense copy.
+  double factorBytes() const;
   double factorFlops() const; // of the numeric factorization, from the last analyze()
   // CHOLMOD's cheap reciprocal condition estimate, (min diag L / max diag L)^2.
   double reciprocalConditionEstimate() const;

@@ -1,0 +1,82 @@
+// OpenBLAS's thread count after scopes that open and close on different threads.
+#include "Common/BlasThreads.h"
+
+#include <gtest/gtest.h>
+
+#include <dlfcn.h>
+
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+using namespace faceplan;
+
+namespace {
+
+int OpenBlasThreads() {
+  auto get = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  return get ? get() : -1;
+}
+
+// Steps of two threads taken in a fixed order.
+class Turns {
+public:
+  void waitFor(int step) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [&] { return step_ >= step; });
+  }
+  void done(int step) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    step_ = step;
+    changed_.notify_all();
+  }
+
+private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  int step_ = 0;
+};
+
+} // namespace
+
+TEST(BlasThreads, InterleavedScopesOnTwoThreadsRestoreTheOriginalCount) {
+  const int original = OpenBlasThreads();
+  if (original <= 0)
+    GTEST_SKIP() << "the BLAS in use is not OpenBLAS";
+  Turns turns;
+  // A opens, B opens, A closes, B closes: not nested, so each scope's own "previous" is wrong.
+  std::thread a([&] {
+    {
+      ScopedBlasThreads scope(original + 2);
+      turns.done(1);
+      turns.waitFor(2);
+    }
+    turns.done(3);
+  });
+  std::thread b([&] {
+    turns.waitFor(1);
+    {
+      ScopedBlasThreads scope(original + 1);
+      turns.done(2);
+      turns.waitFor(3);
+    }
+  });
+  a.join();
+  b.join();
+  EXPECT_EQ(OpenBlasThreads(), original);
+}
+
+TEST(BlasThreads, NestedScopesGiveBackTheEnclosingCount) {
+  const int original = OpenBlasThreads();
+  if (original <= 0)
+    GTEST_SKIP() << "the BLAS in use is not OpenBLAS";
+  {
+    ScopedBlasThreads outer(original + 2);
+    {
+      ScopedBlasThreads inner(1);
+      EXPECT_EQ(OpenBlasThreads(), 1);
+    }
+    EXPECT_EQ(OpenBlasThreads(), original + 2);
+  }
+  EXPECT_EQ(OpenBlasThreads(), original);
+}
