@@ -12,7 +12,13 @@
 #include "vtkSmartPointer.h"
 #include "vtkStaticCellLocator.h"
 
+#include "vtkPolyData.h"
+#include "vtkPolygon.h"
+#include "vtkStaticPointLocator.h"
+
+#include <algorithm>
 #include <cmath>
+#include <map>
 
 namespace faceplan {
 namespace fem_filter {
@@ -37,8 +43,55 @@ vtkSmartPointer<vtkPointSet> Undeformed(vtkPointSet* bone, vtkDataArray* displac
   return undeformed;
 }
 
+// Region of a bone point for the release: its SegmentId and its side of the ROIMask boundary.
+long RegionOf(vtkPointSet* bone, vtkIdType point) {
+  vtkDataArray* ids = bone->GetPointData()->GetArray("SegmentId");
+  vtkDataArray* mask = bone->GetPointData()->GetArray("ROIMask");
+  const long segment = ids ? std::lround(ids->GetComponent(point, 0)) : 0;
+  const long side = mask && mask->GetComponent(point, 0) > 0.0 ? 1 : 0;
+  return 2 * segment + side;
+}
+
+// Marks tied nodes within `releaseDistance` of an undeformed bone point of another region.
+void MarkReleased(vtkPointSet* tissue, vtkPointSet* undeformed, vtkPointSet* bone,
+                  double releaseDistance, ContactMap& map) {
+  map.released.assign(map.tiedNodes.size(), 0);
+  if (!(releaseDistance > 0.0))
+    return;
+  std::map<long, vtkSmartPointer<vtkPolyData>> regions;
+  for (vtkIdType i = 0; i < undeformed->GetNumberOfPoints(); ++i) {
+    vtkSmartPointer<vtkPolyData>& region = regions[RegionOf(bone, i)];
+    if (!region) {
+      region = vtkSmartPointer<vtkPolyData>::New();
+      vtkNew<vtkPoints> points;
+      points->SetDataTypeToDouble();
+      region->SetPoints(points);
+    }
+    region->GetPoints()->InsertNextPoint(undeformed->GetPoint(i));
+  }
+  if (regions.size() < 2)
+    return;
+  std::map<long, vtkSmartPointer<vtkStaticPointLocator>> locators;
+  for (auto& [label, points] : regions) {
+    auto locator = vtkSmartPointer<vtkStaticPointLocator>::New();
+    locator->SetDataSet(points);
+    locator->BuildLocator();
+    locators[label] = locator;
+  }
+  for (size_t t = 0; t < map.tiedNodes.size(); ++t) {
+    const long own = RegionOf(bone, map.nearestBonePoint[t]);
+    double x[3], dist2;
+    tissue->GetPoint(map.tiedNodes[t], x);
+    for (auto& [label, locator] : locators)
+      if (label != own && locator->FindClosestPointWithinRadius(releaseDistance, x, dist2) >= 0) {
+        map.released[t] = 1;
+        break;
+      }
+  }
+}
+
 ContactMap BuildContactMap(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
-                           vtkPointSet* bone, double contactDistance) {
+                           vtkPointSet* bone, double contactDistance, double releaseDistance) {
   vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
   vtkDataArray* roiMask = bone->GetPointData()->GetArray("ROIMask");
   vtkSmartPointer<vtkPointSet> undeformed = Undeformed(bone, displacement);
@@ -72,12 +125,21 @@ ContactMap BuildContactMap(vtkPointSet* tissue, const std::vector<vtkIdType>& ti
     }
     map.tiedNodes.push_back(static_cast<int>(node));
     map.movable.push_back(mask > 1e-12 ? 1 : 0);
+    vtkIdType heaviest = 0;
+    for (vtkIdType k = 1; k < n; ++k)
+      if (weights[k] > weights[heaviest])
+        heaviest = k;
+    map.nearestBonePoint.push_back(cell->GetPointId(heaviest));
+    double normal[3] = {0.0, 0.0, 0.0};
+    vtkPolygon::ComputeNormal(cell->GetPoints(), normal);
+    map.normals.insert(map.normals.end(), normal, normal + 3);
     for (vtkIdType k = 0; k < n; ++k) {
       map.bonePointIds.push_back(cell->GetPointId(k));
       map.weights.push_back(weights[k]);
     }
     map.weightStart.push_back(static_cast<vtkIdType>(map.weights.size()));
   }
+  MarkReleased(tissue, undeformed, bone, releaseDistance, map);
   return map;
 }
 
@@ -85,7 +147,8 @@ ContactMap BuildContactMap(vtkPointSet* tissue, const std::vector<vtkIdType>& ti
 
 ContactCache::Key ContactCache::MakeKey(vtkPointSet* tissue,
                                         const std::vector<vtkIdType>& tissueBoundary,
-                                        vtkPointSet* bone, double contactDistance) {
+                                        vtkPointSet* bone, double contactDistance,
+                                        double releaseDistance) {
   Key key;
   vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
   key.undeformedBone.resize(3 * bone->GetNumberOfPoints());
@@ -99,6 +162,9 @@ ContactCache::Key ContactCache::MakeKey(vtkPointSet* tissue,
   if (vtkDataArray* mask = bone->GetPointData()->GetArray("ROIMask"))
     for (vtkIdType i = 0; i < mask->GetNumberOfTuples(); ++i)
       key.mask.push_back(mask->GetComponent(i, 0));
+  if (vtkDataArray* ids = bone->GetPointData()->GetArray("SegmentId"))
+    for (vtkIdType i = 0; i < ids->GetNumberOfTuples(); ++i)
+      key.segmentIds.push_back(ids->GetComponent(i, 0));
   vtkNew<vtkIdList> ids;
   for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
     bone->GetCellPoints(c, ids);
@@ -112,16 +178,18 @@ ContactCache::Key ContactCache::MakeKey(vtkPointSet* tissue,
     tissue->GetPoint(i, &key.tissuePoints[3 * i]);
   key.tissueBoundary = tissueBoundary;
   key.distance = contactDistance;
+  key.release = releaseDistance;
   return key;
 }
 
 Status ContactCache::update(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
-                            vtkPointSet* bone, double contactDistance) {
-  Key key = MakeKey(tissue, tissueBoundary, bone, contactDistance);
+                            vtkPointSet* bone, double contactDistance, double releaseDistance) {
+  Key key = MakeKey(tissue, tissueBoundary, bone, contactDistance, releaseDistance);
   // The undeformed bone is bone points minus Displacement: an edit changes both by the same amount,
   // so compare with a tolerance relative to the bone's size instead of bit for bit.
   bool same = valid_ && key.undeformedBone.size() == key_.undeformedBone.size() &&
-              key.mask == key_.mask && key.boneCells == key_.boneCells &&
+              key.mask == key_.mask && key.segmentIds == key_.segmentIds &&
+              key.release == key_.release && key.boneCells == key_.boneCells &&
               key.tissuePoints == key_.tissuePoints && key.tissueBoundary == key_.tissueBoundary &&
               key.distance == key_.distance;
   if (same) {
@@ -136,31 +204,53 @@ Status ContactCache::update(vtkPointSet* tissue, const std::vector<vtkIdType>& t
   if (same)
     return Status::Ok();
   valid_ = false;
-  map_ = BuildContactMap(tissue, tissueBoundary, bone, contactDistance);
+  map_ = BuildContactMap(tissue, tissueBoundary, bone, contactDistance, releaseDistance);
   key_ = std::move(key);
   valid_ = true;
   return Status::Ok();
 }
 
-NodeSets MakeNodeSets(const ContactMap& map, const std::vector<vtkIdType>& tissueBoundary) {
+NodeSets MakeNodeSets(const ContactMap& map, const std::vector<vtkIdType>& tissueBoundary,
+                      ContactModelChoice model, vtkDataArray* slidingFlags,
+                      const std::vector<int>& segmentOfBonePoint) {
   NodeSets sets;
   for (size_t t = 0; t < map.tiedNodes.size(); ++t) {
-    sets.constrained.push_back(map.tiedNodes[t]);
-    if (map.movable[t])
-      sets.movable.push_back(map.tiedNodes[t]);
+    if (map.released[t])
+      continue;
+    const int node = map.tiedNodes[t];
+    const vtkIdType bonePoint = map.nearestBonePoint[t];
+    sets.constrained.push_back(node);
+    if (map.movable[t]) {
+      sets.movable.push_back(node);
+      if (!segmentOfBonePoint.empty())
+        sets.movableSegment.push_back(segmentOfBonePoint[bonePoint]);
+    }
+    const bool sliding = model == ContactModelChoice::Sliding ||
+                         (model == ContactModelChoice::ByArray && slidingFlags &&
+                          slidingFlags->GetComponent(bonePoint, 0) > 0.0);
+    const Eigen::Vector3d normal(map.normals[3 * t], map.normals[3 * t + 1],
+                                 map.normals[3 * t + 2]);
+    if (sliding && std::abs(normal.norm() - 1.0) < 1e-6) {
+      sets.sliding.push_back(node);
+      sets.slidingNormal.push_back(normal);
+    }
   }
   for (vtkIdType node : tissueBoundary)
     sets.kept.push_back(static_cast<int>(node));
   return sets;
 }
 
+size_t ReleasedCount(const ContactMap& map) {
+  return static_cast<size_t>(std::count(map.released.begin(), map.released.end(), 1));
+}
+
 Displacements MovableDisplacements(const ContactMap& map, vtkDataArray* boneDisplacement) {
   Eigen::Index movable = 0;
-  for (char m : map.movable)
-    movable += m ? 1 : 0;
+  for (size_t t = 0; t < map.tiedNodes.size(); ++t)
+    movable += map.movable[t] && !map.released[t] ? 1 : 0;
   Displacements out = Displacements::Zero(movable, 3);
   for (size_t t = 0, row = 0; t < map.tiedNodes.size(); ++t) {
-    if (!map.movable[t])
+    if (!map.movable[t] || map.released[t])
       continue;
     for (vtkIdType k = map.weightStart[t]; k < map.weightStart[t + 1]; ++k) {
       double d[3];

@@ -3,6 +3,10 @@
 // node within ContactDistance of the undeformed bone (bone points minus Displacement) is tied to
 // its closest point there, found with a VTK cell locator; its displacement is the bone's
 // Displacement interpolated at that point. Tied nodes where the bone's ROIMask is 0 stay fixed.
+// Each tied node also records the bone point that weighs most at its closest point (its SegmentId
+// and Sliding flag count), the bone's normal there, and whether it is released: within
+// ReleaseDistance of a bone point of another region (another SegmentId, or the other side of the
+// ROIMask boundary), that is of a cut line, a cut face or the ROI's boundary.
 // Private to FacePlan::Filters; inputs are validated before.
 #include "Common/Status.h"
 #include "Mesh/NodeSets.h"
@@ -23,8 +27,13 @@ struct ContactMap {
   std::vector<vtkIdType> weightStart; // tiedNodes.size() + 1 offsets into ids/weights
   std::vector<vtkIdType> bonePointIds;
   std::vector<double> weights;
-  std::vector<char> movable; // 1 when the bone's ROIMask at the closest point is > 0
+  std::vector<char> movable;               // 1 when the bone's ROIMask at the closest point is > 0
+  std::vector<vtkIdType> nearestBonePoint; // the closest cell's point of largest weight
+  std::vector<double> normals;             // 3 per tied node: the closest cell's unit normal
+  std::vector<char> released;              // 1 when within ReleaseDistance of another region
 };
+
+enum class ContactModelChoice { Tied = 0, Sliding = 1, ByArray = 2 };
 
 // The contact map for one tissue and bone, rebuilt only when what it depends on changed: the
 // undeformed bone's points, its cells, its ROIMask, the tissue's points and boundary nodes, and
@@ -32,29 +41,36 @@ struct ContactMap {
 class ContactCache {
 public:
   Status update(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
-                vtkPointSet* bone, double contactDistance);
+                vtkPointSet* bone, double contactDistance, double releaseDistance);
   const ContactMap& map() const { return map_; }
   void clear() { valid_ = false; }
 
 private:
   struct Key {
-    std::vector<double> undeformedBone, mask, tissuePoints;
+    std::vector<double> undeformedBone, mask, segmentIds, tissuePoints;
     std::vector<vtkIdType> boneCells, tissueBoundary;
-    double distance = -1.0;
+    double distance = -1.0, release = -1.0;
   };
   static Key MakeKey(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
-                     vtkPointSet* bone, double contactDistance);
+                     vtkPointSet* bone, double contactDistance, double releaseDistance);
   bool valid_ = false;
   Key key_;
   ContactMap map_;
 };
 
-// The node sets of the solve: tied nodes constrained (movable where the ROI moves), the tissue
-// boundary kept.
-NodeSets MakeNodeSets(const ContactMap& map, const std::vector<vtkIdType>& tissueBoundary);
+// The node sets of the solve: tied nodes that are not released constrained (movable where the ROI
+// moves), the tissue boundary kept. Sliding nodes by the contact model (ByArray: the bone point
+// array Sliding > 0 at the node's bone point), with the bone's normal. `segmentOfBonePoint`, when
+// not empty, gives movable nodes their rigid segment.
+NodeSets MakeNodeSets(const ContactMap& map, const std::vector<vtkIdType>& tissueBoundary,
+                      ContactModelChoice model, vtkDataArray* slidingFlags,
+                      const std::vector<int>& segmentOfBonePoint);
 
 // The bone's displacement at each movable tied node, in NodeSets::movable order.
 Displacements MovableDisplacements(const ContactMap& map, vtkDataArray* boneDisplacement);
+
+// The number of tied nodes that were released.
+size_t ReleasedCount(const ContactMap& map);
 
 } // namespace fem_filter
 } // namespace faceplan

@@ -17,6 +17,8 @@ struct Settings {
   bool useCellMaterials = true;
   double lengthUnit = 0.001; // metres per mesh unit
   double contactDistance = 1.0;
+  int contactModel = 0;         // ContactModelChoice: Tied, Sliding, ByArray
+  double releaseDistance = 0.0; // mesh units; 0 releases nothing
   bool useGravity = false;
   double density = 1100.0; // kg/m^3
   double gravity[3] = {0.0, 0.0, -9.81};

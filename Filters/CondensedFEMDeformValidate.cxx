@@ -67,6 +67,11 @@ Status ValidateProperties(const Settings& s) {
   if (!(s.contactDistance >= 0.0) || !std::isfinite(s.contactDistance))
     return Error("ContactDistance must be zero or positive and finite (got ", s.contactDistance,
                  ")");
+  if (s.contactModel < 0 || s.contactModel > 2)
+    return Error("ContactModel must be 0 (Tied), 1 (Sliding) or 2 (ByArray), not ", s.contactModel);
+  if (!(s.releaseDistance >= 0.0) || !std::isfinite(s.releaseDistance))
+    return Error("ReleaseDistance must be zero or positive and finite (got ", s.releaseDistance,
+                 ")");
   if (s.useGravity) {
     if (!(s.density >= 0.0) || !std::isfinite(s.density))
       return Error("Density must be zero or positive and finite with UseGravity on (got ",
@@ -160,11 +165,12 @@ Status ValidateBone(vtkPointSet* bone) {
   Status s = CheckArray(displacement, "Displacement", "point", n, 3);
   if (!s)
     return s;
-  if (vtkDataArray* mask = bone->GetPointData()->GetArray("ROIMask")) {
-    s = CheckArray(mask, "ROIMask", "point", n, 1);
-    if (!s)
-      return s;
-  }
+  for (const char* name : {"ROIMask", "SegmentId", "Sliding"})
+    if (vtkDataArray* array = bone->GetPointData()->GetArray(name)) {
+      s = CheckArray(array, name, "point", n, 1);
+      if (!s)
+        return s;
+    }
   return Status::Ok();
 }
 

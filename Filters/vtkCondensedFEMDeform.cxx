@@ -1,5 +1,6 @@
 #include "vtkCondensedFEMDeform.h"
 
+#include "CondensedFEMDeformBone.h"
 #include "CondensedFEMDeformContact.h"
 #include "CondensedFEMDeformConvert.h"
 #include "CondensedFEMDeformInputCache.h"
@@ -35,6 +36,7 @@ struct vtkCondensedFEMDeform::Cache {
   faceplan::PrecomputeRequest request; // mesh, materials and node sets; options set by the solver
   unsigned long requestTissue = 0;     // the tissue generation `request` was made from
   bool requestValid = false;
+  double contactRelease = -1.0; // the ReleaseDistance the contact was built with
   Solver solver;
 };
 
@@ -90,8 +92,10 @@ vtkMTimeType vtkCondensedFEMDeform::GetMTime() {
 int vtkCondensedFEMDeform::FillInputPortInformation(int port, vtkInformation* info) {
   if (port == 0)
     info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
-  else
+  else {
     info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPointSet");
+    info->Set(vtkAlgorithm::INPUT_IS_REPEATABLE(), 1);
+  }
   return 1;
 }
 
@@ -106,9 +110,23 @@ int vtkCondensedFEMDeform::FillOutputPortInformation(int port, vtkInformation* i
 int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** inputVector,
                                        vtkInformationVector* outputVector) {
   vtkUnstructuredGrid* tissue = vtkUnstructuredGrid::GetData(inputVector[0], 0);
-  vtkPointSet* bone = vtkPointSet::GetData(inputVector[1], 0);
+  std::vector<vtkPointSet*> bones;
+  for (int c = 0; c < inputVector[1]->GetNumberOfInformationObjects(); ++c)
+    bones.push_back(vtkPointSet::GetData(inputVector[1], c));
+  if (bones.empty())
+    bones.push_back(nullptr);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   vtkTable* table = vtkTable::GetData(outputVector, 1);
+  // Several connections (a bimaxillary plan) become one bone, each checked first.
+  for (size_t c = 0; bones.size() > 1 && c < bones.size(); ++c) {
+    const faceplan::Status status = ValidateBone(bones[c]);
+    if (!status) {
+      vtkErrorMacro(<< "Bone connection " << c << ": " << status.message);
+      return 1;
+    }
+  }
+  const vtkSmartPointer<vtkPointSet> mergedBone = MergeBones(bones);
+  vtkPointSet* bone = mergedBone;
   // Under MPI the pieces are gathered and solved once (CondensedFEMDeformParallel.h).
   if (vtkMultiProcessController* controller = faceplan::gather::DistributedController()) {
     DeformGathered(controller, this->CurrentSettings().output(), tissue, bone, output, table,
@@ -142,16 +160,20 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   const TissueBoundary& boundary = cache.tissue.boundary();
   this->UpdateProgress(0.05);
 
-  // 3. contact, rebuilt when the tissue, the distance, or the undeformed bone changed.
+  // 3. contact, rebuilt when the tissue, the distance, the release distance or the undeformed
+  // bone changed (a bone with SegmentId is checked by the contact's own key, which covers it).
   const unsigned long tissueGeneration = cache.tissue.generation();
-  if (!cache.bone.contactStillValid(bone, tissueGeneration, settings.contactDistance)) {
-    cache.requestValid = false;
-    status = cache.contact.update(tissue, boundary.nodes, bone, settings.contactDistance);
+  if (!cache.bone.contactStillValid(bone, tissueGeneration, settings.contactDistance) ||
+      settings.releaseDistance != cache.contactRelease ||
+      bone->GetPointData()->GetArray("SegmentId")) {
+    status = cache.contact.update(tissue, boundary.nodes, bone, settings.contactDistance,
+                                  settings.releaseDistance);
     if (!status) {
       vtkErrorMacro(<< status.message);
       return false;
     }
     cache.bone.contactBuilt(bone, tissueGeneration, settings.contactDistance);
+    cache.contactRelease = settings.releaseDistance;
   }
   const ContactMap& contact = cache.contact.map();
   if (contact.tiedNodes.empty()) {
@@ -165,18 +187,42 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
       UnfollowedBoneMotion(contact.movable, bone->GetPointData()->GetArray("Displacement"));
   if (!unfollowed.empty())
     vtkWarningMacro(<< unfollowed);
+  if (static_cast<ContactModelChoice>(settings.contactModel) == ContactModelChoice::ByArray &&
+      !bone->GetPointData()->GetArray("Sliding")) {
+    vtkErrorMacro("ContactModel ByArray needs a bone point array named Sliding (uint8, 1 = slide)");
+    return 1;
+  }
+  // Rigid segments: the bone's SegmentId and SegmentTransform, used when its Displacement follows
+  // them; a node tied to a segment then moves with it as one body.
+  const BoneSegments segments = ReadBoneSegments(bone);
+  if (!segments.usable && bone->GetPointData()->GetArray("SegmentId"))
+    vtkWarningMacro(<< "rigid-segment path not used: " << segments.whyNot);
+  if (settings.releaseDistance > 0.0)
+    vtkWarningMacro(
+        << ReleasedCount(contact)
+        << " tied nodes released within ReleaseDistance of a cut or the ROI's boundary");
   if (!cache.requestValid || cache.requestTissue != tissueGeneration) {
     cache.request = faceplan::PrecomputeRequest();
     cache.request.mesh = cache.tissue.mesh();
     cache.request.materials = cache.tissue.materials();
-    cache.request.sets = MakeNodeSets(contact, boundary.nodes);
     cache.requestTissue = tissueGeneration;
     cache.requestValid = true;
   }
+  // The node sets also follow the contact model, the Sliding flags and the segments (cheap to
+  // rebuild; the solver reuses its precompute while the whole request is equal).
+  cache.request.sets =
+      MakeNodeSets(contact, boundary.nodes, static_cast<ContactModelChoice>(settings.contactModel),
+                   bone->GetPointData()->GetArray("Sliding"),
+                   segments.usable ? segments.segmentOfPoint : std::vector<int>());
   const faceplan::PrecomputeRequest& request = cache.request;
   faceplan::SolveInput input;
   input.movableDisplacement =
       MovableDisplacements(contact, bone->GetPointData()->GetArray("Displacement"));
+  if (segments.usable) {
+    input.segmentTransforms = segments.transforms;
+    input.movableDisplacement = faceplan::FollowSegments(
+        request.mesh.points, request.sets, segments.transforms, input.movableDisplacement);
+  }
   if (settings.useGravity)
     input.gravity = Eigen::Vector3d(settings.gravity[0], settings.gravity[1], settings.gravity[2]);
   input.recoverInterior = settings.output() == OutputMode::Volume;
@@ -209,6 +255,8 @@ Settings vtkCondensedFEMDeform::CurrentSettings() const {
   s.useCellMaterials = this->UseCellMaterials;
   s.lengthUnit = this->LengthUnit;
   s.contactDistance = this->ContactDistance;
+  s.contactModel = this->ContactModel;
+  s.releaseDistance = this->ReleaseDistance;
   s.useGravity = this->UseGravity;
   s.density = this->Density;
   for (int c = 0; c < 3; ++c)
@@ -226,6 +274,8 @@ void vtkCondensedFEMDeform::PrintSelf(ostream& os, vtkIndent indent) {
   os << indent << "YoungsModulus: " << this->YoungsModulus << "\n"
      << indent << "PoissonRatio: " << this->PoissonRatio << "\n"
      << indent << "ContactDistance: " << this->ContactDistance << "\n"
+     << indent << "ContactModel: " << this->ContactModel << "\n"
+     << indent << "ReleaseDistance: " << this->ReleaseDistance << "\n"
      << indent << "OutputMode: " << this->OutputMode << "\n"
      << indent << "Backend: " << this->Backend << "\n"
      << indent << "Method: " << this->Method << "\n"

@@ -4,8 +4,13 @@
  *
  * Input port 0 ("Input"): the soft tissue, a vtkUnstructuredGrid of tetrahedra (any other cell
  * type is an error that suggests ParaView's Tetrahedralize filter).
- * Input port 1 ("Bone"): a surface with a point vector array `Displacement` (the output of
- * vtkBezierCut) and optionally `ROIMask`.
+ * Input port 1 ("Bone"): one or more surfaces (several connections are merged: their SegmentIds
+ * renumbered, their SegmentTransforms concatenated) with a point vector array `Displacement` (the
+ * output of vtkBezierCut or Osteotomy) and optionally `ROIMask`, `SegmentId` (int, 0 = not moved
+ * rigidly), `Sliding` (uint8, for ContactModel ByArray) and field data `SegmentTransform` (12
+ * doubles [R|t] row-major per segment; a NaN transform marks a segment as not rigid). When the
+ * bone carries SegmentId and SegmentTransform and its Displacement follows them, the rigid-segment
+ * path (Method field data `RigidSegments`) is used; otherwise a warning says why not.
  * Contact: tissue boundary nodes within ContactDistance of the undeformed bone (bone points minus
  * Displacement) are tied to it and take the bone's Displacement interpolated at the closest point;
  * tied nodes where the bone's ROIMask is 0 stay fixed (every tied node may move without ROIMask).
@@ -59,10 +64,15 @@ public:
     METHOD_CACHED_FACTOR = 2,
     METHOD_FULL_REFERENCE = 3
   };
+  enum ContactModels { CONTACT_TIED = 0, CONTACT_SLIDING = 1, CONTACT_BY_ARRAY = 2 };
   enum ElementOrders { LINEAR_ELEMENTS = 0, QUADRATIC_ELEMENTS = 1, QUADRATIC_NODAL_PRESSURE = 2 };
 
   /// Connects the bone surface (port 1).
   void SetBoneConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
+  /// Adds one more bone surface to port 1 (several are merged, see the class description).
+  void AddBoneConnection(vtkAlgorithmOutput* output) { this->AddInputConnection(1, output); }
+  /// Removes every connection of port 1 only (the proxy's clean command for the Bone input).
+  void RemoveAllBoneConnections() { this->RemoveAllInputConnections(1); }
 
   ///@{
   /// Young's modulus in Pa (default 15 kPa, facial soft tissue) and Poisson ratio (default 0.45).
@@ -121,6 +131,22 @@ public:
   ///@}
 
   ///@{
+  /// Contact: CONTACT_TIED (0, every component follows the bone), CONTACT_SLIDING (1, only the
+  /// component along the bone's normal follows it; the tissue slides tangentially) or
+  /// CONTACT_BY_ARRAY (2, the bone point array `Sliding` picks per node).
+  vtkSetMacro(ContactModel, int);
+  vtkGetMacro(ContactModel, int);
+  ///@}
+
+  ///@{
+  /// Tied tissue nodes within this distance (mesh units) of a cut line or cut face (bone points of
+  /// another SegmentId) or of the ROI's boundary (the other side of ROIMask) are released: they
+  /// become free nodes, as when the surgeon detaches the tissue there. 0 (default) releases none.
+  vtkSetMacro(ReleaseDistance, double);
+  vtkGetMacro(ReleaseDistance, double);
+  ///@}
+
+  ///@{
   /// Also run the reference full solve and report the largest relative difference to it.
   vtkSetMacro(Verify, bool);
   vtkGetMacro(Verify, bool);
@@ -146,6 +172,8 @@ protected:
   bool UseCellMaterials = true;
   double LengthUnit = 0.001;
   double ContactDistance = 1.0;
+  int ContactModel = CONTACT_TIED;
+  double ReleaseDistance = 0.0;
   bool UseGravity = false;
   double Density = 1100.0;
   double Gravity[3] = {0.0, 0.0, -9.81};

@@ -100,4 +100,19 @@ Eigen::VectorXd SegmentParameters(const NodeSets& sets,
   return p;
 }
 
+Displacements FollowSegments(const Points& points, const NodeSets& sets,
+                             const std::vector<SegmentTransform>& transforms,
+                             const Displacements& movableDisplacement) {
+  Displacements out = movableDisplacement;
+  for (size_t k = 0; k < sets.movableSegment.size(); ++k) {
+    const int s = sets.movableSegment[k];
+    if (s <= 0 || s > static_cast<int>(transforms.size()))
+      continue;
+    const Eigen::Vector3d x = points.row(sets.movable[k]).transpose();
+    out.row(static_cast<Eigen::Index>(k)) =
+        (transforms[s - 1].leftCols<3>() * x + transforms[s - 1].col(3) - x).transpose();
+  }
+  return out;
+}
+
 } // namespace faceplan

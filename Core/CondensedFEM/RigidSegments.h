@@ -35,4 +35,10 @@ Eigen::VectorXd SegmentParameters(const NodeSets& sets,
                                   const std::vector<SegmentTransform>& transforms,
                                   const Displacements& movableDisplacement);
 
+// The movable displacements with every segment node's row replaced by its segment's motion at the
+// node, (R - I) x + t: a node tied to a rigidly moved segment moves with it as one body.
+Displacements FollowSegments(const Points& points, const NodeSets& sets,
+                             const std::vector<SegmentTransform>& transforms,
+                             const Displacements& movableDisplacement);
+
 } // namespace faceplan

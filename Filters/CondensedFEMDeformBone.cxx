@@ -1,0 +1,162 @@
+#include "CondensedFEMDeformBone.h"
+
+#include "vtkAppendFilter.h"
+#include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkIntArray.h"
+#include "vtkNew.h"
+#include "vtkPointData.h"
+#include "vtkPointSet.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace faceplan {
+namespace fem_filter {
+
+namespace {
+
+int SegmentCountOf(vtkPointSet* bone) {
+  vtkDataArray* transforms = bone->GetFieldData()->GetArray("SegmentTransform");
+  const vtkIdType values = transforms ? transforms->GetNumberOfValues() : 0;
+  int fromIds = 0;
+  if (vtkDataArray* ids = bone->GetPointData()->GetArray("SegmentId"))
+    for (vtkIdType i = 0; i < ids->GetNumberOfTuples(); ++i)
+      fromIds = std::max(fromIds, static_cast<int>(std::lround(ids->GetComponent(i, 0))));
+  return std::max(fromIds, static_cast<int>(values / 12));
+}
+
+// A point array of `bone` as a fresh array of the given type, or `fill` everywhere when absent;
+// SegmentId values above 0 are offset by `offset`.
+template <class Array>
+vtkSmartPointer<Array> PointArrayOrFill(vtkPointSet* bone, const char* name, double fill,
+                                        int offset = 0) {
+  vtkNew<Array> out;
+  out->SetName(name);
+  out->SetNumberOfTuples(bone->GetNumberOfPoints());
+  vtkDataArray* in = bone->GetPointData()->GetArray(name);
+  for (vtkIdType i = 0; i < bone->GetNumberOfPoints(); ++i) {
+    double v = in ? in->GetComponent(i, 0) : fill;
+    if (offset && v > 0.5)
+      v += offset;
+    out->SetValue(i, static_cast<typename Array::ValueType>(v));
+  }
+  return vtkSmartPointer<Array>(out.GetPointer());
+}
+
+} // namespace
+
+vtkSmartPointer<vtkPointSet> MergeBones(const std::vector<vtkPointSet*>& bones) {
+  if (bones.size() == 1)
+    return vtkSmartPointer<vtkPointSet>(bones[0]);
+  bool anySegments = false, anySliding = false;
+  for (vtkPointSet* bone : bones) {
+    anySegments |= bone->GetPointData()->GetArray("SegmentId") != nullptr;
+    anySliding |= bone->GetPointData()->GetArray("Sliding") != nullptr;
+  }
+  vtkNew<vtkAppendFilter> append;
+  append->MergePointsOff();
+  vtkNew<vtkDoubleArray> transforms;
+  transforms->SetName("SegmentTransform");
+  int offset = 0;
+  for (vtkPointSet* bone : bones) {
+    vtkSmartPointer<vtkPointSet> copy;
+    copy.TakeReference(bone->NewInstance());
+    copy->CopyStructure(bone);
+    vtkPointData* pd = copy->GetPointData();
+    vtkNew<vtkDoubleArray> displacement;
+    displacement->DeepCopy(bone->GetPointData()->GetArray("Displacement"));
+    displacement->SetName("Displacement");
+    pd->AddArray(displacement);
+    pd->AddArray(PointArrayOrFill<vtkUnsignedCharArray>(bone, "ROIMask", 1.0));
+    if (anySegments)
+      pd->AddArray(PointArrayOrFill<vtkIntArray>(bone, "SegmentId", 0.0, offset));
+    if (anySliding)
+      pd->AddArray(PointArrayOrFill<vtkUnsignedCharArray>(bone, "Sliding", 0.0));
+    const int segments = SegmentCountOf(bone);
+    vtkDataArray* own = bone->GetFieldData()->GetArray("SegmentTransform");
+    for (int v = 0; v < 12 * segments; ++v)
+      transforms->InsertNextValue(own && v < own->GetNumberOfValues()
+                                      ? own->GetComponent(v / own->GetNumberOfComponents(),
+                                                          v % own->GetNumberOfComponents())
+                                      : std::nan(""));
+    offset += segments;
+    append->AddInputData(copy);
+  }
+  append->Update();
+  vtkSmartPointer<vtkPointSet> merged = append->GetOutput();
+  if (anySegments)
+    merged->GetFieldData()->AddArray(transforms);
+  return merged;
+}
+
+BoneSegments ReadBoneSegments(vtkPointSet* bone) {
+  BoneSegments out;
+  vtkDataArray* ids = bone->GetPointData()->GetArray("SegmentId");
+  vtkDataArray* values = bone->GetFieldData()->GetArray("SegmentTransform");
+  if (!ids || !values) {
+    out.whyNot = "the bone has no SegmentId point array and SegmentTransform field data";
+    return out;
+  }
+  const vtkIdType n = bone->GetNumberOfPoints();
+  const int components = values->GetNumberOfComponents();
+  const vtkIdType count = values->GetNumberOfValues() / 12;
+  if (values->GetNumberOfValues() % 12 != 0 || ids->GetNumberOfTuples() != n) {
+    out.whyNot = "SegmentTransform must hold 12 values per segment and SegmentId one per point";
+    return out;
+  }
+  // Segments with a finite transform, renumbered 1..s.
+  std::vector<int> coreSegment(count + 1, 0);
+  for (vtkIdType s = 0; s < count; ++s) {
+    SegmentTransform t;
+    for (int v = 0; v < 12; ++v) {
+      const vtkIdType index = 12 * s + v;
+      t(v / 4, v % 4) = values->GetComponent(index / components, index % components);
+    }
+    if (!t.allFinite())
+      continue;
+    out.transforms.push_back(t);
+    coreSegment[s + 1] = static_cast<int>(out.transforms.size());
+  }
+  out.segmentOfPoint.assign(n, 0);
+  NodeSets sets;
+  Points undeformed(n, 3);
+  Displacements displacement(n, 3);
+  vtkDataArray* d = bone->GetPointData()->GetArray("Displacement");
+  for (vtkIdType i = 0; i < n; ++i) {
+    double p[3], u[3];
+    bone->GetPoint(i, p);
+    d->GetTuple(i, u);
+    for (int c = 0; c < 3; ++c) {
+      undeformed(i, c) = p[c] - u[c];
+      displacement(i, c) = u[c];
+    }
+    const long id = std::lround(ids->GetComponent(i, 0));
+    if (id > 0 && id <= count && coreSegment[id] > 0) {
+      out.segmentOfPoint[i] = coreSegment[id];
+      sets.movable.push_back(static_cast<int>(i));
+      sets.movableSegment.push_back(coreSegment[id]);
+    }
+  }
+  if (out.transforms.empty() || sets.movable.empty()) {
+    out.whyNot = "no bone point lies on a segment with a finite SegmentTransform";
+    return out;
+  }
+  Displacements segmentDisplacement(static_cast<Eigen::Index>(sets.movable.size()), 3);
+  for (size_t k = 0; k < sets.movable.size(); ++k)
+    segmentDisplacement.row(static_cast<Eigen::Index>(k)) = displacement.row(sets.movable[k]);
+  const Status check =
+      CheckSegmentDisplacements(undeformed, sets, out.transforms, segmentDisplacement);
+  if (!check) {
+    out.whyNot = "the bone's Displacement does not follow SegmentTransform (" + check.message + ")";
+    return out;
+  }
+  out.usable = true;
+  return out;
+}
+
+} // namespace fem_filter
+} // namespace faceplan
