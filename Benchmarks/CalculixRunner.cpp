@@ -26,7 +26,7 @@ std::string ShellQuoted(const std::string& text) {
   return quoted + "'";
 }
 
-void WriteInput(const PrecomputeRequest& r, const Displacements& movable, const std::string& path) {
+void WriteInput(const PrecomputeRequest& r, const RowVectors3d& movable, const std::string& path) {
   std::ofstream out(path);
   out << "*HEADING\nFacePlan benchmark peer\n*NODE, NSET=NALL\n";
   for (Eigen::Index i = 0; i < r.mesh.numPoints(); ++i)
@@ -73,7 +73,7 @@ void WriteInput(const PrecomputeRequest& r, const Displacements& movable, const 
 
 } // namespace
 
-CalculixResult RunCalculix(const PrecomputeRequest& request, const Displacements& movable,
+CalculixResult RunCalculix(const PrecomputeRequest& request, const RowVectors3d& movable,
                            const std::string& workDir, int threads) {
   CalculixResult result;
   if (request.materials.youngsModulus.size() != 1 || request.materials.poissonRatio.size() != 1) {

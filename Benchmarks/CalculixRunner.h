@@ -12,11 +12,11 @@ struct CalculixResult {
   bool ok = false;
   std::string error;
   double wallMs = 0.0;         // ccx run alone (input already written)
-  Displacements keptDisplacement; // NodeSets::kept order
+  RowVectors3d keptDisplacement; // NodeSets::kept order
 };
 
 // Writes <workDir>/job.inp, runs `ccx -i job` there and parses job.dat.
-CalculixResult RunCalculix(const PrecomputeRequest& request, const Displacements& movable,
+CalculixResult RunCalculix(const PrecomputeRequest& request, const RowVectors3d& movable,
                            const std::string& workDir, int threads);
 
 } // namespace faceplan::bench

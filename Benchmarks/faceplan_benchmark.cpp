@@ -39,10 +39,10 @@ double PeakRssMB() {
 }
 
 // A random surgical edit: a smooth displacement of the ROI, a few millimetres.
-Displacements RandomEdit(const PrecomputeRequest& r, std::mt19937& rng) {
+RowVectors3d RandomEdit(const PrecomputeRequest& r, std::mt19937& rng) {
   std::uniform_real_distribution<double> amp(-3.0, 3.0), freq(0.02, 0.08);
   const double ax = amp(rng), ay = amp(rng), az = amp(rng), f = freq(rng);
-  Displacements u(static_cast<Eigen::Index>(r.sets.movable.size()), 3);
+  RowVectors3d u(static_cast<Eigen::Index>(r.sets.movable.size()), 3);
   for (size_t k = 0; k < r.sets.movable.size(); ++k) {
     const Eigen::RowVector3d p = r.mesh.points.row(r.sets.movable[k]);
     u.row(k) << ax * std::sin(f * p(0)), ay * std::cos(f * p(1)), az * (1 + std::sin(f * (p(0) + p(1))));
@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
 
   // Per-edit updates: new ROI displacements -> kept displacements.
   std::mt19937 rng(42);
-  std::vector<Displacements> editInputs;
+  std::vector<RowVectors3d> editInputs;
   for (int e = 0; e < std::min(edits, 16); ++e) editInputs.push_back(RandomEdit(request, rng));
   std::vector<double> editMs;
   SolveResult result;
@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
   }
   input.movableDisplacement = editInputs[0];
   Solve(*system, input, result);
-  const Displacements condensedKept = result.keptDisplacement;
+  const RowVectors3d condensedKept = result.keptDisplacement;
   const double peakCondensedMB = PeakRssMB();
   system.reset();
 

@@ -60,8 +60,8 @@ SegmentTransform RandomMove(const Eigen::Vector3d& pivot, std::mt19937& rng) {
   return t;
 }
 
-Displacements Follow(const PrecomputeRequest& r, const SegmentTransform& t) {
-  Displacements u(static_cast<Eigen::Index>(r.sets.movable.size()), 3);
+RowVectors3d Follow(const PrecomputeRequest& r, const SegmentTransform& t) {
+  RowVectors3d u(static_cast<Eigen::Index>(r.sets.movable.size()), 3);
   for (size_t k = 0; k < r.sets.movable.size(); ++k) {
     const Eigen::Vector3d x = r.mesh.points.row(r.sets.movable[k]).transpose();
     u.row(static_cast<Eigen::Index>(k)) = (t.leftCols<3>() * x + t.col(3) - x).transpose();

@@ -124,7 +124,7 @@ BoneSegments ReadBoneSegments(vtkPointSet* bone) {
   out.segmentOfPoint.assign(n, 0);
   NodeSets sets;
   Points undeformed(n, 3);
-  Displacements displacement(n, 3);
+  RowVectors3d displacement(n, 3);
   vtkDataArray* d = bone->GetPointData()->GetArray("Displacement");
   for (vtkIdType i = 0; i < n; ++i) {
     double p[3], u[3];
@@ -145,7 +145,7 @@ BoneSegments ReadBoneSegments(vtkPointSet* bone) {
     out.whyNot = "no bone point lies on a segment with a finite SegmentTransform";
     return out;
   }
-  Displacements segmentDisplacement(static_cast<Eigen::Index>(sets.movable.size()), 3);
+  RowVectors3d segmentDisplacement(static_cast<Eigen::Index>(sets.movable.size()), 3);
   for (size_t k = 0; k < sets.movable.size(); ++k)
     segmentDisplacement.row(static_cast<Eigen::Index>(k)) = displacement.row(sets.movable[k]);
   const Status check =

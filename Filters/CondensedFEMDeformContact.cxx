@@ -244,11 +244,11 @@ size_t ReleasedCount(const ContactMap& map) {
   return static_cast<size_t>(std::count(map.released.begin(), map.released.end(), 1));
 }
 
-Displacements MovableDisplacements(const ContactMap& map, vtkDataArray* boneDisplacement) {
+RowVectors3d MovableDisplacements(const ContactMap& map, vtkDataArray* boneDisplacement) {
   Eigen::Index movable = 0;
   for (size_t t = 0; t < map.tiedNodes.size(); ++t)
     movable += map.movable[t] && !map.released[t] ? 1 : 0;
-  Displacements out = Displacements::Zero(movable, 3);
+  RowVectors3d out = RowVectors3d::Zero(movable, 3);
   for (size_t t = 0, row = 0; t < map.tiedNodes.size(); ++t) {
     if (!map.movable[t] || map.released[t])
       continue;

@@ -67,7 +67,7 @@ NodeSets MakeNodeSets(const ContactMap& map, const std::vector<vtkIdType>& tissu
                       const std::vector<int>& segmentOfBonePoint);
 
 // The bone's displacement at each movable tied node, in NodeSets::movable order.
-Displacements MovableDisplacements(const ContactMap& map, vtkDataArray* boneDisplacement);
+RowVectors3d MovableDisplacements(const ContactMap& map, vtkDataArray* boneDisplacement);
 
 // The number of tied nodes that were released.
 size_t ReleasedCount(const ContactMap& map);

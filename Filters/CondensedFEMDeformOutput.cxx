@@ -36,14 +36,14 @@ void AddString(vtkFieldData* fd, const char* name, const std::string& value) {
 } // namespace
 
 void BuildDeformedTissue(vtkUnstructuredGrid* tissue, const TissueBoundary& boundary,
-                         const Points& restPoints, const SolveOutcome& outcome, OutputMode mode,
+                         const RowVectors3d& restPoints, const SolveOutcome& outcome, OutputMode mode,
                          vtkUnstructuredGrid* output) {
   // The structure (cells, passed arrays) is shared with the tissue or with the cached boundary, so
   // an update writes only the new points and Displacement.
   const SolveResult& result = outcome.result;
   const bool volume = mode == OutputMode::Volume;
   const vtkIdType n = volume ? tissue->GetNumberOfPoints() : boundary.surface->GetNumberOfPoints();
-  const Displacements& u = volume ? result.allDisplacement : result.keptDisplacement;
+  const RowVectors3d& u = volume ? result.allDisplacement : result.keptDisplacement;
   vtkNew<vtkDoubleArray> displacement;
   displacement->SetName("Displacement");
   displacement->SetNumberOfComponents(3);

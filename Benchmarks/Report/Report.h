@@ -26,7 +26,7 @@ struct Errors {
   double maxAbs = kNaN, rmsAbs = kNaN, maxRel = kNaN, rmsRel = kNaN;
 };
 
-Errors Compare(const Displacements& u, const Displacements& reference);
+Errors Compare(const RowVectors3d& u, const RowVectors3d& reference);
 
 struct Config {
   std::string outDir = "out/report", dataDir;
@@ -76,7 +76,7 @@ private:
     r.note = "not run: " + why;
     add(s, r);
   }
-  void setErrors(const Scene& s, Row& r, const Displacements& kept, const Displacements* all) {
+  void setErrors(const Scene& s, Row& r, const RowVectors3d& kept, const RowVectors3d* all) {
     const Errors e = Compare(kept, referenceKept_);
     r.maxAbs = e.maxAbs;
     r.rmsAbs = e.rmsAbs;
@@ -104,7 +104,7 @@ private:
   std::map<std::string, std::map<std::string, double>> sceneStats_;
   std::vector<AutoChoice> autos_;
   Table2 table2_;
-  Displacements referenceKept_;
+  RowVectors3d referenceKept_;
   Eigen::VectorXd referenceRoi_;
 };
 

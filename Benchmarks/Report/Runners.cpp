@@ -35,7 +35,7 @@ namespace faceplan::report {
 
 namespace fs = std::filesystem;
 
-Errors Compare(const Displacements& u, const Displacements& reference) {
+Errors Compare(const RowVectors3d& u, const RowVectors3d& reference) {
   Errors e;
   if (u.rows() != reference.rows() || u.rows() == 0)
     return e;
@@ -176,7 +176,7 @@ void Report::runCondensed(Scene& s) {
     r.precompute = Summarize(pre);
     r.edit = Summarize(edit);
     r.residual = result.relativeResidual;
-    Displacements all;
+    RowVectors3d all;
     if (s.analytic && method == SolveMethod::CachedFactor) {
       SolveInput full = input;
       full.recoverInterior = true;
@@ -275,7 +275,7 @@ void Report::runIterative(Scene& s, const FreeSystem& fs, double assembleMs) {
       r.iterations = report.iterations;
       r.converged = report.converged ? 1 : 0;
       r.residual = report.relativeResidual;
-      const Displacements allU = s.analytic ? AllDisplacement(fs, x, roi) : Displacements();
+      const RowVectors3d allU = s.analytic ? AllDisplacement(fs, x, roi) : RowVectors3d();
       setErrors(s, r, KeptDisplacement(fs, x, roi), s.analytic ? &allU : nullptr);
     };
     bool stalled = false;
@@ -375,7 +375,7 @@ void Report::runSingleDirect(Scene& s, const FreeSystem& fs, double assembleMs) 
     r.precompute = Summarize(pre);
     r.edit = Summarize(ms);
     r.residual = report.relativeResidual;
-    const Displacements allU = s.analytic ? AllDisplacement(fs, x, roi) : Displacements();
+    const RowVectors3d allU = s.analytic ? AllDisplacement(fs, x, roi) : RowVectors3d();
     setErrors(s, r, KeptDisplacement(fs, x, roi), s.analytic ? &allU : nullptr);
     r.note = steps == 0 ? "Eigen SimplicialLLT<float>, AMD ordering, one thread"
                         : "float factor, residuals in double (iterative refinement)";
@@ -474,7 +474,7 @@ void Report::runMassSpring(Scene& s) {
   if (!st)
     return notRun(s, path, st.message);
   std::vector<double> ms;
-  Displacements kept, all;
+  RowVectors3d kept, all;
   for (int k = 0; k < cfg_.edits && st; ++k) {
     const double t0 = NowMs();
     st = model.solve(s.edit, kept);

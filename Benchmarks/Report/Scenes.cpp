@@ -27,8 +27,8 @@ namespace faceplan::report {
 namespace {
 
 // A smooth surgical edit of the face-like shell's ROI cap (a few millimetres).
-Displacements ShellEdit(const PrecomputeRequest& r) {
-  Displacements u(static_cast<Eigen::Index>(r.sets.movable.size()), 3);
+RowVectors3d ShellEdit(const PrecomputeRequest& r) {
+  RowVectors3d u(static_cast<Eigen::Index>(r.sets.movable.size()), 3);
   for (size_t k = 0; k < r.sets.movable.size(); ++k) {
     const Eigen::RowVector3d p = r.mesh.points.row(r.sets.movable[k]);
     u.row(k) << 1.5 * std::sin(0.05 * p(0)), -1.0 * std::cos(0.04 * p(1)),

@@ -12,7 +12,7 @@ namespace faceplan::report {
 struct Scene {
   std::string name, family, description;
   PrecomputeRequest request;
-  Displacements edit;
+  RowVectors3d edit;
   bool analytic = false;
   HollowSphere exact;
   double h = kNaN; // mesh size (analytic family)

@@ -96,7 +96,7 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
   for (std::int64_t i = 0; i < n; ++i)
     r.numMoved += moved[i];
   r.points = mesh.points;
-  r.displacement = SurfacePoints::Zero(n, 3);
+  r.displacement = RowVectors3d::Zero(n, 3);
   r.parameters.assign(n, Vector2d::Zero());
   if (r.numMoved == 0) {
     r.warnings.push_back(std::string("no ROI vertex lies on the ") +
@@ -139,7 +139,7 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
         hint);
   }
 
-  const SurfacePoints& P = mapping.points;
+  const RowVectors3d& P = mapping.points;
   const std::vector<Vector2d>& uv = mapping.parameters;
   for (std::int64_t i = 0; i < n; ++i) {
     if (!moved[i])

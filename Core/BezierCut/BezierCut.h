@@ -61,8 +61,8 @@ struct BezierCutOptions {
 };
 
 struct BezierCutResult {
-  SurfacePoints points;       // n x 3: the new coordinates
-  SurfacePoints displacement; // n x 3: points - input points (exactly zero where unmoved)
+  RowVectors3d points;       // n x 3: the new coordinates
+  RowVectors3d displacement; // n x 3: points - input points (exactly zero where unmoved)
   std::vector<std::uint8_t> moved;
   std::vector<Eigen::Vector2d> parameters; // (u,v) of each moved vertex (others: 0)
   std::int64_t numMoved = 0;
@@ -71,7 +71,7 @@ struct BezierCutResult {
                                    // T > 1: mapped through T intermediary surfaces
   double maxDistanceToSurface = 0; // max over moved vertices of |x - S(u,v)| (should be ~1e-15)
   SurfaceMesh operativeSurface;    // triangles of S for display
-  SurfacePoints operativeNormals;  // unit normal (flip applied) at each operativeSurface point
+  RowVectors3d operativeNormals;  // unit normal (flip applied) at each operativeSurface point
   std::vector<Eigen::Vector2d> operativeParameters; // (u,v) of each operativeSurface point
   std::string mappingNote;           // why intermediary surfaces were needed (informational)
   std::vector<std::string> warnings; // e.g. nothing moved

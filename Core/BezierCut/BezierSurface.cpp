@@ -313,7 +313,7 @@ SurfaceProjection BezierSurface::Project(const Vector3d& x) const {
 }
 
 void BezierSurface::Tessellate(int perSegment, SurfaceMesh& out, std::vector<Vector2d>* uv,
-                               SurfacePoints* normals) const {
+                               RowVectors3d* normals) const {
   out = SurfaceMesh{};
   perSegment = std::max(perSegment, 1);
   const int nu = perSegment * SegmentsU(), nv = perSegment * SegmentsV();

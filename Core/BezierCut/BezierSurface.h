@@ -52,7 +52,7 @@ public:
   // Triangles over a regular grid with `perSegment` intervals per Bezier segment, oriented along
   // the (flipped) normal. uv receives the parameters of each point, normals its unit normal.
   void Tessellate(int perSegment, SurfaceMesh& out, std::vector<Eigen::Vector2d>* uv = nullptr,
-                  SurfacePoints* normals = nullptr) const;
+                  RowVectors3d* normals = nullptr) const;
 
   int SegmentsU() const { return int(U_.size() - 1) / 3; }
   int SegmentsV() const { return int(V_.size() - 1) / 3; }

@@ -17,13 +17,13 @@ using Eigen::Vector3d;
 
 namespace {
 
-Vector3d AreaVector(const Tri& t, const SurfacePoints& P) {
+Vector3d AreaVector(const Tri& t, const RowVectors3d& P) {
   const Vector3d a = P.row(t.v[0]).transpose(), b = P.row(t.v[1]).transpose(),
                  c = P.row(t.v[2]).transpose();
   return 0.5 * (b - a).cross(c - a);
 }
 
-double Quality(const Tri& t, const SurfacePoints& P) {
+double Quality(const Tri& t, const RowVectors3d& P) {
   const Vector3d a = P.row(t.v[0]).transpose(), b = P.row(t.v[1]).transpose(),
                  c = P.row(t.v[2]).transpose();
   const double l2 = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
@@ -37,7 +37,7 @@ enum class TriState { Ok, Degenerate, Flipped, Squashed };
 class CutMapper {
 public:
   CutMapper(const BezierSurface& surf, const std::vector<Tri>& tris,
-            const std::vector<std::vector<std::int64_t>>& nbrs, const SurfacePoints& X0,
+            const std::vector<std::vector<std::int64_t>>& nbrs, const RowVectors3d& X0,
             const std::vector<std::uint8_t>& moved, const std::vector<Vector2d>& foot)
       : S_(surf), tris_(tris), nbrs_(nbrs), X0_(X0), moved_(moved), foot_(foot) {
     for (std::size_t t = 0; t < tris_.size(); ++t) {
@@ -87,7 +87,7 @@ public:
   }
 
   // Direct projection.
-  bool Direct(SurfacePoints& P, std::string& why) {
+  bool Direct(RowVectors3d& P, std::string& why) {
     uv_ = foot_;
     P = X0_;
     for (std::int64_t i : movedIds_)
@@ -97,7 +97,7 @@ public:
 
   // Local repair on S itself: relax growing neighbourhoods of the bad triangles of the direct
   // projection (the rest keeps its direct projection).
-  bool LocalRepair(int maxRelax, SurfacePoints& P, std::string& why) {
+  bool LocalRepair(int maxRelax, RowVectors3d& P, std::string& why) {
     uv_ = foot_;
     P = X0_;
     ResetRegion();
@@ -123,7 +123,7 @@ public:
   // Signed size of touched triangle k with its current points, relative to its original area:
   // for a triangle whose vertices all moved, sigma * (area vector . n(uv of `at`)) / |a0|; for the
   // others, (area vector . a0) / |a0|^2. Positive = correctly oriented.
-  double SignedSize(std::size_t k, const SurfacePoints& P, std::int64_t at) const {
+  double SignedSize(std::size_t k, const RowVectors3d& P, std::int64_t at) const {
     const double A0 = a0_[k].norm();
     if (!(A0 > 0))
       return 1.0;
@@ -136,7 +136,7 @@ public:
   // Untangling: each moved vertex of a flipped or degenerate triangle (and its moved neighbours)
   // moves within S to maximise the smallest signed size of its triangles (pattern search in
   // (u,v)). Returns true when no triangle is flipped or degenerate any more.
-  bool Untangle(SurfacePoints& P, int maxSweeps) {
+  bool Untangle(RowVectors3d& P, int maxSweeps) {
     std::vector<std::int64_t> bad, verts;
     std::vector<std::uint8_t> mark(moved_.size(), 0);
     for (int sweep = 0; sweep < maxSweeps; ++sweep) {
@@ -169,7 +169,7 @@ public:
     return bad.empty();
   }
 
-  void OptimizeVertex(SurfacePoints& P, std::int64_t i) {
+  void OptimizeVertex(RowVectors3d& P, std::int64_t i) {
     auto worst = [&]() {
       double w = std::numeric_limits<double>::infinity();
       for (std::int64_t k : incident_[i])
@@ -213,7 +213,7 @@ public:
   }
 
   // Mapping through T intermediary surfaces.
-  bool Intermediary(int T, int maxRelax, SurfacePoints& P, std::string& why) {
+  bool Intermediary(int T, int maxRelax, RowVectors3d& P, std::string& why) {
     uv_ = foot_;
     P = X0_;
     ResetRegion();
@@ -252,7 +252,7 @@ public:
   }
 
 private:
-  void Place(SurfacePoints& P, std::int64_t i, double t) const {
+  void Place(RowVectors3d& P, std::int64_t i, double t) const {
     const Vector3d s = S_.Evaluate(uv_[i].x(), uv_[i].y());
     if (t >= 1.0)
       P.row(i) = s.transpose();
@@ -260,7 +260,7 @@ private:
       P.row(i) = ((1.0 - t) * X0_.row(i).transpose() + t * s).transpose();
   }
 
-  TriState State(std::size_t k, const SurfacePoints& P, const Vector3d& ref, bool finalStage,
+  TriState State(std::size_t k, const RowVectors3d& P, const Vector3d& ref, bool finalStage,
                  bool quality) const {
     const Tri& t = tris_[touched_[k]];
     const double A0 = a0_[k].norm();
@@ -283,7 +283,7 @@ private:
     return TriState::Ok;
   }
 
-  void CollectBad(const SurfacePoints& P, const std::vector<Vector3d>& ref, bool quality,
+  void CollectBad(const RowVectors3d& P, const std::vector<Vector3d>& ref, bool quality,
                   bool finalStage, std::vector<std::int64_t>& bad) const {
     bad.clear();
     for (std::size_t k = 0; k < touched_.size(); ++k)
@@ -291,7 +291,7 @@ private:
         bad.push_back(touched_[k]);
   }
 
-  bool FinalCheck(const SurfacePoints& P, std::vector<std::int64_t>* badOut,
+  bool FinalCheck(const RowVectors3d& P, std::vector<std::int64_t>* badOut,
                   std::string& why) const {
     std::vector<std::int64_t> bad;
     std::int64_t flipped = 0, degenerate = 0;
@@ -323,7 +323,7 @@ private:
   // harmonic map: every vertex at the average of its neighbours), with Dirichlet values from the
   // vertices around the region (the (u,v) of other moved vertices, the foot points of unmoved
   // ones). Returns false when the region did not change (nothing more to gain).
-  bool Relax(SurfacePoints& P, const std::vector<std::int64_t>& bad, double t, int rings) {
+  bool Relax(RowVectors3d& P, const std::vector<std::int64_t>& bad, double t, int rings) {
     const std::size_t before = region_.size();
     for (std::int64_t tr : bad)
       for (int k = 0; k < 3; ++k) {
@@ -388,7 +388,7 @@ private:
   const BezierSurface& S_;
   const std::vector<Tri>& tris_;
   const std::vector<std::vector<std::int64_t>>& nbrs_;
-  const SurfacePoints& X0_;
+  const RowVectors3d& X0_;
   const std::vector<std::uint8_t>& moved_;
   const std::vector<Vector2d>& foot_;
   std::vector<Vector2d> uv_;

@@ -20,7 +20,7 @@ struct CutMappingOptions {
 
 struct CutMapping {
   bool ok = false;
-  SurfacePoints points;                    // all points; moved ones on S
+  RowVectors3d points;                    // all points; moved ones on S
   std::vector<Eigen::Vector2d> parameters; // (u,v) of each moved point
   int intermediarySteps = 0;               // 0: direct, 1: local repair on S, T > 1: T surfaces
   std::string directProblem;               // why direct projection failed (empty if it did not)

@@ -5,7 +5,7 @@
 
 namespace faceplan {
 
-bool DefaultCutCurves(const SurfacePoints& points, const std::vector<std::uint8_t>& mask,
+bool DefaultCutCurves(const RowVectors3d& points, const std::vector<std::uint8_t>& mask,
                       const std::vector<std::uint8_t>& boundary,
                       std::vector<Eigen::Vector3d>& curveU, std::vector<Eigen::Vector3d>& curveV) {
   const Eigen::Index n = points.rows();

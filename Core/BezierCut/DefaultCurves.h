@@ -18,7 +18,7 @@ namespace faceplan {
 // of the ROI boundary. Without boundary points the normal is the box's shortest axis and the plane
 // lies at three quarters of the box along it. Returns false (curves untouched) when the ROI has no
 // extent to cut.
-bool DefaultCutCurves(const SurfacePoints& points, const std::vector<std::uint8_t>& mask,
+bool DefaultCutCurves(const RowVectors3d& points, const std::vector<std::uint8_t>& mask,
                       const std::vector<std::uint8_t>& boundary,
                       std::vector<Eigen::Vector3d>& curveU, std::vector<Eigen::Vector3d>& curveV);
 

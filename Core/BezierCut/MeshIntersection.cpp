@@ -74,7 +74,7 @@ bool SegmentHitsTriangle(const Vector3d& p, const Vector3d& q, const Vector3d& a
 
 } // namespace
 
-bool TrianglesIntersect(const Tri& A, const Tri& B, const SurfacePoints& P, bool skipSharedVertex) {
+bool TrianglesIntersect(const Tri& A, const Tri& B, const RowVectors3d& P, bool skipSharedVertex) {
   int shared = 0;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
@@ -94,7 +94,7 @@ bool TrianglesIntersect(const Tri& A, const Tri& B, const SurfacePoints& P, bool
   return false;
 }
 
-TriangleHash::TriangleHash(const std::vector<Tri>& tris, const SurfacePoints& P,
+TriangleHash::TriangleHash(const std::vector<Tri>& tris, const RowVectors3d& P,
                            const std::vector<std::int64_t>& ids, double cell)
     : tris_(tris), P_(P), h_(cell) {
   for (std::int64_t t : ids) {
@@ -152,7 +152,7 @@ std::vector<Tri> FanTriangles(const SurfaceMesh& mesh) {
 }
 
 std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris,
-                                           const SurfacePoints& before, const SurfacePoints& after,
+                                           const RowVectors3d& before, const RowVectors3d& after,
                                            const std::vector<std::uint8_t>& activeTri) {
   std::vector<std::int64_t> active;
   Eigen::Array3d lo = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -211,8 +211,8 @@ std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris,
   return result;
 }
 
-std::int64_t CountNewIntersections(const SurfaceMesh& cells, const SurfacePoints& before,
-                                   const SurfacePoints& after,
+std::int64_t CountNewIntersections(const SurfaceMesh& cells, const RowVectors3d& before,
+                                   const RowVectors3d& after,
                                    const std::vector<std::uint8_t>& active,
                                    std::int64_t* firstTriangle) {
   std::vector<Tri> tris = FanTriangles(cells);

@@ -21,12 +21,12 @@ std::vector<Tri> FanTriangles(const SurfaceMesh& mesh);
 // Do triangles A and B (points P) cross? Pairs sharing two or more vertices are never reported
 // (their folding is a flip); skipSharedVertex also skips pairs sharing one vertex. Touching along
 // an edge or at a vertex does not count.
-bool TrianglesIntersect(const Tri& A, const Tri& B, const SurfacePoints& P, bool skipSharedVertex);
+bool TrianglesIntersect(const Tri& A, const Tri& B, const RowVectors3d& P, bool skipSharedVertex);
 
 // Uniform spatial hash over triangle bounding boxes.
 class TriangleHash {
 public:
-  TriangleHash(const std::vector<Tri>& tris, const SurfacePoints& P,
+  TriangleHash(const std::vector<Tri>& tris, const RowVectors3d& P,
                const std::vector<std::int64_t>& ids, double cell);
   // Candidate triangles whose cells overlap those of triangle t (sorted, unique).
   void Candidates(std::int64_t t, std::vector<std::int64_t>& out) const;
@@ -35,7 +35,7 @@ private:
   void Range(std::int64_t t, Eigen::Array3i& lo, Eigen::Array3i& hi) const;
   static std::int64_t Key(int x, int y, int z);
   const std::vector<Tri>& tris_;
-  const SurfacePoints& P_;
+  const RowVectors3d& P_;
   double h_;
   std::unordered_map<std::int64_t, std::vector<std::int64_t>> map_;
 };
@@ -43,13 +43,13 @@ private:
 // Triangles (among those flagged in activeTri) that intersect another triangle in `after` but did
 // not in `before`, tested against all triangles near the active region.
 std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris,
-                                           const SurfacePoints& before, const SurfacePoints& after,
+                                           const RowVectors3d& before, const RowVectors3d& after,
                                            const std::vector<std::uint8_t>& activeTri);
 
 // The same over the fan triangulation of `cells`, for the triangles with a point flagged in
 // `active`; returns how many, and the first one's index in *firstTriangle (-1: none).
-std::int64_t CountNewIntersections(const SurfaceMesh& cells, const SurfacePoints& before,
-                                   const SurfacePoints& after,
+std::int64_t CountNewIntersections(const SurfaceMesh& cells, const RowVectors3d& before,
+                                   const RowVectors3d& after,
                                    const std::vector<std::uint8_t>& active,
                                    std::int64_t* firstTriangle = nullptr);
 

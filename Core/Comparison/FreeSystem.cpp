@@ -58,7 +58,7 @@ Status BuildFreeSystem(const PrecomputeRequest& request, FreeSystem& s) {
   });
 }
 
-Status RoiVector(const FreeSystem& s, const Displacements& movable, Eigen::VectorXd& roi) {
+Status RoiVector(const FreeSystem& s, const RowVectors3d& movable, Eigen::VectorXd& roi) {
   if (movable.rows() != static_cast<Eigen::Index>(s.roiPosition.size()))
     return Status::Error("expected " + std::to_string(s.roiPosition.size()) + " ROI displacements, got " +
                          std::to_string(movable.rows()));
@@ -85,14 +85,14 @@ Eigen::RowVector3d ValueOf(const FreeSystem& s, int node, const Eigen::VectorXd&
 }
 } // namespace
 
-Displacements KeptDisplacement(const FreeSystem& s, const Eigen::VectorXd& freeValues, const Eigen::VectorXd& roi) {
-  Displacements out(static_cast<Eigen::Index>(s.kept.size()), 3);
+RowVectors3d KeptDisplacement(const FreeSystem& s, const Eigen::VectorXd& freeValues, const Eigen::VectorXd& roi) {
+  RowVectors3d out(static_cast<Eigen::Index>(s.kept.size()), 3);
   for (size_t k = 0; k < s.kept.size(); ++k) out.row(k) = ValueOf(s, s.kept[k], freeValues, roi);
   return out;
 }
 
-Displacements AllDisplacement(const FreeSystem& s, const Eigen::VectorXd& freeValues, const Eigen::VectorXd& roi) {
-  Displacements out(s.numMeshNodes, 3);
+RowVectors3d AllDisplacement(const FreeSystem& s, const Eigen::VectorXd& freeValues, const Eigen::VectorXd& roi) {
+  RowVectors3d out(s.numMeshNodes, 3);
   for (Eigen::Index i = 0; i < s.numMeshNodes; ++i) out.row(i) = ValueOf(s, static_cast<int>(i), freeValues, roi);
   return out;
 }

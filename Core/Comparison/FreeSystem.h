@@ -29,15 +29,15 @@ struct FreeSystem {
 Status BuildFreeSystem(const PrecomputeRequest& request, FreeSystem& system);
 
 // The ROI vector u_R (3 per ROI node) from NodeSets::movable-ordered displacements.
-Status RoiVector(const FreeSystem& system, const Displacements& movable, Eigen::VectorXd& roi);
+Status RoiVector(const FreeSystem& system, const RowVectors3d& movable, Eigen::VectorXd& roi);
 
 // Right-hand side f_F - K_FR u_R (no loads).
 Eigen::VectorXd FreeRightHandSide(const FreeSystem& system, const Eigen::VectorXd& roi);
 
 // Kept (NodeSets::kept order) or all nodes' displacement from free values and the ROI vector.
-Displacements KeptDisplacement(const FreeSystem& system, const Eigen::VectorXd& freeValues,
+RowVectors3d KeptDisplacement(const FreeSystem& system, const Eigen::VectorXd& freeValues,
                                const Eigen::VectorXd& roi);
-Displacements AllDisplacement(const FreeSystem& system, const Eigen::VectorXd& freeValues,
+RowVectors3d AllDisplacement(const FreeSystem& system, const Eigen::VectorXd& freeValues,
                               const Eigen::VectorXd& roi);
 
 // ||K_FF x - b|| / ||b||.

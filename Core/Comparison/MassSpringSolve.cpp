@@ -99,7 +99,7 @@ Status MassSpringModel::build(const PrecomputeRequest& request) {
   });
 }
 
-Status MassSpringModel::solve(const Displacements& movable, Displacements& kept, Displacements* all) const {
+Status MassSpringModel::solve(const RowVectors3d& movable, RowVectors3d& kept, RowVectors3d* all) const {
   return ReturnStatusOnException("the mass-spring solve", [&]() -> Status {
     if (!ready_)
       return Status::Error("mass-spring solve before a successful build");

@@ -16,7 +16,7 @@ public:
   Status build(const PrecomputeRequest& request);
   // Kept nodes' displacement (NodeSets::kept order) for prescribed ROI displacements; with `all`
   // non-null also every node's.
-  Status solve(const Displacements& movable, Displacements& kept, Displacements* all = nullptr) const;
+  Status solve(const RowVectors3d& movable, RowVectors3d& kept, RowVectors3d* all = nullptr) const;
 
   long long springs() const { return springs_; }
   double buildMs() const { return buildMs_; }

@@ -48,7 +48,7 @@ const Lapack& FindLapack() {
   return lapack;
 }
 
-Status TraditionalImpl(const PrecomputeRequest& request, const Displacements& movable,
+Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& movable,
                        TraditionalBandResult& r, const TraditionalBandOptions& options) {
   r = TraditionalBandResult();
   const Lapack& lapack = FindLapack();
@@ -150,7 +150,7 @@ Status TraditionalImpl(const PrecomputeRequest& request, const Displacements& mo
   r.assemblyMs = clock.lapMs();
 
   // Boundary condition: prescribed values moved to the right-hand side, element by element.
-  Displacements prescribed = Displacements::Zero(n, 3);
+  RowVectors3d prescribed = RowVectors3d::Zero(n, 3);
   for (size_t k = 0; k < sets.movable.size(); ++k) prescribed.row(sets.movable[k]) = movable.row(k);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(dofs);
   for (Eigen::Index e = 0; e < m; ++e) {
@@ -206,7 +206,7 @@ Status TraditionalImpl(const PrecomputeRequest& request, const Displacements& mo
   r.totalMs = r.reorderingMs + r.elementStiffnessMs + r.assemblyMs + r.boundaryConditionMs +
               r.factorizationMs + r.solveMs;
 
-  Displacements all = prescribed;
+  RowVectors3d all = prescribed;
   for (Eigen::Index i = 0; i < n; ++i) {
     if (freeIndex[i] >= 0) all.row(i) = x.segment<3>(3 * freeIndex[i]).transpose();
     else if (!constrained[i]) all.row(i).setZero();
@@ -226,7 +226,7 @@ bool BandLapackAvailable(std::string* why) {
   return l.pbtrf && l.pbtrs;
 }
 
-Status SolveTraditionalBand(const PrecomputeRequest& request, const Displacements& movable,
+Status SolveTraditionalBand(const PrecomputeRequest& request, const RowVectors3d& movable,
                             TraditionalBandResult& result, const TraditionalBandOptions& options) {
   return ReturnStatusOnException("the band solve", [&]() -> Status {
     return TraditionalImpl(request, movable, result, options);

@@ -18,8 +18,8 @@ struct TraditionalBandOptions {
 };
 
 struct TraditionalBandResult {
-  Displacements keptDisplacement; // NodeSets::kept order
-  Displacements allDisplacement;  // n x 3 when recoverAll
+  RowVectors3d keptDisplacement; // NodeSets::kept order
+  RowVectors3d allDisplacement;  // n x 3 when recoverAll
   double reorderingMs = 0, elementStiffnessMs = 0, assemblyMs = 0, boundaryConditionMs = 0,
          factorizationMs = 0, solveMs = 0, totalMs = 0;
   long long freeDofs = 0;
@@ -32,7 +32,7 @@ struct TraditionalBandResult {
 // True when LAPACK's dpbtrf/dpbtrs can be found in this process.
 bool BandLapackAvailable(std::string* why = nullptr);
 
-Status SolveTraditionalBand(const PrecomputeRequest& request, const Displacements& movable,
+Status SolveTraditionalBand(const PrecomputeRequest& request, const RowVectors3d& movable,
                             TraditionalBandResult& result, const TraditionalBandOptions& options = {});
 
 } // namespace faceplan

@@ -227,7 +227,7 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
       deformation = CheckDeformation(sys.cornerMesh, result.allDisplacement, status.warnings,
                                      sys.strainWarningLimit);
     } else if (!sys.checkableCells.empty()) {
-      Displacements known = Displacements::Zero(sys.numOutputNodes, 3);
+      RowVectors3d known = RowVectors3d::Zero(sys.numOutputNodes, 3);
       for (Eigen::Index k = 0; k < movable; ++k) known.row(sys.movableNodes[k]) = input.movableDisplacement.row(k);
       for (size_t k = 0; k < sys.kept.size(); ++k) known.row(sys.kept[k]) = result.keptDisplacement.row(k);
       deformation = CheckDeformation(sys.cornerMesh, known, status.warnings, sys.strainWarningLimit,

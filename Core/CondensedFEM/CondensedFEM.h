@@ -93,7 +93,7 @@ struct PrecomputeOptions {
 
 struct SolveInput {
   // |movable| x 3, in NodeSets::movable order. Sliding nodes use only its normal part.
-  Displacements movableDisplacement;
+  RowVectors3d movableDisplacement;
   // One [R | t] per rigid segment (segment k uses entry k - 1), or empty. The displacements above
   // remain the boundary values of every path; when transforms are given and the system has
   // segments, Solve checks that the segments' displacements follow them (CheckSegmentDisplacements)
@@ -101,13 +101,13 @@ struct SolveInput {
   // without segments ignores them.
   std::vector<SegmentTransform> segmentTransforms;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero(); // body load density * gravity, if non-zero
-  Displacements nodalLoads;          // n x 3 or empty
+  RowVectors3d nodalLoads;          // n x 3 or empty
   bool recoverInterior = false;      // also return every node's displacement
 };
 
 struct SolveResult {
-  Displacements keptDisplacement; // |kept| x 3, in NodeSets::kept order
-  Displacements allDisplacement;  // n x 3 when recoverInterior, else empty
+  RowVectors3d keptDisplacement; // |kept| x 3, in NodeSets::kept order
+  RowVectors3d allDisplacement;  // n x 3 when recoverInterior, else empty
   // ||K_FF u_F - f_F|| / ||f_F||. For a kept-only DenseResponse solve it is the precompute's figure
   // for the response (SystemInfo::responsePath says which): an estimate from random combinations
   // of its columns, or the largest relative residual of its columns when it needed refinement.

@@ -34,7 +34,7 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
 
   // Prescribed values in mesh numbering; free nodes numbered in mesh order.
   const Eigen::Index n = mesh.numPoints();
-  Displacements prescribed = Displacements::Zero(n, 3);
+  RowVectors3d prescribed = RowVectors3d::Zero(n, 3);
   std::vector<char> isConstrained(n, 0), used(n, 0);
   for (int id : sets.constrained) isConstrained[id] = 1;
   for (size_t k = 0; k < sets.movable.size(); ++k) prescribed.row(sets.movable[k]) = input.movableDisplacement.row(k);
@@ -115,7 +115,7 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
         rhsNorm > 0 ? (pattern.upper.selfadjointView<Eigen::Upper>() * x - rhs).norm() / rhsNorm : x.norm();
   }
 
-  Displacements all = prescribed;
+  RowVectors3d all = prescribed;
   for (Eigen::Index i = 0; i < n; ++i)
     if (freeIndex[i] >= 0) all.row(i) = x.segment<3>(3 * freeIndex[i]).transpose();
     else if (!isConstrained[i]) all.row(i).setZero();

@@ -11,7 +11,7 @@ static_assert(sizeof(NodeSets) ==
               "SameRequest must compare every NodeSets field");
 static_assert(sizeof(Materials) == 3 * sizeof(Eigen::VectorXd),
               "SameRequest must compare every Materials field");
-static_assert(sizeof(TetMesh) == sizeof(Points) + sizeof(Tets),
+static_assert(sizeof(TetMesh) == sizeof(RowVectors3d) + sizeof(Tets),
               "SameRequest must compare every TetMesh field");
 static_assert(sizeof(PrecomputeOptions) == 128,
               "SameOptions must compare every PrecomputeOptions field");

@@ -13,9 +13,9 @@ int SegmentCount(const NodeSets& sets) {
   return count;
 }
 
-Status CheckSegmentDisplacements(const Points& points, const NodeSets& sets,
+Status CheckSegmentDisplacements(const RowVectors3d& points, const NodeSets& sets,
                                  const std::vector<SegmentTransform>& transforms,
-                                 const Displacements& movableDisplacement) {
+                                 const RowVectors3d& movableDisplacement) {
   const int segments = SegmentCount(sets);
   if (static_cast<int>(transforms.size()) != segments)
     return Status::Error("expected " + std::to_string(segments) + " segment transforms, got " +
@@ -51,7 +51,7 @@ Status CheckSegmentDisplacements(const Points& points, const NodeSets& sets,
   return Status::Ok();
 }
 
-SparseMatrix SegmentBasis(const Points& points, const NodeSets& sets) {
+SparseMatrix SegmentBasis(const RowVectors3d& points, const NodeSets& sets) {
   const int segments = SegmentCount(sets);
   const Eigen::Index movable = static_cast<Eigen::Index>(sets.movable.size());
   std::vector<Eigen::Triplet<double>> entries;
@@ -79,7 +79,7 @@ SparseMatrix SegmentBasis(const Points& points, const NodeSets& sets) {
 
 Eigen::VectorXd SegmentParameters(const NodeSets& sets,
                                   const std::vector<SegmentTransform>& transforms,
-                                  const Displacements& movableDisplacement) {
+                                  const RowVectors3d& movableDisplacement) {
   const int segments = static_cast<int>(transforms.size());
   Eigen::Index generalNodes = 0;
   for (size_t k = 0; k < sets.movable.size(); ++k)
@@ -100,10 +100,10 @@ Eigen::VectorXd SegmentParameters(const NodeSets& sets,
   return p;
 }
 
-Displacements FollowSegments(const Points& points, const NodeSets& sets,
+RowVectors3d FollowSegments(const RowVectors3d& points, const NodeSets& sets,
                              const std::vector<SegmentTransform>& transforms,
-                             const Displacements& movableDisplacement) {
-  Displacements out = movableDisplacement;
+                             const RowVectors3d& movableDisplacement) {
+  RowVectors3d out = movableDisplacement;
   for (size_t k = 0; k < sets.movableSegment.size(); ++k) {
     const int s = sets.movableSegment[k];
     if (s <= 0 || s > static_cast<int>(transforms.size()))

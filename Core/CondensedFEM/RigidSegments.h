@@ -21,24 +21,24 @@ int SegmentCount(const NodeSets& sets);
 // |u - ((R - I) x + t)| <= 1e-8 * (the segment's largest displacement, or the mesh extent's 1e-12
 // when nothing moves), and that the transforms are finite and one per segment. The error names the
 // segment, the node and the mismatch.
-Status CheckSegmentDisplacements(const Points& points, const NodeSets& sets,
+Status CheckSegmentDisplacements(const RowVectors3d& points, const NodeSets& sets,
                                  const std::vector<SegmentTransform>& transforms,
-                                 const Displacements& movableDisplacement);
+                                 const RowVectors3d& movableDisplacement);
 
 // B: the caller's movable displacements (3 per node, node-major) as a linear function of the
 // parameters p = [12 per segment: row-major [R - I | t]; 3 per movable node of segment 0]. Nodes
 // of segment k take u = (R - I) x + t; nodes of segment 0 take their own slot.
-SparseMatrix SegmentBasis(const Points& points, const NodeSets& sets);
+SparseMatrix SegmentBasis(const RowVectors3d& points, const NodeSets& sets);
 
 // p for given transforms and displacements (the segment-0 nodes' rows of `movableDisplacement`).
 Eigen::VectorXd SegmentParameters(const NodeSets& sets,
                                   const std::vector<SegmentTransform>& transforms,
-                                  const Displacements& movableDisplacement);
+                                  const RowVectors3d& movableDisplacement);
 
 // The movable displacements with every segment node's row replaced by its segment's motion at the
 // node, (R - I) x + t: a node tied to a rigidly moved segment moves with it as one body.
-Displacements FollowSegments(const Points& points, const NodeSets& sets,
+RowVectors3d FollowSegments(const RowVectors3d& points, const NodeSets& sets,
                              const std::vector<SegmentTransform>& transforms,
-                             const Displacements& movableDisplacement);
+                             const RowVectors3d& movableDisplacement);
 
 } // namespace faceplan

@@ -11,12 +11,12 @@ namespace {
 // Relative to the largest reference value over both blocks, so the interior does not get its own,
 // possibly tiny, scale.
 double RelativeError(const SolveResult& result, const SolveResult& reference, bool withInterior) {
-  auto size = [](const Displacements& d) { return static_cast<std::size_t>(d.size()); };
+  auto size = [](const RowVectors3d& d) { return static_cast<std::size_t>(d.size()); };
   double scale = MaxAbs(reference.keptDisplacement.data(), size(reference.keptDisplacement));
   if (withInterior)
     scale =
         std::max(scale, MaxAbs(reference.allDisplacement.data(), size(reference.allDisplacement)));
-  auto difference = [&](const Displacements& a, const Displacements& b) {
+  auto difference = [&](const RowVectors3d& a, const RowVectors3d& b) {
     if (a.size() != b.size())
       return std::numeric_limits<double>::infinity();
     return MaxAbsDifference(a.data(), b.data(), size(a));

@@ -22,7 +22,7 @@ double Lambda(const Materials& materials, Eigen::Index cell) {
 
 // Per cell: D(k, 3 a + c) = int phi_k dN_a/dx_c (k: corner, a: node) and P(k) = int phi_k, with the
 // degree-2 four-point rule (exact for straight cells: phi_k is linear, dN_a/dx too).
-bool CellPressureCoupling(const Points& points, const int* cell, Eigen::Matrix<double, 4, 30>& D,
+bool CellPressureCoupling(const RowVectors3d& points, const int* cell, Eigen::Matrix<double, 4, 30>& D,
                           Eigen::Vector4d& P) {
   const double alpha = 0.5854101966249685, beta = 0.1381966011250105;
   D.setZero();
@@ -46,7 +46,7 @@ bool CellPressureCoupling(const Points& points, const int* cell, Eigen::Matrix<d
   return true;
 }
 
-bool BuildCoupling(const Points& points, const int* cells, Eigen::Index numCells,
+bool BuildCoupling(const RowVectors3d& points, const int* cells, Eigen::Index numCells,
                    const Materials& materials, const std::vector<int>& dofNode,
                    std::vector<Eigen::Triplet<double, int>>& triplets, Eigen::VectorXd& mass) {
   constexpr int Nodes = 10;
@@ -88,7 +88,7 @@ Materials ShearOnlyMaterials(const Materials& materials) {
   return out;
 }
 
-Status NodalPressureStiffness(const Points& points, const int* cells, Eigen::Index numCells,
+Status NodalPressureStiffness(const RowVectors3d& points, const int* cells, Eigen::Index numCells,
                               int nodesPerCell, const Materials& materials,
                               const std::vector<int>& dofNode, int numDofNodes,
                               SparseMatrix& upper) {
@@ -113,7 +113,7 @@ Status NodalPressureStiffness(const Points& points, const int* cells, Eigen::Ind
   return Status::Ok();
 }
 
-Status AddNodalPressureStiffness(SparseMatrix& upper, const Points& points, const int* cells,
+Status AddNodalPressureStiffness(SparseMatrix& upper, const RowVectors3d& points, const int* cells,
                                  Eigen::Index numCells, int nodesPerCell,
                                  const Materials& materials, const std::vector<int>& dofNode,
                                  int numDofNodes) {

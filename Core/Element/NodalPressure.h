@@ -32,13 +32,13 @@ Materials ShearOnlyMaterials(const Materials& materials);
 // DOFs and are dropped), size 3 numDofNodes. `cells` holds numCells x nodesPerCell ids row by row
 // (nodesPerCell must be 10, VTK order, corners first); `points` the solver mesh's points. Pressure
 // nodes are the cells' corner nodes. Fails on a cell with a non-positive Jacobian.
-Status NodalPressureStiffness(const Points& points, const int* cells, Eigen::Index numCells,
+Status NodalPressureStiffness(const RowVectors3d& points, const int* cells, Eigen::Index numCells,
                               int nodesPerCell, const Materials& materials,
                               const std::vector<int>& dofNode, int numDofNodes,
                               SparseMatrix& upper);
 
 // Adds K_vol to an assembled upper triangle (same numbering) in place.
-Status AddNodalPressureStiffness(SparseMatrix& upper, const Points& points, const int* cells,
+Status AddNodalPressureStiffness(SparseMatrix& upper, const RowVectors3d& points, const int* cells,
                                  Eigen::Index numCells, int nodesPerCell,
                                  const Materials& materials, const std::vector<int>& dofNode,
                                  int numDofNodes);

@@ -31,7 +31,7 @@ using MidEdgeProjection =
 using Tet10Cells = Eigen::Matrix<int, Eigen::Dynamic, 10, Eigen::RowMajor>;
 
 struct QuadraticMesh {
-  Points points;                          // corners (same ids as the linear mesh), then edges
+  RowVectors3d points;                          // corners (same ids as the linear mesh), then edges
   Tet10Cells cells;                       // m x 10
   std::vector<std::array<int, 2>> edges;  // edge e is node numCorners + e, between these corners
   std::vector<char> boundaryEdge;         // edge lies on the boundary of the linear mesh

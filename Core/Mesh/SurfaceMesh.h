@@ -1,5 +1,7 @@
 #pragma once
 // A polygonal surface as Core sees it (no VTK): points and polygon cells as plain arrays.
+#include "Common/RowVectors3d.h"
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -8,14 +10,13 @@
 
 namespace faceplan {
 
-using SurfacePoints = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 // Cells in compressed form (like vtkCellArray): cell c uses the point ids
 // connectivity[offsets[c] .. offsets[c+1]). offsets has numCells()+1 entries, offsets[0] == 0.
 // A cell of n >= 3 points is a polygon with the edges (p0,p1), ..., (p_{n-1},p0);
 // a cell of 2 points is one edge; a cell of 1 point has no edge.
 struct SurfaceMesh {
-  SurfacePoints points;               // n x 3
+  RowVectors3d points;               // n x 3
   std::vector<std::int64_t> offsets;   // numCells + 1
   std::vector<std::int64_t> connectivity;
 

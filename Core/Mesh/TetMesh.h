@@ -1,15 +1,15 @@
 #pragma once
 // The tetrahedral mesh and its per-cell materials, as Core sees them (no VTK).
+#include "Common/RowVectors3d.h"
+
 #include <Eigen/Core>
 
 namespace faceplan {
 
-using Points = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 using Tets = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
-using Displacements = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 struct TetMesh {
-  Points points; // n x 3
+  RowVectors3d points; // n x 3
   Tets tets;     // m x 4, positively oriented (det[x1-x0, x2-x0, x3-x0] > 0)
 
   Eigen::Index numPoints() const { return points.rows(); }

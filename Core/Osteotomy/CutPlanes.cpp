@@ -31,7 +31,7 @@ bool OnSegmentSide(const std::vector<CutPlane>& planes, bool insideOut, const Ei
   return positive != insideOut;
 }
 
-Status ClassifyCutSides(const SurfacePoints& points, const std::vector<CutPlane>& planes,
+Status ClassifyCutSides(const RowVectors3d& points, const std::vector<CutPlane>& planes,
                         bool insideOut, std::vector<std::uint8_t>& onSegmentSide) {
   onSegmentSide.assign(static_cast<std::size_t>(points.rows()), 0);
   Eigen::Index moving = 0;

@@ -24,7 +24,7 @@ bool OnSegmentSide(const std::vector<CutPlane>& planes, bool insideOut, const Ei
 
 // 1 for points on the segment side. Fails when either side holds no point: such a cut moves
 // nothing or everything.
-Status ClassifyCutSides(const SurfacePoints& points, const std::vector<CutPlane>& planes,
+Status ClassifyCutSides(const RowVectors3d& points, const std::vector<CutPlane>& planes,
                         bool insideOut, std::vector<std::uint8_t>& onSegmentSide);
 
 // A convex piece of one side: the intersection of the half-spaces n . (x - o) >= 0 of `bounds`.

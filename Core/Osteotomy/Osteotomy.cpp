@@ -43,7 +43,7 @@ Status ValidateBone(const OsteotomyBone& bone) {
   return Status::Ok();
 }
 
-double BoundingDiagonal(const SurfacePoints& p) {
+double BoundingDiagonal(const RowVectors3d& p) {
   return (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm();
 }
 

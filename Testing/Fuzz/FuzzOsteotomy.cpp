@@ -58,7 +58,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   OsteotomyBone input;
   input.mesh = bone;
-  input.displacement = SurfacePoints::Zero(n, 3);
+  input.displacement = RowVectors3d::Zero(n, 3);
   for (Eigen::Index i = 0; i < n; ++i)
     if (in.flag())
       input.displacement.row(i) << in.scaled(1.0), in.scaled(1.0), in.scaled(1.0);

@@ -116,7 +116,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (in.flag())
     input.gravity = Eigen::Vector3d(in.scaled(10.0), in.scaled(10.0), in.scaled(10.0));
   if (in.flag()) {
-    input.nodalLoads = Displacements::Zero(n, 3);
+    input.nodalLoads = RowVectors3d::Zero(n, 3);
     for (int i = 0; i < n; ++i)
       if (in.flag())
         input.nodalLoads.row(i) << in.scaled(1.0), in.scaled(1.0), in.scaled(1.0);

@@ -31,7 +31,7 @@ struct HollowSphere {
 
 // L2 norm of the error of nodal displacements u (one row per mesh point) over the mesh, with the
 // degree-2 four-point rule per tetrahedron; l2Exact receives the exact solution's L2 norm.
-inline double HollowSphereL2Error(const TetMesh& mesh, const Displacements& u, const HollowSphere& exact,
+inline double HollowSphereL2Error(const TetMesh& mesh, const RowVectors3d& u, const HollowSphere& exact,
                                   double& l2Exact) {
   const double alpha = 0.5854101966249685, beta = 0.1381966011250105;
   double err2 = 0.0, ref2 = 0.0;

@@ -13,8 +13,8 @@ PrecomputeRequest ShellRequest(int subdivisions, int layers, double E, double nu
   return request;
 }
 
-Displacements SmoothRoiField(const PrecomputeRequest& request, double amplitude) {
-  Displacements u(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+RowVectors3d SmoothRoiField(const PrecomputeRequest& request, double amplitude) {
+  RowVectors3d u(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
   for (size_t k = 0; k < request.sets.movable.size(); ++k) {
     const Eigen::RowVector3d p = request.mesh.points.row(request.sets.movable[k]);
     u.row(k) << amplitude * std::sin(p(0) / 20.0), amplitude * std::cos(p(1) / 25.0) * 0.5,

@@ -9,6 +9,6 @@ namespace faceplan::testing {
 PrecomputeRequest ShellRequest(int subdivisions, int layers, double E = 3000.0, double nu = 0.45);
 
 // A smooth, non-trivial ROI displacement field (mm) for the request's movable nodes.
-Displacements SmoothRoiField(const PrecomputeRequest& request, double amplitude = 2.0);
+RowVectors3d SmoothRoiField(const PrecomputeRequest& request, double amplitude = 2.0);
 
 } // namespace faceplan::testing

@@ -38,8 +38,8 @@ Curve Line(const Vector3d& a, const Vector3d& b, int segments = 1) {
   return c;
 }
 
-Vector3d Row(const SurfacePoints& P, Eigen::Index i) { return P.row(i).transpose(); }
-Vector3d AreaVec(const SurfacePoints& P, const std::int64_t* t) {
+Vector3d Row(const RowVectors3d& P, Eigen::Index i) { return P.row(i).transpose(); }
+Vector3d AreaVec(const RowVectors3d& P, const std::int64_t* t) {
   return 0.5 * (Row(P, t[1]) - Row(P, t[0])).cross(Row(P, t[2]) - Row(P, t[0]));
 }
 
@@ -455,6 +455,6 @@ TEST(BezierCut, DefaultCurvesCutTheCapClearOfTheBoundary) {
     }
   // Nothing to cut: an ROI without extent.
   SurfaceMesh point;
-  point.points = SurfacePoints::Zero(1, 3);
+  point.points = RowVectors3d::Zero(1, 3);
   EXPECT_FALSE(DefaultCutCurves(point.points, {1}, {0}, U, V));
 }

@@ -21,7 +21,7 @@ namespace {
 
 struct Scene {
   PrecomputeRequest request;
-  Displacements edit;
+  RowVectors3d edit;
 };
 
 // Face-like shell (mm, soft tissue): inner surface on bone, a polar ROI cap moved smoothly.
@@ -39,7 +39,7 @@ Scene FaceShell(int subdivisions = 5, int layers = 2) {
   return s;
 }
 
-Displacements Reference(const Scene& s) {
+RowVectors3d Reference(const Scene& s) {
   SolveInput input;
   input.movableDisplacement = s.edit;
   SolveResult result;
@@ -74,7 +74,7 @@ TEST(SolvePaths, FreeSystemMatchesReferenceWithCholmod) {
 
 TEST(SolvePaths, ConjugateGradientsAtTightToleranceMatchReference) {
   const Scene s = FaceShell();
-  const Displacements reference = Reference(s);
+  const RowVectors3d reference = Reference(s);
   Prepared p;
   Prepare(s, p);
   for (CGPreconditioner pre : {CGPreconditioner::IncompleteCholesky, CGPreconditioner::Jacobi}) {
@@ -94,7 +94,7 @@ TEST(SolvePaths, ConjugateGradientsAtTightToleranceMatchReference) {
 
 TEST(SolvePaths, ConjugateGradientErrorFollowsTolerance) {
   const Scene s = FaceShell();
-  const Displacements reference = Reference(s);
+  const RowVectors3d reference = Reference(s);
   Prepared p;
   Prepare(s, p);
   ConjugateGradientSolver cg;
@@ -131,7 +131,7 @@ TEST(SolvePaths, WarmStartNeedsFewerIterations) {
 
 TEST(SolvePaths, SinglePrecisionWithinItsTolerance) {
   const Scene s = FaceShell();
-  const Displacements reference = Reference(s);
+  const RowVectors3d reference = Reference(s);
   Prepared p;
   Prepare(s, p);
   SinglePrecisionCholesky direct;
@@ -198,11 +198,11 @@ TEST(SolvePaths, ReverseCuthillMcKeeShrinksBandwidthOfShuffledMesh) {
 
 TEST(SolvePaths, MassSpringRunsAndDiffersFromFEM) {
   const Scene s = FaceShell();
-  const Displacements reference = Reference(s);
+  const RowVectors3d reference = Reference(s);
   MassSpringModel springs;
   ASSERT_TRUE(springs.build(s.request).ok);
   EXPECT_GT(springs.springs(), s.request.mesh.numTets());
-  Displacements kept, all;
+  RowVectors3d kept, all;
   ASSERT_TRUE(springs.solve(s.edit, kept, &all).ok);
   ASSERT_TRUE(kept.allFinite());
   EXPECT_GT(kept.rowwise().norm().maxCoeff(), 0.0);
@@ -220,7 +220,7 @@ TEST(SolvePaths, HollowSphereCGErrorIsDiscretisationError) {
   r.mesh = shell.mesh;
   r.materials = Materials::Uniform(exact.E, exact.nu);
   r.sets = {shell.innerNodes, shell.innerNodes, shell.outerNodes};
-  Displacements edit(static_cast<Eigen::Index>(shell.innerNodes.size()), 3);
+  RowVectors3d edit(static_cast<Eigen::Index>(shell.innerNodes.size()), 3);
   for (size_t k = 0; k < shell.innerNodes.size(); ++k)
     edit.row(k) = exact.displacement(shell.mesh.points.row(shell.innerNodes[k]).transpose()).transpose();
   FreeSystem system;
@@ -259,15 +259,15 @@ TEST(SolvePaths, ErrorsComeBackAsStatus) {
   SinglePrecisionReport sr;
   EXPECT_FALSE(direct.solve(p.rhs, 0, x, sr).ok);
   MassSpringModel springs;
-  Displacements kept;
+  RowVectors3d kept;
   EXPECT_FALSE(springs.solve(s.edit, kept).ok);
   TraditionalBandResult band;
-  EXPECT_FALSE(SolveTraditionalBand(s.request, Displacements::Zero(1, 3), band).ok);
+  EXPECT_FALSE(SolveTraditionalBand(s.request, RowVectors3d::Zero(1, 3), band).ok);
   PrecomputeRequest bad = s.request;
   bad.sets.constrained.clear();
   bad.sets.movable.clear();
   FreeSystem system;
   EXPECT_FALSE(BuildFreeSystem(bad, system).ok);
   Eigen::VectorXd roi;
-  EXPECT_FALSE(RoiVector(p.system, Displacements::Zero(1, 3), roi).ok);
+  EXPECT_FALSE(RoiVector(p.system, RowVectors3d::Zero(1, 3), roi).ok);
 }

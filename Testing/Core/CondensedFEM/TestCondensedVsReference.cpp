@@ -32,7 +32,7 @@ TEST_P(CondensedVsReference, AgreesTo1e10) {
   input.recoverInterior = c.interior;
   if (c.loads) {
     input.gravity = Eigen::Vector3d(0.0, -9810.0, 0.0); // mm/s^2 with density in kg/mm^3
-    input.nodalLoads = Displacements::Zero(request.mesh.numPoints(), 3);
+    input.nodalLoads = RowVectors3d::Zero(request.mesh.numPoints(), 3);
     for (int id : request.sets.kept) input.nodalLoads.row(id) << 0.01, 0.02, -0.01;
   }
   std::shared_ptr<const CondensedSystem> system;

@@ -15,7 +15,7 @@ std::string PrecomputeError(const PrecomputeRequest& request) {
   EXPECT_EQ(system, nullptr);
   SolveResult reference;
   SolveInput input;
-  input.movableDisplacement = Displacements::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+  input.movableDisplacement = RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
   EXPECT_FALSE(SolveFullReference(request, input, reference).ok);
   return s.message;
 }
@@ -102,7 +102,7 @@ TEST(InvalidInput, BadSolveInputs) {
   Status s = Solve(*system, input, result);
   EXPECT_FALSE(s.ok);
   EXPECT_NE(s.message.find("NaN"), std::string::npos);
-  input.movableDisplacement = Displacements::Zero(3, 3);
+  input.movableDisplacement = RowVectors3d::Zero(3, 3);
   s = Solve(*system, input, result);
   EXPECT_FALSE(s.ok);
   EXPECT_NE(s.message.find("ROI displacements"), std::string::npos);

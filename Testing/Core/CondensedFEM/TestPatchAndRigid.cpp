@@ -31,9 +31,9 @@ PrecomputeRequest BoundaryDriven(int subdivisions, int layers) {
   return request;
 }
 
-Displacements FieldAt(const PrecomputeRequest& r, const std::vector<int>& nodes, const Eigen::Matrix3d& A,
+RowVectors3d FieldAt(const PrecomputeRequest& r, const std::vector<int>& nodes, const Eigen::Matrix3d& A,
                       const Eigen::Vector3d& b) {
-  Displacements u(static_cast<Eigen::Index>(nodes.size()), 3);
+  RowVectors3d u(static_cast<Eigen::Index>(nodes.size()), 3);
   for (size_t k = 0; k < nodes.size(); ++k) u.row(k) = (A * r.mesh.points.row(nodes[k]).transpose() + b).transpose();
   return u;
 }
@@ -51,10 +51,10 @@ void ExpectReproduces(SolveMethod method, const Eigen::Matrix3d& A, const Eigen:
   ASSERT_TRUE(s.ok) << s.message;
   std::vector<int> all(request.mesh.numPoints());
   for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
-  const Displacements exact = FieldAt(request, all, A, b);
+  const RowVectors3d exact = FieldAt(request, all, A, b);
   EXPECT_LT(RelativeMaxDifference(result.allDisplacement, exact), 1e-12);
   const double scale = exact.cwiseAbs().maxCoeff();
-  const Displacements exactKept = FieldAt(request, request.sets.kept, A, b);
+  const RowVectors3d exactKept = FieldAt(request, request.sets.kept, A, b);
   EXPECT_LT((result.keptDisplacement - exactKept).cwiseAbs().maxCoeff() / scale, 1e-12);
 }
 
@@ -89,7 +89,7 @@ TEST(RigidMotion, ZeroStrainAndZeroReaction) {
   input.recoverInterior = true;
   SolveResult result;
   ASSERT_TRUE(Solve(*system, input, result).ok);
-  const Displacements& u = result.allDisplacement;
+  const RowVectors3d& u = result.allDisplacement;
   double maxStrain = 0.0, maxForce = 0.0, forceScale = 0.0;
   Eigen::MatrixXd nodalForce = Eigen::MatrixXd::Zero(request.mesh.numPoints(), 3);
   TetCorners c;

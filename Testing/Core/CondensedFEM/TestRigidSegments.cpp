@@ -33,7 +33,7 @@ Plan MakePlan(bool two, bool mixed) {
   Plan plan;
   plan.request = ShellRequest(5, 3);
   PrecomputeRequest& r = plan.request;
-  const Displacements general = SmoothRoiField(r, 0.5);
+  const RowVectors3d general = SmoothRoiField(r, 0.5);
   double zMin = 1e300, zMax = -1e300;
   for (int node : r.sets.movable) {
     zMin = std::min(zMin, r.mesh.points(node, 2));

@@ -48,9 +48,9 @@ PrecomputeRequest PressedBlock() {
 }
 
 // u = (nu e x, nu e y, -e z) with e = kPress / kLz: uniaxial compression, lateral expansion free.
-Displacements Uniaxial(const Points& points) {
+RowVectors3d Uniaxial(const RowVectors3d& points) {
   const double strain = kPress / kLz;
-  Displacements u(points.rows(), 3);
+  RowVectors3d u(points.rows(), 3);
   for (Eigen::Index i = 0; i < points.rows(); ++i)
     u.row(i) << kNu * strain * points(i, 0), kNu * strain * points(i, 1), -strain * points(i, 2);
   return u;
@@ -65,14 +65,14 @@ void ExpectUniaxial(SolveMethod method, bool recoverInterior) {
   SolveInput input;
   // The plate's full motion may carry a tangential part: sliding nodes take only the normal one.
   input.movableDisplacement =
-      Displacements::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+      RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
   input.movableDisplacement.col(0).setConstant(0.25);
   input.movableDisplacement.col(2).setConstant(-kPress);
   input.recoverInterior = recoverInterior;
   SolveResult result;
   s = Solve(*system, input, result);
   ASSERT_TRUE(s.ok) << s.message;
-  const Displacements exact = Uniaxial(request.mesh.points);
+  const RowVectors3d exact = Uniaxial(request.mesh.points);
   EXPECT_LT(RelativeMaxDifference(result.keptDisplacement, exact), 1e-10);
   if (recoverInterior)
     EXPECT_LT(RelativeMaxDifference(result.allDisplacement, exact), 1e-10);
@@ -80,7 +80,7 @@ void ExpectUniaxial(SolveMethod method, bool recoverInterior) {
 
 // A thick spherical shell: the bottom of its inner surface is tied, the rest of it slides on the
 // sphere, and a cap on top is pushed outwards along the normal; the outer surface is free.
-PrecomputeRequest SlidingShell(Displacements& push) {
+PrecomputeRequest SlidingShell(RowVectors3d& push) {
   const ShellMesh shell = MakeSphericalShell(4, 2, 40.0, 55.0);
   PrecomputeRequest r;
   r.mesh = shell.mesh;
@@ -120,7 +120,7 @@ TEST(SlidingContact, BlockBetweenFrictionlessWallsIsUniaxialCachedFactor) {
 }
 
 TEST(SlidingContact, SlidingNodesKeepTheirNormalValueAndMoveTangentially) {
-  Displacements push;
+  RowVectors3d push;
   PrecomputeRequest request = SlidingShell(push);
   std::shared_ptr<const CondensedSystem> system;
   Status s = Precompute(request, system);
@@ -152,7 +152,7 @@ TEST(SlidingContact, SlidingNodesKeepTheirNormalValueAndMoveTangentially) {
 TEST(SlidingContact, CurvedSurfaceAgreesWithCalculix) {
   if (std::system("command -v ccx > /dev/null 2>&1") != 0)
     GTEST_SKIP() << "ccx (CalculiX) is not installed";
-  Displacements push;
+  RowVectors3d push;
   PrecomputeRequest request = SlidingShell(push);
   std::shared_ptr<const CondensedSystem> system;
   Status s = Precompute(request, system);
@@ -187,7 +187,7 @@ TEST(SlidingContact, InvalidSlidingSetsAreErrors) {
   SolveResult result;
   SolveInput input;
   input.movableDisplacement =
-      Displacements::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+      RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
   s = SolveFullReference(request, input, result);
   EXPECT_FALSE(s.ok);
 }

@@ -226,7 +226,7 @@ TEST(Stability, QuadraticWorksWithCondensationAndCaching) {
   request.sets.movable = request.sets.constrained;
   for (int i = shell.nodesPerLayer; i < 2 * shell.nodesPerLayer; ++i) request.sets.kept.push_back(i);
   const Eigen::Matrix3d G = (Eigen::Matrix3d() << 1e-3, 2e-3, 0, -1e-3, 5e-4, 1e-3, 0, 3e-4, -2e-3).finished();
-  Displacements linearField(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+  RowVectors3d linearField(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
   for (size_t k = 0; k < request.sets.movable.size(); ++k)
     linearField.row(k) = (G * request.mesh.points.row(request.sets.movable[k]).transpose()).transpose();
   for (ElementOrder order : {ElementOrder::Quadratic, ElementOrder::QuadraticNodalPressure})
@@ -275,9 +275,9 @@ TEST(Stability, QuadraticDenseAndCachedAgreeWithLoads) {
   SolveInput input;
   input.movableDisplacement = SmoothRoiField(request);
   input.gravity = Eigen::Vector3d(0.0, -9810.0, 0.0);
-  input.nodalLoads = Displacements::Zero(request.mesh.numPoints(), 3);
+  input.nodalLoads = RowVectors3d::Zero(request.mesh.numPoints(), 3);
   for (int id : request.sets.kept) input.nodalLoads.row(id) << 0.01, 0.02, -0.01;
-  Displacements kept[2];
+  RowVectors3d kept[2];
   int k = 0;
   for (SolveMethod method : {SolveMethod::DenseResponse, SolveMethod::CachedFactor}) {
     request.options.method = method;
@@ -351,7 +351,7 @@ TEST(Stability, UnitRescalingChangesResultBy1e8AtMost) {
   input.movableDisplacement = SmoothRoiField(mmPa);
   input.recoverInterior = true;
   double worst = 0.0;
-  Displacements base;
+  RowVectors3d base;
   // (length scale, stress scale): mm -> m and Pa -> MPa, separately and together.
   const double scales[4][2] = {{1.0, 1.0}, {1e-3, 1.0}, {1.0, 1e-6}, {1e-3, 1e-6}};
   for (const auto& sc : scales) {
@@ -364,7 +364,7 @@ TEST(Stability, UnitRescalingChangesResultBy1e8AtMost) {
     SolveResult result;
     ASSERT_TRUE(Solve(*system, scaled, result).ok);
     EXPECT_LE(result.relativeResidual, 1e-9);
-    const Displacements inMm = result.allDisplacement / sc[0];
+    const RowVectors3d inMm = result.allDisplacement / sc[0];
     if (base.size() == 0) base = inMm;
     else
       worst = std::max(worst, RelativeMaxDifference(inMm, base));
@@ -534,7 +534,7 @@ TEST(Stability, LargeStrainAndInvertedCellsAreReported) {
 TEST(Stability, CheckDeformationOnAKnownField) {
   const ShellMesh shell = MakeSphericalShell(2, 1, 1.0, 2.0);
   // Uniform stretch of 20% in x: strain 0.2 everywhere, nothing inverted.
-  Displacements u(shell.mesh.numPoints(), 3);
+  RowVectors3d u(shell.mesh.numPoints(), 3);
   for (Eigen::Index i = 0; i < u.rows(); ++i) u.row(i) << 0.2 * shell.mesh.points(i, 0), 0, 0;
   std::vector<std::string> warnings;
   DeformationReport r = CheckDeformation(shell.mesh, u, warnings, 0.1);

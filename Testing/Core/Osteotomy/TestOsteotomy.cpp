@@ -26,7 +26,7 @@ void AppendSphere(SurfaceMesh& mesh, const Eigen::Vector3d& c, double r, int nu 
                                             std::sin(th) * std::sin(ph), std::cos(th)));
     }
   pts.push_back(c - Eigen::Vector3d(0, 0, r));
-  SurfacePoints all(base + static_cast<Eigen::Index>(pts.size()), 3);
+  RowVectors3d all(base + static_cast<Eigen::Index>(pts.size()), 3);
   if (base > 0)
     all.topRows(base) = mesh.points;
   for (std::size_t k = 0; k < pts.size(); ++k)
@@ -52,7 +52,7 @@ OsteotomyBone TwoPieceBone() {
   const Eigen::Index fixedCount = bone.mesh.numPoints();
   AppendSphere(bone.mesh, Eigen::Vector3d(5, 1, 0), 2.0);
   const Eigen::Index n = bone.mesh.numPoints();
-  bone.displacement = SurfacePoints::Zero(n, 3);
+  bone.displacement = RowVectors3d::Zero(n, 3);
   bone.segmentId.assign(static_cast<std::size_t>(n), 0);
   bone.roiMask.assign(static_cast<std::size_t>(n), 0);
   bone.moves.assign(static_cast<std::size_t>(n), 0);
@@ -151,7 +151,7 @@ TEST(OsteotomyCut, PlaneValidation) {
 }
 
 TEST(OsteotomyCut, SidesAndInsideOut) {
-  SurfacePoints p(4, 3);
+  RowVectors3d p(4, 3);
   p << -2, 0, 0, -1, 0, 0, 1, 0, 0, 2, 0, 0;
   std::vector<CutPlane> planes(1);
   std::vector<std::uint8_t> side;
@@ -308,7 +308,7 @@ TEST(OsteotomyMoveSegment, NonRigidInputKeepsExactDisplacementButNoTransform) {
     bone.displacement(i, 0) = dx;
     bone.mesh.points(i, 0) += dx;
   }
-  const SurfacePoints undeformed = bone.mesh.points - bone.displacement;
+  const RowVectors3d undeformed = bone.mesh.points - bone.displacement;
   OsteotomyMove request;
   request.move.translation = Eigen::Vector3d(0, 0, 4);
   OsteotomyResult r;
