@@ -1,4 +1,4 @@
-// GPU benchmark of issue 4: element stiffness + assembly, per-edit update and precompute, CUDA
+// GPU benchmark: element stiffness + assembly, per-edit update and precompute, CUDA
 // backend against the CPU backend on face-like spherical-shell scenes (Core's MakeFaceLikeScene).
 //
 //   gpu_benchmark [--out results.json] [--cases kidney,heart,mandible,10k,100k,1M]
@@ -260,7 +260,7 @@ int main(int argc, char** argv) {
       cases.push_back(c);
 
   Json top;
-  top.str("benchmark", "FacePlan gpu_benchmark (issue 4)");
+  top.str("benchmark", "FacePlan gpu_benchmark");
   top.num("hardware_threads", std::thread::hardware_concurrency());
   std::shared_ptr<ComputeBackend> gpu;
   std::string gpuWhy;

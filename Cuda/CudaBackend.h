@@ -1,5 +1,5 @@
 #pragma once
-// CUDA implementation of faceplan::ComputeBackend (issue 4).
+// CUDA implementation of faceplan::ComputeBackend.
 //
 // - assembleStiffness: element stiffness Ke = B^T D B V of every tetrahedron on the GPU in double
 //   (same formula and packed 78-entry layout as Core/ElementStiffness.cpp), then the gather of

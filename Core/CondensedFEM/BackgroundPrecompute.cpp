@@ -106,9 +106,4 @@ void BackgroundPrecompute::cancel() {
   }
 }
 
-std::uint64_t BackgroundPrecompute::generation() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return generation_;
-}
-
 } // namespace faceplan

@@ -26,7 +26,6 @@ public:
   bool ready() const;
   // Cancels the running precompute (wait() then reports "cancelled").
   void cancel();
-  std::uint64_t generation() const;
   // Cancels and joins the worker; called for every instance when the process exits.
   void stopForExit();
 

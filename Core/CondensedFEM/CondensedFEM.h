@@ -46,7 +46,7 @@ const char* MethodName(SolveMethod method);
 // QuadraticNodalPressure: the same 10-node cells, but the volumetric (lambda) term uses a
 // continuous pressure on the corner nodes with a lumped pressure mass (P2-P1, NodalPressure.h):
 // exact and symmetric, its error does not grow as nu -> 0.5, but its wider stencil makes the
-// factor ~6x larger and the precompute ~10x slower than Quadratic's.
+// factor and the precompute several times larger than Quadratic's (BENCHMARKS.md).
 enum class ElementOrder { Linear, Quadratic, QuadraticNodalPressure };
 const char* ElementOrderName(ElementOrder order);
 
@@ -62,12 +62,12 @@ struct PrecomputeOptions {
   double memoryBudgetBytes = 0.0;
   // Compute backend for element stiffness, assembly and the dense per-edit update; null = CPU.
   std::shared_ptr<ComputeBackend> backend;
-  // Columns of the response solved per block (bounds the precompute's transient memory).
-  // 128: on the 100k face-like scene as fast as or faster than 32-512 in single runs (noisy; the
-  // solve's gathered rows stay in cache), and half the transient memory of 256.
+  // Columns of the response solved per block (bounds the precompute's transient memory). Large
+  // enough that the solve's gathered rows stay in cache, small enough to halve the transient
+  // memory of 256 (the measurement is in BENCHMARKS.md).
   int responseBlockColumns = 128;
 
-  // ---- stability options (all optional; the defaults keep the original behaviour) ----
+  // Element order and stability options (all optional; the defaults are linear elements).
   ElementOrder elementOrder = ElementOrder::Linear;
   // Quadratic only: places the mid-edge node of a boundary edge (curved boundaries); empty keeps
   // the straight midpoint. Called during the precompute, on the calling thread.
@@ -117,7 +117,7 @@ struct SolveResult {
   std::string backend;
   StageTimings timings; // precompute stages marked reused, plus this solve's own stages
 
-  // ---- diagnostics added for stability (additive) ----
+  // Diagnostics.
   double conditionEstimate = 0.0; // 1 / CHOLMOD rcond of the free block (a cheap lower estimate)
   int refinementSteps = 0;        // double-precision refinement steps this solve needed
   bool redoneInDouble = false;    // a lower-precision response missed the tolerance; done in double
@@ -169,7 +169,7 @@ struct SystemInfo {
   std::string responsePath; // how the dense response was computed and checked (DenseResponse)
   StageTimings precomputeTimings;
 
-  // ---- diagnostics added for stability (additive) ----
+  // Diagnostics.
   double conditionEstimate = 0.0;  // 1 / CHOLMOD rcond of the free block (0 when there is none)
   ElementOrder elementOrder = ElementOrder::Linear;
   long long solverNodes = 0;       // nodes of the solved mesh (corners + mid-edge nodes if quadratic)

@@ -11,7 +11,7 @@ using RowMajorSparse = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 // exceeds `tolerance`, solve for the residual and correct (at most `maxSteps` times). `worst`
 // receives the largest relative residual after refinement and `steps` the refinement steps taken.
 // `fullRowMajor`, when given, is K_FF with both triangles in row-major storage: a product with
-// many right-hand sides then streams each row once (about 2.5x faster than the symmetric view).
+// many right-hand sides then streams each row once (faster than the symmetric view; BENCHMARKS.md).
 // `initial`, when given, is used as the first solution instead of solving for b.
 Status RefinedSolve(const CondensedSystem& sys, const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
                     bool concurrent, double tolerance, int maxSteps, double& worst, int& steps,

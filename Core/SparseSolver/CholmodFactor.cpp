@@ -33,7 +33,7 @@ struct CholmodFactor::Impl {
   Impl() {
     common.supernodal = CHOLMOD_SUPERNODAL;
     // Coarser relaxed supernodes than CHOLMOD's defaults (4/16/48 columns, 0.8/0.1/0.05 zeros):
-    // fewer, larger BLAS calls. The 10k face-like scene factorizes ~25 % faster; 100k is unchanged.
+    // fewer, larger BLAS calls (the measured gain is in BENCHMARKS.md).
     common.nrelax[0] = 16;
     common.nrelax[1] = 64;
     common.nrelax[2] = 128;
@@ -174,9 +174,8 @@ Status CholmodFactor::factorize(const SparseMatrix& upper) {
   cholmod_sparse view = ViewUpper(upper);
   impl_->numeric = false;
   // At most 8 OpenBLAS threads for the supernodal BLAS calls: on the 16-core GPU machine OpenBLAS
-  // with all 16 threads made this factorization 20x slower than with 8 (BENCHMARKS.md, GPU section:
-  // 14.1 s against 0.72 s at 100k tetrahedra, 127 s against 21.6 s at 1M), and fewer threads lose
-  // little elsewhere. A no-op when the BLAS is not OpenBLAS.
+  // with all 16 threads made this factorization many times slower than with 8 (BENCHMARKS.md, GPU
+  // section), and fewer threads lose little elsewhere. A no-op when the BLAS is not OpenBLAS.
   const int blasThreads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
   ScopedBlasThreads cappedBlas(blasThreads);
   const int ok = cholmod_factorize(&view, impl_->factor, &impl_->common);

@@ -1,4 +1,4 @@
-// GPU-against-CPU agreement of the CUDA backend (issue 4). CTest label `gpu`.
+// GPU-against-CPU agreement of the CUDA backend. CTest label `gpu`.
 // Without a usable GPU every case is skipped (GTEST_SKIP), never passed.
 #include "CudaBackend.h"
 #include "CudaTestMesh.h"

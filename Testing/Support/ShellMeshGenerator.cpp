@@ -79,10 +79,6 @@ void SplitPrism(const std::array<int, 6>& v, std::vector<std::array<int, 4>>& te
 
 } // namespace
 
-long long SphericalShellTetCount(int subdivisions, int layers) {
-  return 60LL * subdivisions * subdivisions * layers;
-}
-
 ShellMesh MakeSphericalShell(int subdivisions, int layers, double innerRadius, double outerRadius) {
   const SphereTriangulation sphere = Icosphere(std::max(1, subdivisions));
   layers = std::max(1, layers);

@@ -18,9 +18,6 @@ struct ShellMesh {
 
 ShellMesh MakeSphericalShell(int subdivisions, int layers, double innerRadius, double outerRadius);
 
-// Number of tetrahedra MakeSphericalShell makes: 60 * subdivisions^2 * layers.
-long long SphericalShellTetCount(int subdivisions, int layers);
-
 // A face-like benchmark scene on the shell: inner surface tied to bone, an ROI cap holding about
 // `roiFraction` of the inner nodes (around +z), outer surface kept.
 struct FaceLikeScene {

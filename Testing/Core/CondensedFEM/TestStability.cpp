@@ -1,4 +1,4 @@
-// Numerical stability on stiff and extreme cases (issue 6): near-incompressible tissue and locking,
+// Numerical stability on stiff and extreme cases: near-incompressible tissue and locking,
 // stiffness contrast and unit rescaling, degenerate and sliver elements, under-constrained pieces,
 // large displacements, single-precision per-edit products.
 #include "Common/RelativeDifference.h"
@@ -150,7 +150,7 @@ TEST(Stability, QuadraticElementsDoNotLock) {
     EXPECT_TRUE(q[k]->ok);
     EXPECT_LE(q[k]->residual, 1e-9);
   }
-  std::printf("STABILITY quadratic error ratio 0.499 / 0.45 = %.2f (issue target 1.5)\n", q499.nodalError / q45.nodalError);
+  std::printf("STABILITY quadratic error ratio 0.499 / 0.45 = %.2f (target 1.5)\n", q499.nodalError / q45.nodalError);
   EXPECT_LT(q45.nodalError, 0.1 * linear[0].nodalError);
   EXPECT_LT(q499.nodalError, 0.2 * linear[0].nodalError); // better than linear cells at nu = 0.45
   EXPECT_LT(q499.nodalError, 0.02 * linear[2].nodalError);
@@ -209,7 +209,7 @@ TEST(Stability, DISABLED_QuadraticNodalPressureMeetsLockingBoundOn35kCells) {
     EXPECT_TRUE(r->ok);
     EXPECT_LE(r->residual, 1e-9);
   }
-  std::printf("STABILITY nodal-pressure error ratio 0.499 / 0.45 = %.2f (issue target 1.5)\n", n499.nodalError / n45.nodalError);
+  std::printf("STABILITY nodal-pressure error ratio 0.499 / 0.45 = %.2f (target 1.5)\n", n499.nodalError / n45.nodalError);
   EXPECT_LE(n499.nodalError, 1.5 * n45.nodalError);
 }
 
