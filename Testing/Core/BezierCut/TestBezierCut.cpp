@@ -306,17 +306,24 @@ TEST(BezierCut, FlipNormalCutsTheOtherSide) {
   o.flipNormal = true; // normal -z: the ROI band between the boundary and z = 0.7 is cut
   BezierCutResult r;
   Status s = BezierCut(m, roi.mask, roi.boundary, U, V, o, r);
-  if (s.ok) {
-    for (Eigen::Index i = 0; i < m.numPoints(); ++i)
-      if (r.moved[i]) {
-        EXPECT_LT(m.points(i, 2), 0.7);
-      }
-    ContractReport c = CheckContract(m, r, U, V, Vector3d::Zero());
-    EXPECT_EQ(c.flipped + c.degenerate + c.intersecting + c.unmovedChanged, 0);
-  } else {
-    // Folding the band onto the plane may be impossible; then the error must say so.
-    EXPECT_NE(s.message.find("without folding"), std::string::npos) << s.message;
+  ASSERT_TRUE(s.ok) << s.message;
+  // The unflipped cut of the same ROI moves the cap above the plane instead.
+  BezierCutResult up;
+  o.flipNormal = false;
+  ASSERT_TRUE(BezierCut(m, roi.mask, roi.boundary, U, V, o, up).ok);
+  ASSERT_GT(r.numMoved, 0);
+  ASSERT_GT(up.numMoved, 0);
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i) {
+    if (r.moved[i]) {
+      EXPECT_LT(m.points(i, 2), 0.7) << "vertex " << i << " above the plane moved";
+      EXPECT_NEAR(r.points(i, 2), 0.7, 1e-12) << "vertex " << i << " not on the plane";
+    } else {
+      EXPECT_EQ(r.displacement.row(i).norm(), 0.0) << "unmoved vertex " << i << " changed";
+    }
+    EXPECT_FALSE(r.moved[i] && up.moved[i]) << "vertex " << i << " moved by both sides";
   }
+  ContractReport c = CheckContract(m, r, U, V, Vector3d::Zero());
+  EXPECT_EQ(c.flipped + c.degenerate + c.intersecting + c.unmovedChanged, 0);
 }
 
 TEST(BezierCut, FillRaisesSphereCap) {
