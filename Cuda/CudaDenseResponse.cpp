@@ -61,33 +61,29 @@ struct SupernodalCholesky::Impl {
   DeviceArray deviceX; // numeric factor on the GPU (factorOnGpu)
   double analyzeMs = 0.0, factorizeMs = 0.0, downloadMs = 0.0;
   bool hostNumeric = false;
+
+  // Drops any previous factor (host and device) and runs the ordering and symbolic analysis.
+  Status analyze(const SparseMatrix& upper) {
+    if (!upper.isCompressed() || upper.rows() != upper.cols())
+      return Status::Error("SupernodalCholesky: the matrix must be square and compressed");
+    deviceX.release();
+    hostNumeric = false;
+    downloadMs = 0.0;
+    StageClock clock;
+    const Status status = factor.analyze(upper);
+    analyzeMs = clock.lapMs();
+    return status;
+  }
 };
 
 SupernodalCholesky::SupernodalCholesky() : impl_(std::make_unique<Impl>()) {}
 SupernodalCholesky::~SupernodalCholesky() = default;
 
-namespace {
-
-Status CheckSquareCompressed(const SparseMatrix& upper) {
-  if (!upper.isCompressed() || upper.rows() != upper.cols())
-    return Status::Error("SupernodalCholesky: the matrix must be square and compressed");
-  return Status::Ok();
-}
-
-} // namespace
-
 Status SupernodalCholesky::factor(const SparseMatrix& upper) {
-  Status status = CheckSquareCompressed(upper);
+  Status status = impl_->analyze(upper);
   if (!status)
     return status;
-  impl_->deviceX.release();
-  impl_->hostNumeric = false;
-  impl_->downloadMs = 0.0;
   StageClock clock;
-  status = impl_->factor.analyze(upper);
-  impl_->analyzeMs = clock.lapMs();
-  if (!status)
-    return status;
   status = impl_->factor.factorize(upper);
   impl_->factorizeMs = clock.lapMs();
   if (!status)
@@ -122,18 +118,10 @@ struct FactorResources {
 } // namespace
 
 Status SupernodalCholesky::factorOnGpu(const SparseMatrix& upper, bool hostCopy) {
-  Status status = CheckSquareCompressed(upper);
-  if (!status)
-    return status;
   std::string error;
   if (!detail::InitDevice(error))
     return Status::Error(error);
-  impl_->deviceX.release();
-  impl_->hostNumeric = false;
-  impl_->downloadMs = 0.0;
-  StageClock clock;
-  status = impl_->factor.analyze(upper);
-  impl_->analyzeMs = clock.lapMs();
+  Status status = impl_->analyze(upper);
   if (!status)
     return status;
   if (!detail::FactorAnalysedOnGpu(upper, impl_->factor.cholmodFactor(),
