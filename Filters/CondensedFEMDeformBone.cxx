@@ -123,7 +123,7 @@ BoneSegments ReadBoneSegments(vtkPointSet* bone) {
   }
   out.segmentOfPoint.assign(n, 0);
   NodeSets sets;
-  Points undeformed(n, 3);
+  RowVectors3d undeformed(n, 3);
   RowVectors3d displacement(n, 3);
   vtkDataArray* d = bone->GetPointData()->GetArray("Displacement");
   for (vtkIdType i = 0; i < n; ++i) {
