@@ -1,4 +1,5 @@
 // The Condensation stage: the dense response of the kept DOFs to the ROI DOFs.
+#include "CondensedFEM/DeformationCheck.h"
 #include "CondensedFEM/PrecomputeStages.h"
 
 #include "Common/BlasThreads.h"
@@ -195,6 +196,7 @@ Status Condense(PrecomputeState& state) {
     }
   }
   state.segmentCoupling = SparseMatrix();
+  BuildStrainBounds(sys);
   state.time(Stage::Condensation).ms += state.clock.lapMs();
   return Status::Ok();
 }

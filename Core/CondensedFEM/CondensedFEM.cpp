@@ -2,6 +2,7 @@
 
 #include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/CondensedSystem.h"
+#include "CondensedFEM/DeformationCheck.h"
 #include "CondensedFEM/PrecomputeStages.h"
 #include "CondensedFEM/RefinedSolve.h"
 #include "Mesh/MeshValidation.h"
@@ -15,20 +16,28 @@ namespace faceplan {
 
 const char* MethodName(SolveMethod method) {
   switch (method) {
-  case SolveMethod::Auto: return "Auto";
-  case SolveMethod::DenseResponse: return "DenseResponse";
-  case SolveMethod::CachedFactor: return "CachedFactor";
-  case SolveMethod::RigidSegments: return "RigidSegments";
-  case SolveMethod::FullReference: return "FullReference";
+  case SolveMethod::Auto:
+    return "Auto";
+  case SolveMethod::DenseResponse:
+    return "DenseResponse";
+  case SolveMethod::CachedFactor:
+    return "CachedFactor";
+  case SolveMethod::RigidSegments:
+    return "RigidSegments";
+  case SolveMethod::FullReference:
+    return "FullReference";
   }
   return "?";
 }
 
 const char* ElementOrderName(ElementOrder order) {
   switch (order) {
-  case ElementOrder::Linear: return "Linear";
-  case ElementOrder::Quadratic: return "Quadratic";
-  case ElementOrder::QuadraticNodalPressure: return "QuadraticNodalPressure";
+  case ElementOrder::Linear:
+    return "Linear";
+  case ElementOrder::Quadratic:
+    return "Quadratic";
+  case ElementOrder::QuadraticNodalPressure:
+    return "QuadraticNodalPressure";
   }
   return "?";
 }
@@ -39,15 +48,18 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
                       const std::atomic<bool>* cancel, const ProgressCallback& progress) {
   StageClock total;
   PrecomputeState state(request, cancel, progress);
-  for (Status (*stage)(PrecomputeState&) :
-       {ValidatePrecomputeRequest, SeparateNodes, AssembleStiffness, SeparateBlocks, ReorderFreeDofs}) {
+  for (Status (*stage)(PrecomputeState&) : {ValidatePrecomputeRequest, SeparateNodes,
+                                            AssembleStiffness, SeparateBlocks, ReorderFreeDofs}) {
     Status s = stage(state);
-    if (!s) return s;
+    if (!s)
+      return s;
   }
-  if (Status s = ChooseSolveMethod(state); !s) return s;
+  if (Status s = ChooseSolveMethod(state); !s)
+    return s;
   for (Status (*stage)(PrecomputeState&) : {Factorize, Condense}) {
     Status s = stage(state);
-    if (!s) return s;
+    if (!s)
+      return s;
   }
   SystemInfo& info = state.sys->info;
   info.precomputeTimings[Stage::Total].ms = total.elapsedMs();
@@ -94,52 +106,59 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
                          std::to_string(input.movableDisplacement.rows()));
   if (!input.movableDisplacement.allFinite())
     return Status::Error("prescribed displacements contain NaN or infinite values");
-  const Eigen::VectorXd roi =
-      sys.movableToRoi * Eigen::Map<const Eigen::VectorXd>(input.movableDisplacement.data(), 3 * movable);
+  const Eigen::VectorXd roi = sys.movableToRoi * Eigen::Map<const Eigen::VectorXd>(
+                                                     input.movableDisplacement.data(), 3 * movable);
   const bool rigidProduct = sys.method == SolveMethod::RigidSegments && !input.recoverInterior;
   if (sys.method == SolveMethod::RigidSegments && input.segmentTransforms.empty())
-    return Status::Error("RigidSegments needs one transform per segment (SolveInput::segmentTransforms)");
+    return Status::Error(
+        "RigidSegments needs one transform per segment (SolveInput::segmentTransforms)");
   if (!input.segmentTransforms.empty() && sys.segments > 0) {
-    Status check = CheckSegmentDisplacements(sys.cornerMesh.points, sys.segmentSets,
-                                             input.segmentTransforms, input.movableDisplacement);
-    if (!check) return check;
+    Status check =
+        CheckSegmentDisplacements(sys.cornerMesh.points, sys.segmentSets, input.segmentTransforms,
+                                  input.movableDisplacement, sys.meshExtent);
+    if (!check)
+      return check;
   }
   result.timings[Stage::BoundaryCondition] = {clock.lapMs(), false};
 
-  // Loads on the free DOFs.
+  // Loads on the free DOFs (none on most edits: then no vector is built).
   const int freeDofs = 3 * layout.freeNodes();
-  Eigen::VectorXd load = Eigen::VectorXd::Zero(freeDofs);
+  if (!input.gravity.allFinite())
+    return Status::Error("gravity contains NaN values");
+  const bool loadGiven = input.nodalLoads.size() > 0 || input.gravity.squaredNorm() > 0.0;
+  Eigen::VectorXd load = Eigen::VectorXd::Zero(loadGiven ? freeDofs : 0);
   if (input.nodalLoads.size() > 0) {
     if (input.nodalLoads.rows() != sys.numOutputNodes)
       return Status::Error("nodal loads must have one row per mesh point");
-    if (!input.nodalLoads.allFinite()) return Status::Error("nodal loads contain NaN values");
+    if (!input.nodalLoads.allFinite())
+      return Status::Error("nodal loads contain NaN values");
     for (int pos = 0; pos < layout.freeNodes(); ++pos)
       if (layout.meshNode[pos] < sys.numOutputNodes) // mid-edge nodes of quadratic cells get none
         load.segment<3>(3 * pos) = input.nodalLoads.row(layout.meshNode[pos]).transpose();
   }
-  if (!input.gravity.allFinite()) return Status::Error("gravity contains NaN values");
   if (input.gravity.squaredNorm() > 0.0)
     for (int pos = 0; pos < layout.freeNodes(); ++pos)
       load.segment<3>(3 * pos) += sys.nodeMass[pos] * input.gravity;
   // Sliding nodes: loads in their normal frame; the normal one is taken by the contact.
-  for (int pos = 0; pos < layout.freeNodes(); ++pos)
-    if (const int slide = sys.slidingOfPosition.empty() ? -1 : sys.slidingOfPosition[pos]; slide >= 0) {
+  for (int pos = 0; loadGiven && pos < layout.freeNodes(); ++pos)
+    if (const int slide = sys.slidingOfPosition.empty() ? -1 : sys.slidingOfPosition[pos];
+        slide >= 0) {
       const Eigen::Vector3d local = sys.slidingFrame[slide].transpose() * load.segment<3>(3 * pos);
       load.segment<3>(3 * pos) << 0.0, local[1], local[2];
     }
-  const bool hasLoad = load.squaredNorm() > 0.0;
+  const bool hasLoad = loadGiven && load.squaredNorm() > 0.0;
   result.timings[Stage::Load] = {clock.lapMs(), false};
 
-  Eigen::VectorXd keptFree, freeValues;
-  const bool fullSolve = !(sys.method == SolveMethod::DenseResponse || rigidProduct) ||
-                         input.recoverInterior;
+  Eigen::VectorXd keptFree, freeValues, parameters;
+  const bool fullSolve =
+      !(sys.method == SolveMethod::DenseResponse || rigidProduct) || input.recoverInterior;
   if (freeDofs == 0) {
     freeValues.resize(0);
   } else if (!fullSolve) {
-    const Eigen::VectorXd parameters =
-        rigidProduct ? SegmentParameters(sys.segmentSets, input.segmentTransforms, input.movableDisplacement)
-                     : roi;
-    const Status applied = sys.responseOperator->apply(parameters, keptFree);
+    if (rigidProduct)
+      parameters =
+          SegmentParameters(sys.segmentSets, input.segmentTransforms, input.movableDisplacement);
+    const Status applied = sys.responseOperator->apply(rigidProduct ? parameters : roi, keptFree);
     if (!applied)
       return Status::Error("dense response update failed: " + applied.message);
     result.relativeResidual = sys.responseResidual;
@@ -154,7 +173,7 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
       keptFree += loadResponse.head(keptFree.size());
     }
   } else {
-    Eigen::VectorXd rhs = load;
+    Eigen::VectorXd rhs = loadGiven ? load : Eigen::VectorXd::Zero(freeDofs);
     Eigen::VectorXd roiLoad; // -K_FR roi: non-zero only on the ROI-coupled (trailing) DOFs
     if (roi.size() > 0) {
       roiLoad.noalias() = -(sys.kfr * roi);
@@ -182,30 +201,26 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
     Status s = RefinedSolve(sys, rhs, x, false, sys.residualTolerance, sys.maxRefinementSteps,
                             result.relativeResidual, result.refinementSteps, nullptr,
                             initial.size() > 0 ? &initial : nullptr);
-    if (!s) return s;
+    if (!s)
+      return s;
     freeValues = x.col(0);
     keptFree = freeValues.head(3 * layout.keptFree);
   }
   result.timings[Stage::Solve] = {clock.lapMs(), false};
 
   // Outputs in the caller's numbering.
-  auto valueOf = [&](int node, const Eigen::VectorXd& freeSource) -> Eigen::RowVector3d {
-    const int pos = layout.dofNode[node];
-    if (pos < 0) return Eigen::RowVector3d::Zero();
-    if (pos >= layout.freeNodes()) return roi.segment<3>(3 * (pos - layout.freeNodes())).transpose();
-    if (3 * pos + 2 >= freeSource.size()) return Eigen::RowVector3d::Zero();
-    const int slide = sys.slidingOfPosition.empty() ? -1 : sys.slidingOfPosition[pos];
-    if (slide < 0) return freeSource.segment<3>(3 * pos).transpose();
-    Eigen::Vector3d local = freeSource.segment<3>(3 * pos); // normal, tangent, tangent
-    local[0] = sys.slidingRoiDof[slide] >= 0 ? roi[sys.slidingRoiDof[slide]] : 0.0;
-    return (sys.slidingFrame[slide] * local).transpose();
-  };
-  result.keptDisplacement.resize(static_cast<Eigen::Index>(sys.kept.size()), 3);
-  for (size_t k = 0; k < sys.kept.size(); ++k) result.keptDisplacement.row(k) = valueOf(sys.kept[k], keptFree);
+  const Eigen::Index keptCount = static_cast<Eigen::Index>(sys.kept.size());
+  if (sys.keptIsFreeBlock && keptFree.size() >= 3 * keptCount) {
+    result.keptDisplacement = Eigen::Map<const RowVectors3d>(keptFree.data(), keptCount, 3);
+  } else {
+    result.keptDisplacement.resize(keptCount, 3);
+    for (Eigen::Index k = 0; k < keptCount; ++k)
+      result.keptDisplacement.row(k) = NodeDisplacement(sys, sys.kept[k], roi, keptFree);
+  }
   if (input.recoverInterior) {
     result.allDisplacement.resize(sys.numOutputNodes, 3);
     for (Eigen::Index i = 0; i < sys.numOutputNodes; ++i)
-      result.allDisplacement.row(i) = valueOf(static_cast<int>(i), freeValues);
+      result.allDisplacement.row(i) = NodeDisplacement(sys, static_cast<int>(i), roi, freeValues);
   }
   if (!result.keptDisplacement.allFinite() || !result.allDisplacement.allFinite() ||
       !std::isfinite(result.relativeResidual))
@@ -227,11 +242,21 @@ Status SolveImpl(const CondensedSystem& sys, const SolveInput& input, SolveResul
       deformation = CheckDeformation(sys.cornerMesh, result.allDisplacement, status.warnings,
                                      sys.strainWarningLimit);
     } else if (!sys.checkableCells.empty()) {
-      RowVectors3d known = RowVectors3d::Zero(sys.numOutputNodes, 3);
-      for (Eigen::Index k = 0; k < movable; ++k) known.row(sys.movableNodes[k]) = input.movableDisplacement.row(k);
-      for (size_t k = 0; k < sys.kept.size(); ++k) known.row(sys.kept[k]) = result.keptDisplacement.row(k);
-      deformation = CheckDeformation(sys.cornerMesh, known, status.warnings, sys.strainWarningLimit,
-                                     &sys.checkableCells);
+      if (rigidProduct && !hasLoad && !sys.boundedCells.empty()) {
+        // Linear in the segment parameters: cells ordered by their strain bound
+        // (DeformationCheck.h).
+        deformation =
+            CheckBoundedCells(sys, parameters, input.segmentTransforms, input.movableDisplacement,
+                              result.keptDisplacement, status.warnings);
+      } else {
+        RowVectors3d known = RowVectors3d::Zero(sys.numOutputNodes, 3);
+        for (Eigen::Index k = 0; k < movable; ++k)
+          known.row(sys.movableNodes[k]) = input.movableDisplacement.row(k);
+        for (size_t k = 0; k < sys.kept.size(); ++k)
+          known.row(sys.kept[k]) = result.keptDisplacement.row(k);
+        deformation = CheckDeformation(sys.cornerMesh, known, status.warnings,
+                                       sys.strainWarningLimit, &sys.checkableCells);
+      }
     }
     result.largestStrain = deformation.largestStrain;
     result.invertedCells = static_cast<long long>(deformation.invertedCells.size());
@@ -248,6 +273,8 @@ Status Solve(const CondensedSystem& system, const SolveInput& input, SolveResult
                                  [&]() -> Status { return SolveImpl(system, input, result); });
 }
 
-SystemInfo Describe(const CondensedSystem& system) { return system.info; }
+SystemInfo Describe(const CondensedSystem& system) {
+  return system.info;
+}
 
 } // namespace faceplan

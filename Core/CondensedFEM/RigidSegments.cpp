@@ -15,7 +15,7 @@ int SegmentCount(const NodeSets& sets) {
 
 Status CheckSegmentDisplacements(const RowVectors3d& points, const NodeSets& sets,
                                  const std::vector<SegmentTransform>& transforms,
-                                 const RowVectors3d& movableDisplacement) {
+                                 const RowVectors3d& movableDisplacement, double meshExtent) {
   const int segments = SegmentCount(sets);
   if (static_cast<int>(transforms.size()) != segments)
     return Status::Error("expected " + std::to_string(segments) + " segment transforms, got " +
@@ -25,8 +25,10 @@ Status CheckSegmentDisplacements(const RowVectors3d& points, const NodeSets& set
       return Status::Error("the transform of segment " + std::to_string(s + 1) + " is not finite");
   if (movableDisplacement.rows() != static_cast<Eigen::Index>(sets.movable.size()))
     return Status::Error("expected one displacement per movable node");
-  const double extent =
-      points.rows() > 0 ? (points.colwise().maxCoeff() - points.colwise().minCoeff()).norm() : 1.0;
+  const double extent = meshExtent >= 0.0 ? meshExtent
+                        : points.rows() > 0
+                            ? (points.colwise().maxCoeff() - points.colwise().minCoeff()).norm()
+                            : 1.0;
   std::vector<double> largest(segments + 1, 0.0);
   for (size_t k = 0; k < sets.movableSegment.size(); ++k)
     largest[sets.movableSegment[k]] =
@@ -101,8 +103,8 @@ Eigen::VectorXd SegmentParameters(const NodeSets& sets,
 }
 
 RowVectors3d FollowSegments(const RowVectors3d& points, const NodeSets& sets,
-                             const std::vector<SegmentTransform>& transforms,
-                             const RowVectors3d& movableDisplacement) {
+                            const std::vector<SegmentTransform>& transforms,
+                            const RowVectors3d& movableDisplacement) {
   RowVectors3d out = movableDisplacement;
   for (size_t k = 0; k < sets.movableSegment.size(); ++k) {
     const int s = sets.movableSegment[k];

@@ -23,7 +23,8 @@ int SegmentCount(const NodeSets& sets);
 // segment, the node and the mismatch.
 Status CheckSegmentDisplacements(const RowVectors3d& points, const NodeSets& sets,
                                  const std::vector<SegmentTransform>& transforms,
-                                 const RowVectors3d& movableDisplacement);
+                                 const RowVectors3d& movableDisplacement,
+                                 double meshExtent = -1.0); // < 0: computed from `points`
 
 // B: the caller's movable displacements (3 per node, node-major) as a linear function of the
 // parameters p = [12 per segment: row-major [R - I | t]; 3 per movable node of segment 0]. Nodes
@@ -38,7 +39,7 @@ Eigen::VectorXd SegmentParameters(const NodeSets& sets,
 // The movable displacements with every segment node's row replaced by its segment's motion at the
 // node, (R - I) x + t: a node tied to a rigidly moved segment moves with it as one body.
 RowVectors3d FollowSegments(const RowVectors3d& points, const NodeSets& sets,
-                             const std::vector<SegmentTransform>& transforms,
-                             const RowVectors3d& movableDisplacement);
+                            const std::vector<SegmentTransform>& transforms,
+                            const RowVectors3d& movableDisplacement);
 
 } // namespace faceplan

@@ -254,6 +254,10 @@ Status SeparateNodes(PrecomputeState& state) {
   sys.strainWarningLimit = options.strainWarningLimit;
   sys.numOutputNodes = mesh.numPoints();
   sys.cornerMesh = mesh;
+  sys.meshExtent =
+      mesh.numPoints() > 0
+          ? (mesh.points.colwise().maxCoeff() - mesh.points.colwise().minCoeff()).norm()
+          : 1.0;
   sys.kept = request.sets.kept;
   sys.movableNodes = request.sets.movable;
   state.quadratic = options.elementOrder == ElementOrder::Quadratic ||
@@ -300,6 +304,10 @@ Status SeparateNodes(PrecomputeState& state) {
         sys.checkableCells.push_back(static_cast<int>(e));
   }
   DescribeSlidingNodes(request.sets, sys);
+  sys.keptIsFreeBlock = true;
+  for (size_t k = 0; k < sys.kept.size() && sys.keptIsFreeBlock; ++k)
+    sys.keptIsFreeBlock = sys.layout.dofNode[sys.kept[k]] == static_cast<int>(k) &&
+                          (sys.slidingOfPosition.empty() || sys.slidingOfPosition[k] < 0);
   sys.movableToRoi = MovableToRoi(sys.layout, sys.derivedMovable, request.sets);
   sys.segments = SegmentCount(request.sets);
   if (sys.segments > 0) {

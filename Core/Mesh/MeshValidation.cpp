@@ -17,8 +17,10 @@ namespace {
 std::string IdList(const std::vector<long long>& ids) {
   std::ostringstream out;
   const size_t shown = std::min<size_t>(ids.size(), 10);
-  for (size_t k = 0; k < shown; ++k) out << (k ? ", " : "") << ids[k];
-  if (ids.size() > shown) out << ", ... (" << ids.size() << " in all)";
+  for (size_t k = 0; k < shown; ++k)
+    out << (k ? ", " : "") << ids[k];
+  if (ids.size() > shown)
+    out << ", ... (" << ids.size() << " in all)";
   return out.str();
 }
 
@@ -34,22 +36,27 @@ int FindRoot(std::vector<int>& parent, int i) {
 
 Status ValidateMeshAndMaterials(const TetMesh& mesh, const Materials& materials) {
   const Eigen::Index n = mesh.numPoints(), m = mesh.numTets();
-  if (m == 0) return Status::Error("the mesh has no tetrahedra");
+  if (m == 0)
+    return Status::Error("the mesh has no tetrahedra");
   if (!mesh.points.allFinite()) {
     std::vector<long long> bad;
     for (Eigen::Index i = 0; i < n; ++i)
-      if (!mesh.points.row(i).allFinite()) bad.push_back(i);
+      if (!mesh.points.row(i).allFinite())
+        bad.push_back(i);
     return Status::Error("non-finite (NaN or infinite) coordinates at points " + IdList(bad));
   }
   std::vector<long long> outOfRange;
   for (Eigen::Index e = 0; e < m; ++e)
     for (int k = 0; k < 4; ++k)
-      if (mesh.tets(e, k) < 0 || mesh.tets(e, k) >= n) outOfRange.push_back(e);
+      if (mesh.tets(e, k) < 0 || mesh.tets(e, k) >= n)
+        outOfRange.push_back(e);
   if (!outOfRange.empty())
-    return Status::Error("tetrahedra reference points that do not exist: cells " + IdList(outOfRange));
+    return Status::Error("tetrahedra reference points that do not exist: cells " +
+                         IdList(outOfRange));
 
   auto checkSize = [m](const Eigen::VectorXd& v, const char* what, bool optional) -> std::string {
-    if (optional && v.size() == 0) return {};
+    if (optional && v.size() == 0)
+      return {};
     if (v.size() != 1 && v.size() != m)
       return std::string(what) + " must have 1 or " + std::to_string(m) + " values, not " +
              std::to_string(v.size());
@@ -58,18 +65,22 @@ Status ValidateMeshAndMaterials(const TetMesh& mesh, const Materials& materials)
   for (auto msg : {checkSize(materials.youngsModulus, "Young's modulus", false),
                    checkSize(materials.poissonRatio, "Poisson ratio", false),
                    checkSize(materials.density, "density", true)})
-    if (!msg.empty()) return Status::Error(msg);
+    if (!msg.empty())
+      return Status::Error(msg);
 
   std::vector<long long> badE, badNu;
   for (Eigen::Index e = 0; e < materials.youngsModulus.size(); ++e)
-    if (!(materials.youngsModulus[e] > 0.0) || !std::isfinite(materials.youngsModulus[e])) badE.push_back(e);
+    if (!(materials.youngsModulus[e] > 0.0) || !std::isfinite(materials.youngsModulus[e]))
+      badE.push_back(e);
   for (Eigen::Index e = 0; e < materials.poissonRatio.size(); ++e)
-    if (!(materials.poissonRatio[e] > -1.0 && materials.poissonRatio[e] < 0.5)) badNu.push_back(e);
+    if (!(materials.poissonRatio[e] > -1.0 && materials.poissonRatio[e] < 0.5))
+      badNu.push_back(e);
   if (!badE.empty())
     return Status::Error("Young's modulus must be positive and finite (E <= 0 or NaN in cells " +
                          IdList(badE) + ")");
   if (!badNu.empty())
-    return Status::Error("Poisson ratio must lie in (-1, 0.5) (violated in cells " + IdList(badNu) + ")");
+    return Status::Error("Poisson ratio must lie in (-1, 0.5) (violated in cells " + IdList(badNu) +
+                         ")");
 
   // A volume is "zero" relative to the cube of the mesh's edge scale.
   const double scale = (mesh.points.colwise().maxCoeff() - mesh.points.colwise().minCoeff()).norm();
@@ -77,15 +88,20 @@ Status ValidateMeshAndMaterials(const TetMesh& mesh, const Materials& materials)
   std::vector<long long> inverted, flat;
   TetCorners corners;
   for (Eigen::Index e = 0; e < m; ++e) {
-    for (int k = 0; k < 4; ++k) corners.row(k) = mesh.points.row(mesh.tets(e, k));
+    for (int k = 0; k < 4; ++k)
+      corners.row(k) = mesh.points.row(mesh.tets(e, k));
     const double v = TetVolume(corners);
-    if (v < -zeroVolume) inverted.push_back(e);
-    else if (v <= zeroVolume) flat.push_back(e);
+    if (v < -zeroVolume)
+      inverted.push_back(e);
+    else if (v <= zeroVolume)
+      flat.push_back(e);
   }
   if (!inverted.empty() || !flat.empty()) {
     std::string msg = "tetrahedra with non-positive volume:";
-    if (!flat.empty()) msg += " zero-volume cells " + IdList(flat) + ";";
-    if (!inverted.empty()) msg += " inverted cells " + IdList(inverted) + ";";
+    if (!flat.empty())
+      msg += " zero-volume cells " + IdList(flat) + ";";
+    if (!inverted.empty())
+      msg += " inverted cells " + IdList(inverted) + ";";
     return Status::Error(msg);
   }
   return Status::Ok();
@@ -102,16 +118,19 @@ int ConnectedComponents(const TetMesh& mesh, std::vector<int>& componentOfNode) 
     for (int k = 1; k < 4; ++k) {
       used[mesh.tets(e, k)] = 1;
       const int rk = FindRoot(parent, mesh.tets(e, k));
-      if (rk != r0) parent[rk] = r0;
+      if (rk != r0)
+        parent[rk] = r0;
     }
   }
   componentOfNode.assign(n, -1);
   std::vector<int> label(n, -1);
   int count = 0;
   for (Eigen::Index i = 0; i < n; ++i) {
-    if (!used[i]) continue;
+    if (!used[i])
+      continue;
     const int root = FindRoot(parent, static_cast<int>(i));
-    if (label[root] < 0) label[root] = count++;
+    if (label[root] < 0)
+      label[root] = count++;
     componentOfNode[i] = label[root];
   }
   return count;
@@ -125,13 +144,16 @@ Status CheckEveryComponentConstrained(const TetMesh& mesh, const std::vector<int
   const int count = ConnectedComponents(mesh, component);
   std::vector<char> held(count, 0);
   for (int node : constrained)
-    if (node >= 0 && node < mesh.numPoints() && component[node] >= 0) held[component[node]] = 1;
+    if (node >= 0 && node < mesh.numPoints() && component[node] >= 0)
+      held[component[node]] = 1;
   for (int c = 0; c < count; ++c) {
-    if (held[c]) continue;
+    if (held[c])
+      continue;
     long long cells = 0;
     Eigen::RowVector3d lo = Eigen::RowVector3d::Constant(INFINITY), hi = -lo;
     for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-      if (component[mesh.tets(e, 0)] != c) continue;
+      if (component[mesh.tets(e, 0)] != c)
+        continue;
       ++cells;
       for (int k = 0; k < 4; ++k) {
         lo = lo.cwiseMin(mesh.points.row(mesh.tets(e, k)));
@@ -140,8 +162,8 @@ Status CheckEveryComponentConstrained(const TetMesh& mesh, const std::vector<int
     }
     std::ostringstream out;
     out << "a free piece of the mesh is attached to no constrained node (component " << c << " of "
-        << count << ": " << cells << " cells, bounds [" << lo(0) << ", " << hi(0) << "] x [" << lo(1)
-        << ", " << hi(1) << "] x [" << lo(2) << ", " << hi(2)
+        << count << ": " << cells << " cells, bounds [" << lo(0) << ", " << hi(0) << "] x ["
+        << lo(1) << ", " << hi(1) << "] x [" << lo(2) << ", " << hi(2)
         << "]); tie it to bone or remove it, or its stiffness matrix is singular";
     return Status::Error(out.str());
   }
@@ -152,8 +174,10 @@ double TetMeanRatio(const Eigen::Matrix<double, 4, 3>& c) {
   const double v = std::abs(TetVolume(c));
   double sum = 0.0;
   for (int i = 0; i < 4; ++i)
-    for (int j = i + 1; j < 4; ++j) sum += (c.row(i) - c.row(j)).squaredNorm();
-  if (!(sum > 0.0)) return 0.0;
+    for (int j = i + 1; j < 4; ++j)
+      sum += (c.row(i) - c.row(j)).squaredNorm();
+  if (!(sum > 0.0))
+    return 0.0;
   return 12.0 * std::cbrt(3.0 * v * 3.0 * v) / sum;
 }
 
@@ -162,18 +186,21 @@ std::string CheckElementQuality(const TetMesh& mesh, double threshold, QualityRe
   std::vector<std::pair<double, long long>> low;
   TetCorners corners;
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-    for (int k = 0; k < 4; ++k) corners.row(k) = mesh.points.row(mesh.tets(e, k));
+    for (int k = 0; k < 4; ++k)
+      corners.row(k) = mesh.points.row(mesh.tets(e, k));
     const double q = TetMeanRatio(corners);
     if (q < report.worstQuality) {
       report.worstQuality = q;
       report.worstCell = e;
     }
-    if (q < threshold) low.push_back({q, e});
+    if (q < threshold)
+      low.push_back({q, e});
   }
   report.belowThreshold = static_cast<long long>(low.size());
   const size_t shown = std::min<size_t>(low.size(), 10);
   std::partial_sort(low.begin(), low.begin() + shown, low.end());
-  for (size_t k = 0; k < shown; ++k) report.worstIds.push_back(low[k].second);
+  for (size_t k = 0; k < shown; ++k)
+    report.worstIds.push_back(low[k].second);
   std::string warning;
   if (!low.empty()) {
     std::ostringstream msg;
@@ -183,48 +210,67 @@ std::string CheckElementQuality(const TetMesh& mesh, double threshold, QualityRe
         << IdList(report.worstIds) << "); the solve is exact, but stresses there are unreliable";
     warning = msg.str();
   }
-  if (out) *out = report;
+  if (out)
+    *out = report;
   return warning;
 }
 
-DeformationReport CheckDeformation(const TetMesh& mesh,
-                                   const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& u,
-                                   std::vector<std::string>& warnings, double strainLimit,
-                                   const std::vector<int>* cells) {
-  DeformationReport report;
-  const Eigen::Index count = cells ? static_cast<Eigen::Index>(cells->size()) : mesh.numTets();
-  if (u.rows() < mesh.numPoints()) return report;
-  for (Eigen::Index k = 0; k < count; ++k) {
-    const Eigen::Index e = cells ? (*cells)[k] : k;
-    Eigen::Matrix3d edges, du;
-    for (int j = 0; j < 3; ++j) {
-      edges.col(j) = (mesh.points.row(mesh.tets(e, j + 1)) - mesh.points.row(mesh.tets(e, 0))).transpose();
-      du.col(j) = (u.row(mesh.tets(e, j + 1)) - u.row(mesh.tets(e, 0))).transpose();
-    }
-    if (!(edges.determinant() > 0.0)) continue;
-    const Eigen::Matrix3d grad = du * edges.inverse(); // d u_i / d x_j
-    const Eigen::Matrix3d strain = 0.5 * (grad + grad.transpose());
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(strain, Eigen::EigenvaluesOnly);
-    const double largest = eig.eigenvalues().cwiseAbs().maxCoeff();
-    ++report.cellsChecked;
-    if (largest > report.largestStrain) {
-      report.largestStrain = largest;
-      report.largestStrainCell = e;
-    }
-    if (!((Eigen::Matrix3d::Identity() + grad).determinant() > 0.0)) report.invertedCells.push_back(e);
-  }
+CellDeformation EvaluateCellDeformation(const Eigen::Matrix3d& gradient) {
+  const Eigen::Matrix3d strain = 0.5 * (gradient + gradient.transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(strain, Eigen::EigenvaluesOnly);
+  CellDeformation cell;
+  cell.largestStrain = eig.eigenvalues().cwiseAbs().maxCoeff();
+  cell.inverted = !((Eigen::Matrix3d::Identity() + gradient).determinant() > 0.0);
+  return cell;
+}
+
+void AppendDeformationWarnings(const DeformationReport& report, double strainLimit,
+                               std::vector<std::string>& warnings) {
   if (report.largestStrain > strainLimit) {
     std::ostringstream msg;
     msg.precision(3);
-    msg << "largest strain " << 100.0 * report.largestStrain << "% (cell " << report.largestStrainCell
-        << ") exceeds " << 100.0 * strainLimit
+    msg << "largest strain " << 100.0 * report.largestStrain << "% (cell "
+        << report.largestStrainCell << ") exceeds " << 100.0 * strainLimit
         << "%: linear FEM is outside its small-strain range, so the result is only qualitative";
     warnings.push_back(msg.str());
   }
   if (!report.invertedCells.empty())
     warnings.push_back(std::to_string(report.invertedCells.size()) +
                        " tetrahedra are inverted in the deformed result (cells " +
-                       IdList(report.invertedCells) + "): the displacement is too large for linear FEM");
+                       IdList(report.invertedCells) +
+                       "): the displacement is too large for linear FEM");
+}
+
+DeformationReport CheckDeformation(
+    const TetMesh& mesh, const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& u,
+    std::vector<std::string>& warnings, double strainLimit, const std::vector<int>* cells) {
+  DeformationReport report;
+  const Eigen::Index count = cells ? static_cast<Eigen::Index>(cells->size()) : mesh.numTets();
+  if (u.rows() < mesh.numPoints())
+    return report;
+  for (Eigen::Index k = 0; k < count; ++k) {
+    const Eigen::Index e = cells ? (*cells)[k] : k;
+    Eigen::Matrix3d edges, du;
+    for (int j = 0; j < 3; ++j) {
+      edges.col(j) =
+          (mesh.points.row(mesh.tets(e, j + 1)) - mesh.points.row(mesh.tets(e, 0))).transpose();
+      du.col(j) = (u.row(mesh.tets(e, j + 1)) - u.row(mesh.tets(e, 0))).transpose();
+    }
+    if (!(edges.determinant() > 0.0))
+      continue;
+    const Eigen::Matrix3d gradient = du * edges.inverse();
+    ++report.cellsChecked;
+    if (!CellMayMatter(gradient, report.largestStrain))
+      continue;
+    const CellDeformation cell = EvaluateCellDeformation(gradient);
+    if (cell.largestStrain > report.largestStrain) {
+      report.largestStrain = cell.largestStrain;
+      report.largestStrainCell = e;
+    }
+    if (cell.inverted)
+      report.invertedCells.push_back(e);
+  }
+  AppendDeformationWarnings(report, strainLimit, warnings);
   return report;
 }
 
@@ -238,7 +284,8 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
     for (int k = 0; k < 4; ++k) {
       std::array<int, 3> f;
       for (int j = 0, t = 0; j < 4; ++j)
-        if (j != k) f[t++] = mesh.tets(e, j);
+        if (j != k)
+          f[t++] = mesh.tets(e, j);
       std::sort(f.begin(), f.end());
       faces[e * 4 + k] = {f, static_cast<int>(e)};
     }
@@ -246,19 +293,23 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
   for (size_t k = 1; k < faces.size(); ++k)
     if (faces[k].first == faces[k - 1].first) {
       const int a = FindRoot(parent, faces[k].second), b = FindRoot(parent, faces[k - 1].second);
-      if (a != b) parent[a] = b;
+      if (a != b)
+        parent[a] = b;
     }
   std::vector<int> pieceOf(m), label(m, -1);
   int pieces = 0;
   for (Eigen::Index e = 0; e < m; ++e) {
     const int r = FindRoot(parent, static_cast<int>(e));
-    if (label[r] < 0) label[r] = pieces++;
+    if (label[r] < 0)
+      label[r] = pieces++;
     pieceOf[e] = label[r];
   }
-  if (pieces == 0) return Status::Ok();
+  if (pieces == 0)
+    return Status::Ok();
   std::vector<std::vector<int>> nodesOf(pieces);
   for (Eigen::Index e = 0; e < m; ++e)
-    for (int k = 0; k < 4; ++k) nodesOf[pieceOf[e]].push_back(mesh.tets(e, k));
+    for (int k = 0; k < 4; ++k)
+      nodesOf[pieceOf[e]].push_back(mesh.tets(e, k));
   for (auto& v : nodesOf) {
     std::sort(v.begin(), v.end());
     v.erase(std::unique(v.begin(), v.end()), v.end());
@@ -267,12 +318,14 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
   // True when the held nodes among `nodes` include three non-collinear points.
   std::vector<char> held(n, 0);
   for (int i : constrained)
-    if (i >= 0 && i < n) held[i] = 1;
+    if (i >= 0 && i < n)
+      held[i] = 1;
   auto spans = [&](const std::vector<int>& nodes) {
     int first = -1, second = -1;
     double farthest = 0.0;
     for (int i : nodes) {
-      if (!held[i]) continue;
+      if (!held[i])
+        continue;
       if (first < 0) {
         first = i;
         continue;
@@ -283,12 +336,15 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
         second = i;
       }
     }
-    if (second < 0 || farthest <= 1e-9 * scale) return false;
+    if (second < 0 || farthest <= 1e-9 * scale)
+      return false;
     const Eigen::RowVector3d axis = (mesh.points.row(second) - mesh.points.row(first)) / farthest;
     for (int i : nodes) {
-      if (!held[i]) continue;
+      if (!held[i])
+        continue;
       const Eigen::RowVector3d d = mesh.points.row(i) - mesh.points.row(first);
-      if ((d - d.dot(axis) * axis).norm() > 1e-6 * farthest) return true;
+      if ((d - d.dot(axis) * axis).norm() > 1e-6 * farthest)
+        return true;
     }
     return false;
   };
@@ -296,18 +352,22 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
   for (bool changed = true; changed;) {
     changed = false;
     for (int p = 0; p < pieces; ++p) {
-      if (pieceHeld[p] || !spans(nodesOf[p])) continue;
+      if (pieceHeld[p] || !spans(nodesOf[p]))
+        continue;
       pieceHeld[p] = 1;
       changed = true;
-      for (int i : nodesOf[p]) held[i] = 1; // a held piece holds the nodes it shares
+      for (int i : nodesOf[p])
+        held[i] = 1; // a held piece holds the nodes it shares
     }
   }
   for (int p = 0; p < pieces; ++p) {
-    if (pieceHeld[p]) continue;
+    if (pieceHeld[p])
+      continue;
     long long cells = 0;
     Eigen::RowVector3d lo = Eigen::RowVector3d::Constant(INFINITY), hi = -lo;
     for (Eigen::Index e = 0; e < m; ++e) {
-      if (pieceOf[e] != p) continue;
+      if (pieceOf[e] != p)
+        continue;
       ++cells;
       for (int k = 0; k < 4; ++k) {
         lo = lo.cwiseMin(mesh.points.row(mesh.tets(e, k)));
@@ -315,12 +375,14 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
       }
     }
     int heldNodes = 0;
-    for (int i : nodesOf[p]) heldNodes += held[i];
+    for (int i : nodesOf[p])
+      heldNodes += held[i];
     std::ostringstream out;
     out << "a piece of the mesh can move rigidly (piece " << p << " of " << pieces
         << " face-connected pieces: " << cells << " cells, bounds [" << lo(0) << ", " << hi(0)
-        << "] x [" << lo(1) << ", " << hi(1) << "] x [" << lo(2) << ", " << hi(2) << "]); it is held by "
-        << heldNodes << " node(s) that are constrained or shared with held tissue, which do not span "
+        << "] x [" << lo(1) << ", " << hi(1) << "] x [" << lo(2) << ", " << hi(2)
+        << "]); it is held by " << heldNodes
+        << " node(s) that are constrained or shared with held tissue, which do not span "
         << "a plane (it hangs on a node or an edge); tie it to bone or remove it, or its stiffness "
         << "matrix is singular";
     return Status::Error(out.str());

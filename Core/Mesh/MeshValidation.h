@@ -30,27 +30,49 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
 double TetMeanRatio(const Eigen::Matrix<double, 4, 3>& corners);
 
 struct QualityReport {
-  long long belowThreshold = 0;     // cells with quality < threshold
-  std::vector<long long> worstIds;  // the first few of them, worst first
+  long long belowThreshold = 0;    // cells with quality < threshold
+  std::vector<long long> worstIds; // the first few of them, worst first
   double worstQuality = 1.0;
   long long worstCell = -1;
 };
 
 // Cells whose mean ratio is below `threshold` (slivers). Returns a warning text (empty when none).
-std::string CheckElementQuality(const TetMesh& mesh, double threshold, QualityReport* report = nullptr);
+std::string CheckElementQuality(const TetMesh& mesh, double threshold,
+                                QualityReport* report = nullptr);
 
 struct DeformationReport {
-  double largestStrain = 0.0;       // largest |principal value| of the small strain, over cells
+  double largestStrain = 0.0; // largest |principal value| of the small strain, over cells
   long long largestStrainCell = -1;
   long long cellsChecked = 0;
   std::vector<long long> invertedCells; // det(I + grad u) <= 0
 };
 
+// One cell's displacement gradient d u_i / d x_j: its largest |principal strain| and whether the
+// deformed cell is inverted (det(I + grad) <= 0).
+struct CellDeformation {
+  double largestStrain = 0.0;
+  bool inverted = false;
+};
+CellDeformation EvaluateCellDeformation(const Eigen::Matrix3d& gradient);
+
+// False when the cell can change neither a largest strain `largestSoFar` nor the inverted list:
+// ||grad||_F bounds every principal strain, and ||grad||_F < 1 keeps det(I + grad) > 0.
+inline bool CellMayMatter(const Eigen::Matrix3d& gradient, double largestSoFar) {
+  const double norm = gradient.norm();
+  return norm > largestSoFar || norm >= 1.0;
+}
+
+// The warnings CheckDeformation appends for a report (strain over `strainLimit`, inverted cells).
+void AppendDeformationWarnings(const DeformationReport& report, double strainLimit,
+                               std::vector<std::string>& warnings);
+
 // Checks a displacement field (n x 3, mesh numbering) on every cell, or only on `cells` when given
 // (cells whose corners all have known values). Appends warnings when the largest strain exceeds
 // `strainLimit` (linear FEM is outside its range) and when cells invert in the deformed result.
-DeformationReport CheckDeformation(const TetMesh& mesh, const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& displacement,
-                                   std::vector<std::string>& warnings, double strainLimit = 0.1,
-                                   const std::vector<int>* cells = nullptr);
+DeformationReport
+CheckDeformation(const TetMesh& mesh,
+                 const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& displacement,
+                 std::vector<std::string>& warnings, double strainLimit = 0.1,
+                 const std::vector<int>* cells = nullptr);
 
 } // namespace faceplan

@@ -1,6 +1,7 @@
 // The rigid-segment path (SolveMethod::RigidSegments) against the general dense response and the
 // reference full solve, for rigid-only and mixed plans.
 #include "Common/RelativeDifference.h"
+#include "CondensedFEM/DeformationCheck.h"
 #include "Support/FEMTestScenes.h"
 
 #include <Eigen/Geometry>
@@ -159,4 +160,77 @@ TEST(RigidSegments, RequestedWithoutSegmentsIsAnError) {
   s = Precompute(request, system);
   EXPECT_FALSE(s.ok);
   EXPECT_NE(s.message.find("movableSegment"), std::string::npos) << s.message;
+}
+
+// The per-edit strain check of the rigid path stops early on bounds (DeformationCheck.h): every
+// bound must hold on the recovered field, and the result must equal checking every cell, for a
+// small move and for one so large that cells invert.
+TEST(RigidSegments, BoundedStrainCheckEqualsCheckingEveryCell) {
+  for (double stretch : {1.0, 40.0}) {
+    for (bool mixed : {false, true}) {
+      Plan plan = MakePlan(true, mixed);
+      for (SegmentTransform& t : plan.input.segmentTransforms) {
+        t.col(3) *= stretch;
+        t.leftCols<3>() =
+            Eigen::Matrix3d::Identity() + stretch * (t.leftCols<3>() - Eigen::Matrix3d::Identity());
+      }
+      const RowVectors3d& points = plan.request.mesh.points;
+      for (size_t k = 0; k < plan.request.sets.movable.size(); ++k) {
+        const int s = plan.request.sets.movableSegment[k];
+        const Eigen::Vector3d x = points.row(plan.request.sets.movable[k]).transpose();
+        if (s > 0) {
+          const SegmentTransform& t = plan.input.segmentTransforms[s - 1];
+          plan.input.movableDisplacement.row(k) = (t.leftCols<3>() * x + t.col(3) - x).transpose();
+        } else {
+          plan.input.movableDisplacement.row(k) *= stretch;
+        }
+      }
+      // Every unconstrained node kept, so that every cell is checkable on a kept-only solve.
+      std::vector<char> constrained(points.rows(), 0);
+      for (int node : plan.request.sets.constrained)
+        constrained[node] = 1;
+      plan.request.sets.kept.clear();
+      for (int node = 0; node < points.rows(); ++node)
+        if (!constrained[node])
+          plan.request.sets.kept.push_back(node);
+      std::shared_ptr<const CondensedSystem> rigid, dense;
+      ASSERT_TRUE(Precompute(plan.request, rigid).ok);
+      ASSERT_EQ(rigid->method, SolveMethod::RigidSegments);
+      ASSERT_FALSE(rigid->boundedCells.empty())
+          << "no ordered check: parameters " << rigid->response.cols() << ", checkable cells "
+          << rigid->checkableCells.size();
+      PrecomputeRequest general = plan.request;
+      general.options.method = SolveMethod::DenseResponse;
+      ASSERT_TRUE(Precompute(general, dense).ok);
+
+      SolveResult fast, slow, all;
+      ASSERT_TRUE(Solve(*rigid, plan.input, fast).ok);
+      ASSERT_TRUE(Solve(*dense, plan.input, slow).ok);
+      EXPECT_NEAR(fast.largestStrain, slow.largestStrain, 1e-12 * slow.largestStrain);
+      EXPECT_EQ(fast.invertedCells, slow.invertedCells);
+      EXPECT_EQ(fast.warnings.size(), slow.warnings.size());
+      if (stretch > 1.0)
+        EXPECT_GT(slow.invertedCells, 0) << "the large move should invert cells";
+
+      // Each bound holds on the field the solve represents.
+      SolveInput input = plan.input;
+      input.recoverInterior = true;
+      ASSERT_TRUE(Solve(*rigid, input, all).ok);
+      const Eigen::VectorXd p = SegmentParameters(plan.request.sets, plan.input.segmentTransforms,
+                                                  plan.input.movableDisplacement);
+      const double scale = ScaledParameterNorm(*rigid, p);
+      double previous = std::numeric_limits<double>::infinity();
+      for (const CondensedSystem::BoundedCell& cell : rigid->boundedCells) {
+        EXPECT_LE(cell.gain, previous);
+        previous = cell.gain;
+        Eigen::Matrix3d du;
+        for (int j = 0; j < 3; ++j)
+          du.col(j) = (all.allDisplacement.row(plan.request.mesh.tets(cell.cell, j + 1)) -
+                       all.allDisplacement.row(plan.request.mesh.tets(cell.cell, 0)))
+                          .transpose();
+        EXPECT_LE((du * cell.inverseEdges).norm(), cell.gain * scale * (1.0 + 1e-9) + 1e-12)
+            << "cell " << cell.cell;
+      }
+    }
+  }
 }
