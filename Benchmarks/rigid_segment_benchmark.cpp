@@ -210,9 +210,11 @@ int main(int argc, char** argv) {
   const double rigidEdit = Median(rigidMs), generalEdit = Median(generalMs);
   const double uncheckedEdit = Median(uncheckedMs);
   std::printf(
-      "face: %lld tets, %lld nodes; free / kept / ROI DOFs %lld / %lld / %lld; segment nodes %zu\n",
+      "face: %lld tets, %lld nodes; free / kept / ROI DOFs %lld / %lld / %lld; segment nodes %zu; "
+      "%lld slivers, %lld folded face pairs\n",
       static_cast<long long>(rigid.mesh.numTets()), static_cast<long long>(rigid.mesh.numPoints()),
-      fast.info.freeDofs, fast.info.keptDofs, fast.info.roiDofs, rigid.sets.movable.size());
+      fast.info.freeDofs, fast.info.keptDofs, fast.info.roiDofs, rigid.sets.movable.size(),
+      fast.info.sliverCells, fast.info.foldedFaces);
   std::printf("RigidSegments (%s): precompute %.1f ms (condensation %.1f ms), per-edit %.4f ms "
               "(%.4f ms without the large-strain check)\n",
               fast.info.choiceReason.c_str(), fast.totalMs, fast.condensationMs, rigidEdit,

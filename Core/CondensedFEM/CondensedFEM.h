@@ -174,6 +174,7 @@ struct SystemInfo {
   ElementOrder elementOrder = ElementOrder::Linear;
   long long solverNodes = 0;       // nodes of the solved mesh (corners + mid-edge nodes if quadratic)
   long long sliverCells = 0;       // cells below sliverQualityThreshold
+  long long foldedFaces = 0;       // shared faces whose two cells overlap (CheckFoldedFaces)
   double worstQuality = 1.0;       // smallest mean-ratio quality
   double responseProbeError = 0.0; // relative deviation of the backend's response operator
   bool responseRedoneInDouble = false;

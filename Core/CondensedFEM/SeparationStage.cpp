@@ -220,8 +220,10 @@ Status ValidatePrecomputeRequest(PrecomputeState& state) {
   if (options.method == SolveMethod::FullReference)
     return Status::Error("FullReference has no precompute: call SolveFullReference");
   Status status = ValidateSolveInputs(request.mesh, request.materials, request.sets);
-  if (status)
-    status = CheckRigidModesHeld(request.mesh, request.sets.constrained);
+  if (!status)
+    return status;
+  const std::vector<SharedFace> shared = SharedFaces(request.mesh);
+  status = CheckRigidModesHeld(request.mesh, request.sets.constrained, shared);
   if (!status)
     return status;
   if (options.method == SolveMethod::RigidSegments && SegmentCount(request.sets) == 0)
@@ -240,6 +242,10 @@ Status ValidatePrecomputeRequest(PrecomputeState& state) {
     state.sys->info.sliverCells = quality.belowThreshold;
     state.sys->info.worstQuality = quality.worstQuality;
   }
+  FoldReport folds;
+  if (const std::string w = CheckFoldedFaces(request.mesh, shared, &folds); !w.empty())
+    status.warnings.push_back(w);
+  state.sys->info.foldedFaces = folds.foldedFaces;
   state.status = status;
   return Status::Ok();
 }

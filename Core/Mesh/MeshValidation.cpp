@@ -274,11 +274,8 @@ DeformationReport CheckDeformation(
   return report;
 }
 
-Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrained) {
-  const Eigen::Index n = mesh.numPoints(), m = mesh.numTets();
-  // Face-connected pieces: union cells that share a triangle.
-  std::vector<int> parent(m);
-  std::iota(parent.begin(), parent.end(), 0);
+std::vector<SharedFace> SharedFaces(const TetMesh& mesh) {
+  const Eigen::Index m = mesh.numTets();
   std::vector<std::pair<std::array<int, 3>, int>> faces(static_cast<size_t>(m) * 4);
   for (Eigen::Index e = 0; e < m; ++e)
     for (int k = 0; k < 4; ++k) {
@@ -290,12 +287,71 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
       faces[e * 4 + k] = {f, static_cast<int>(e)};
     }
   std::sort(faces.begin(), faces.end());
+  std::vector<SharedFace> shared;
   for (size_t k = 1; k < faces.size(); ++k)
-    if (faces[k].first == faces[k - 1].first) {
-      const int a = FindRoot(parent, faces[k].second), b = FindRoot(parent, faces[k - 1].second);
-      if (a != b)
-        parent[a] = b;
+    if (faces[k].first == faces[k - 1].first)
+      shared.push_back({faces[k].first, faces[k - 1].second, faces[k].second});
+  return shared;
+}
+
+std::string CheckFoldedFaces(const TetMesh& mesh, const std::vector<SharedFace>& shared,
+                             FoldReport* out) {
+  FoldReport report;
+  auto opposite = [&](int cell, const std::array<int, 3>& f) {
+    for (int j = 0; j < 4; ++j) {
+      const int v = mesh.tets(cell, j);
+      if (v != f[0] && v != f[1] && v != f[2])
+        return v;
     }
+    return -1;
+  };
+  for (const SharedFace& s : shared) {
+    const Eigen::Vector3d p = mesh.points.row(s.face[0]).transpose();
+    const Eigen::Vector3d n = (mesh.points.row(s.face[1]).transpose() - p)
+                                  .cross(mesh.points.row(s.face[2]).transpose() - p);
+    const int va = opposite(s.a, s.face), vb = opposite(s.b, s.face);
+    if (va < 0 || vb < 0 || va == vb)
+      continue; // repeated ids: refused by the mesh validation
+    const double sa = n.dot(mesh.points.row(va).transpose() - p);
+    const double sb = n.dot(mesh.points.row(vb).transpose() - p);
+    if (sa * sb > 0.0) {
+      ++report.foldedFaces;
+      if (report.cells.size() < 10) {
+        report.cells.push_back(s.a);
+        report.cells.push_back(s.b);
+      }
+    }
+  }
+  std::string warning;
+  if (report.foldedFaces > 0) {
+    std::ostringstream msg;
+    msg << report.foldedFaces
+        << " pairs of tetrahedra that share a face lie on the same side of it "
+        << "(cells " << IdList(report.cells)
+        << "): they overlap, so the mesh folds over itself there and results near them are "
+           "unreliable";
+    warning = msg.str();
+  }
+  if (out)
+    *out = report;
+  return warning;
+}
+
+Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrained) {
+  return CheckRigidModesHeld(mesh, constrained, SharedFaces(mesh));
+}
+
+Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrained,
+                           const std::vector<SharedFace>& shared) {
+  const Eigen::Index n = mesh.numPoints(), m = mesh.numTets();
+  // Face-connected pieces: union cells that share a triangle.
+  std::vector<int> parent(m);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const SharedFace& f : shared) {
+    const int a = FindRoot(parent, f.a), b = FindRoot(parent, f.b);
+    if (a != b)
+      parent[a] = b;
+  }
   std::vector<int> pieceOf(m), label(m, -1);
   int pieces = 0;
   for (Eigen::Index e = 0; e < m; ++e) {

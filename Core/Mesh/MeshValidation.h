@@ -3,6 +3,7 @@
 #include "Common/Status.h"
 #include "Mesh/TetMesh.h"
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,26 @@ Status CheckEveryComponentConstrained(const TetMesh& mesh, const std::vector<int
 // an already held piece; a piece hanging on one node or one edge (free to rotate) fails with its
 // cell count and bounds, instead of a singular stiffness matrix.
 Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrained);
+
+// Two cells that share a triangle (sorted node ids).
+struct SharedFace {
+  std::array<int, 3> face;
+  int a = -1, b = -1;
+};
+// Every triangle shared by two cells (one sort over the cells' faces; both checks below use it).
+std::vector<SharedFace> SharedFaces(const TetMesh& mesh);
+Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrained,
+                           const std::vector<SharedFace>& shared);
+
+// A valid mesh has the two cells of a shared face on opposite sides of it. Cells on the same side
+// overlap (the mesh folds over itself) although each has a positive volume: the mesh then does not
+// partition the volume. Returns a warning naming the count and cells (empty when none).
+struct FoldReport {
+  long long foldedFaces = 0;
+  std::vector<long long> cells; // the first few cells involved
+};
+std::string CheckFoldedFaces(const TetMesh& mesh, const std::vector<SharedFace>& shared,
+                             FoldReport* report = nullptr);
 
 // Mean-ratio quality of a tetrahedron, 12 (3 |V|)^(2/3) / sum of squared edge lengths: 1 for a
 // regular tetrahedron, tending to 0 for slivers, needles and caps (scale invariant).

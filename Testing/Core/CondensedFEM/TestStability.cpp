@@ -59,7 +59,8 @@ SphereRun SolveSphere(const ShellMesh& shell, double nu, ElementOrder order,
   request.options.method = method;
   request.options.elementOrder = order;
   // Mid-edge nodes of boundary edges on the sphere they belong to.
-  request.options.midEdgeProjection = [&exact](const Eigen::Vector3d& mid, int, int) -> Eigen::Vector3d {
+  request.options.midEdgeProjection = [&exact](const Eigen::Vector3d& mid, int,
+                                               int) -> Eigen::Vector3d {
     const double r = mid.norm();
     return mid * ((r < 0.5 * (exact.a + exact.b) ? exact.a : exact.b) / r);
   };
@@ -67,16 +68,19 @@ SphereRun SolveSphere(const ShellMesh& shell, double nu, ElementOrder order,
   std::shared_ptr<const CondensedSystem> system;
   Status s = Precompute(request, system);
   EXPECT_TRUE(s.ok) << s.message;
-  if (!s) return run;
+  if (!s)
+    return run;
   SolveInput input;
   input.movableDisplacement.resize(static_cast<Eigen::Index>(shell.innerNodes.size()), 3);
   for (size_t k = 0; k < shell.innerNodes.size(); ++k)
-    input.movableDisplacement.row(k) = exact.displacement(shell.mesh.points.row(shell.innerNodes[k]));
+    input.movableDisplacement.row(k) =
+        exact.displacement(shell.mesh.points.row(shell.innerNodes[k]));
   input.recoverInterior = true;
   SolveResult result;
   s = Solve(*system, input, result);
   EXPECT_TRUE(s.ok) << s.message;
-  if (!s) return run;
+  if (!s)
+    return run;
   double err2 = 0.0, ref2 = 0.0;
   for (Eigen::Index i = 0; i < shell.mesh.numPoints(); ++i) {
     const Eigen::RowVector3d ue = exact.displacement(shell.mesh.points.row(i));
@@ -104,7 +108,8 @@ const ShellMesh& SphereMesh() {
 const std::vector<SphereRun>& LinearRuns() {
   static const std::vector<SphereRun> runs = [] {
     std::vector<SphereRun> out;
-    for (double nu : {0.45, 0.49, 0.499, 0.4999}) out.push_back(SolveSphere(SphereMesh(), nu, ElementOrder::Linear));
+    for (double nu : {0.45, 0.49, 0.499, 0.4999})
+      out.push_back(SolveSphere(SphereMesh(), nu, ElementOrder::Linear));
     return out;
   }();
   return runs;
@@ -119,9 +124,11 @@ TEST(Stability, NearIncompressibleLinearIsFiniteWithResidualAndCondition) {
   ASSERT_EQ(SphereMesh().mesh.numTets(), 34560);
   const auto& runs = LinearRuns();
   for (int k = 0; k < 4; ++k) {
-    std::printf("STABILITY linear  nu=%-7g tets=%lld dofs=%lld error=%.3f%% residual=%.2e cond=%.2e precompute=%.0f ms\n",
-                kNus[k], (long long)SphereMesh().mesh.numTets(), runs[k].dofs, 100 * runs[k].nodalError,
-                runs[k].residual, runs[k].condition, runs[k].precomputeMs);
+    std::printf("STABILITY linear  nu=%-7g tets=%lld dofs=%lld error=%.3f%% residual=%.2e "
+                "cond=%.2e precompute=%.0f ms\n",
+                kNus[k], (long long)SphereMesh().mesh.numTets(), runs[k].dofs,
+                100 * runs[k].nodalError, runs[k].residual, runs[k].condition,
+                runs[k].precomputeMs);
     EXPECT_TRUE(runs[k].ok);
     EXPECT_LE(runs[k].residual, 1e-9) << "nu " << kNus[k];
     EXPECT_TRUE(std::isfinite(runs[k].condition) && runs[k].condition > 1.0) << runs[k].condition;
@@ -144,13 +151,15 @@ TEST(Stability, QuadraticElementsDoNotLock) {
   const SphereRun* q[2] = {&q45, &q499};
   const double nus[2] = {0.45, 0.499};
   for (int k = 0; k < 2; ++k) {
-    std::printf("STABILITY quadratic nu=%-7g tets=%lld dofs=%lld error=%.3f%% residual=%.2e cond=%.2e precompute=%.0f ms\n",
+    std::printf("STABILITY quadratic nu=%-7g tets=%lld dofs=%lld error=%.3f%% residual=%.2e "
+                "cond=%.2e precompute=%.0f ms\n",
                 nus[k], (long long)SphereMesh().mesh.numTets(), q[k]->dofs, 100 * q[k]->nodalError,
                 q[k]->residual, q[k]->condition, q[k]->precomputeMs);
     EXPECT_TRUE(q[k]->ok);
     EXPECT_LE(q[k]->residual, 1e-9);
   }
-  std::printf("STABILITY quadratic error ratio 0.499 / 0.45 = %.2f (target 1.5)\n", q499.nodalError / q45.nodalError);
+  std::printf("STABILITY quadratic error ratio 0.499 / 0.45 = %.2f (target 1.5)\n",
+              q499.nodalError / q45.nodalError);
   EXPECT_LT(q45.nodalError, 0.1 * linear[0].nodalError);
   EXPECT_LT(q499.nodalError, 0.2 * linear[0].nodalError); // better than linear cells at nu = 0.45
   EXPECT_LT(q499.nodalError, 0.02 * linear[2].nodalError);
@@ -164,7 +173,8 @@ TEST(Stability, QuadraticErrorIndependentOfLambda) {
   const SphereRun l4999 = SolveSphere(shell, 0.4999, ElementOrder::Linear);
   const SphereRun q499 = SolveSphere(shell, 0.499, ElementOrder::Quadratic);
   const SphereRun q4999 = SolveSphere(shell, 0.4999, ElementOrder::Quadratic);
-  std::printf("STABILITY small mesh (%lld tets): linear %.3f%% -> %.3f%%, quadratic %.3f%% -> %.3f%% (nu 0.499 -> 0.4999)\n",
+  std::printf("STABILITY small mesh (%lld tets): linear %.3f%% -> %.3f%%, quadratic %.3f%% -> "
+              "%.3f%% (nu 0.499 -> 0.4999)\n",
               (long long)shell.mesh.numTets(), 100 * l499.nodalError, 100 * l4999.nodalError,
               100 * q499.nodalError, 100 * q4999.nodalError);
   EXPECT_LE(q4999.nodalError, 1.5 * q499.nodalError);
@@ -184,7 +194,8 @@ TEST(Stability, QuadraticNodalPressureMeetsLockingBound) {
   const SphereRun n499 = SolveSphere(shell, 0.499, ElementOrder::QuadraticNodalPressure);
   const SphereRun n4999 = SolveSphere(shell, 0.4999, ElementOrder::QuadraticNodalPressure);
   const SphereRun q499 = SolveSphere(shell, 0.499, ElementOrder::Quadratic);
-  std::printf("STABILITY nodal-pressure (%lld tets, dofs=%lld factor nnz=%.3g): %.3f%% / %.3f%% / %.3f%% at nu 0.45 / 0.499 / 0.4999 "
+  std::printf("STABILITY nodal-pressure (%lld tets, dofs=%lld factor nnz=%.3g): %.3f%% / %.3f%% / "
+              "%.3f%% at nu 0.45 / 0.499 / 0.4999 "
               "(ratio %.2f, %.2f; Quadratic at 0.499: %.3f%%, factor nnz %.3g)\n",
               (long long)shell.mesh.numTets(), n45.dofs, n45.factorNonzeros, 100 * n45.nodalError,
               100 * n499.nodalError, 100 * n4999.nodalError, n499.nodalError / n45.nodalError,
@@ -203,13 +214,15 @@ TEST(Stability, DISABLED_QuadraticNodalPressureMeetsLockingBoundOn35kCells) {
   const SphereRun n45 = SolveSphere(SphereMesh(), 0.45, ElementOrder::QuadraticNodalPressure);
   const SphereRun n499 = SolveSphere(SphereMesh(), 0.499, ElementOrder::QuadraticNodalPressure);
   for (const SphereRun* r : {&n45, &n499}) {
-    std::printf("STABILITY nodal-pressure nu=%-7g tets=%lld dofs=%lld error=%.4f%% residual=%.2e cond=%.2e factor nnz=%.3g precompute=%.0f ms\n",
-                r == &n45 ? 0.45 : 0.499, (long long)SphereMesh().mesh.numTets(), r->dofs, 100 * r->nodalError,
-                r->residual, r->condition, r->factorNonzeros, r->precomputeMs);
+    std::printf("STABILITY nodal-pressure nu=%-7g tets=%lld dofs=%lld error=%.4f%% residual=%.2e "
+                "cond=%.2e factor nnz=%.3g precompute=%.0f ms\n",
+                r == &n45 ? 0.45 : 0.499, (long long)SphereMesh().mesh.numTets(), r->dofs,
+                100 * r->nodalError, r->residual, r->condition, r->factorNonzeros, r->precomputeMs);
     EXPECT_TRUE(r->ok);
     EXPECT_LE(r->residual, 1e-9);
   }
-  std::printf("STABILITY nodal-pressure error ratio 0.499 / 0.45 = %.2f (target 1.5)\n", n499.nodalError / n45.nodalError);
+  std::printf("STABILITY nodal-pressure error ratio 0.499 / 0.45 = %.2f (target 1.5)\n",
+              n499.nodalError / n45.nodalError);
   EXPECT_LE(n499.nodalError, 1.5 * n45.nodalError);
 }
 
@@ -222,75 +235,84 @@ TEST(Stability, QuadraticWorksWithCondensationAndCaching) {
   request.mesh = shell.mesh;
   request.materials = Materials::Uniform(3000.0, 0.499);
   request.sets.constrained = shell.innerNodes;
-  request.sets.constrained.insert(request.sets.constrained.end(), shell.outerNodes.begin(), shell.outerNodes.end());
+  request.sets.constrained.insert(request.sets.constrained.end(), shell.outerNodes.begin(),
+                                  shell.outerNodes.end());
   request.sets.movable = request.sets.constrained;
-  for (int i = shell.nodesPerLayer; i < 2 * shell.nodesPerLayer; ++i) request.sets.kept.push_back(i);
-  const Eigen::Matrix3d G = (Eigen::Matrix3d() << 1e-3, 2e-3, 0, -1e-3, 5e-4, 1e-3, 0, 3e-4, -2e-3).finished();
+  for (int i = shell.nodesPerLayer; i < 2 * shell.nodesPerLayer; ++i)
+    request.sets.kept.push_back(i);
+  const Eigen::Matrix3d G =
+      (Eigen::Matrix3d() << 1e-3, 2e-3, 0, -1e-3, 5e-4, 1e-3, 0, 3e-4, -2e-3).finished();
   RowVectors3d linearField(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
   for (size_t k = 0; k < request.sets.movable.size(); ++k)
-    linearField.row(k) = (G * request.mesh.points.row(request.sets.movable[k]).transpose()).transpose();
+    linearField.row(k) =
+        (G * request.mesh.points.row(request.sets.movable[k]).transpose()).transpose();
   for (ElementOrder order : {ElementOrder::Quadratic, ElementOrder::QuadraticNodalPressure})
-  for (SolveMethod method : {SolveMethod::DenseResponse, SolveMethod::CachedFactor}) {
-    request.options.elementOrder = order;
-    request.options.method = method;
-    std::shared_ptr<const CondensedSystem> system;
-    Status s = Precompute(request, system);
-    ASSERT_TRUE(s.ok) << s.message;
-    const SystemInfo info = Describe(*system);
-    EXPECT_EQ(info.elementOrder, order);
-    EXPECT_GT(info.solverNodes, request.mesh.numPoints());
-    SolveInput input;
-    input.movableDisplacement = linearField;
-    for (bool interior : {false, true}) {
-      input.recoverInterior = interior;
-      SolveResult result;
-      s = Solve(*system, input, result);
+    for (SolveMethod method : {SolveMethod::DenseResponse, SolveMethod::CachedFactor}) {
+      request.options.elementOrder = order;
+      request.options.method = method;
+      std::shared_ptr<const CondensedSystem> system;
+      Status s = Precompute(request, system);
       ASSERT_TRUE(s.ok) << s.message;
-      EXPECT_LE(result.relativeResidual, 1e-9);
-      ASSERT_EQ(result.keptDisplacement.rows(), static_cast<Eigen::Index>(request.sets.kept.size()));
-      for (size_t k = 0; k < request.sets.kept.size(); ++k) {
-        const Eigen::RowVector3d expected = (G * request.mesh.points.row(request.sets.kept[k]).transpose()).transpose();
-        EXPECT_LT((result.keptDisplacement.row(k) - expected).norm(), 1e-9)
-            << MethodName(method) << " " << ElementOrderName(order);
-      }
-      if (interior) {
-        ASSERT_EQ(result.allDisplacement.rows(), request.mesh.numPoints());
-        for (Eigen::Index i = 0; i < request.mesh.numPoints(); ++i) {
-          const Eigen::RowVector3d expected = (G * request.mesh.points.row(i).transpose()).transpose();
-          EXPECT_LT((result.allDisplacement.row(i) - expected).norm(), 1e-9);
+      const SystemInfo info = Describe(*system);
+      EXPECT_EQ(info.elementOrder, order);
+      EXPECT_GT(info.solverNodes, request.mesh.numPoints());
+      SolveInput input;
+      input.movableDisplacement = linearField;
+      for (bool interior : {false, true}) {
+        input.recoverInterior = interior;
+        SolveResult result;
+        s = Solve(*system, input, result);
+        ASSERT_TRUE(s.ok) << s.message;
+        EXPECT_LE(result.relativeResidual, 1e-9);
+        ASSERT_EQ(result.keptDisplacement.rows(),
+                  static_cast<Eigen::Index>(request.sets.kept.size()));
+        for (size_t k = 0; k < request.sets.kept.size(); ++k) {
+          const Eigen::RowVector3d expected =
+              (G * request.mesh.points.row(request.sets.kept[k]).transpose()).transpose();
+          EXPECT_LT((result.keptDisplacement.row(k) - expected).norm(), 1e-9)
+              << MethodName(method) << " " << ElementOrderName(order);
+        }
+        if (interior) {
+          ASSERT_EQ(result.allDisplacement.rows(), request.mesh.numPoints());
+          for (Eigen::Index i = 0; i < request.mesh.numPoints(); ++i) {
+            const Eigen::RowVector3d expected =
+                (G * request.mesh.points.row(i).transpose()).transpose();
+            EXPECT_LT((result.allDisplacement.row(i) - expected).norm(), 1e-9);
+          }
         }
       }
     }
-  }
 }
 
 TEST(Stability, QuadraticDenseAndCachedAgreeWithLoads) {
   for (ElementOrder order : {ElementOrder::Quadratic, ElementOrder::QuadraticNodalPressure}) {
-  PrecomputeRequest request = ShellRequest(3, 2, 3000.0, 0.49);
-  request.options.elementOrder = order;
-  if (order == ElementOrder::QuadraticNodalPressure) { // per-cell materials, contrast 1e4
-    request.materials.youngsModulus = Eigen::VectorXd::Constant(request.mesh.numTets(), 3000.0);
-    for (Eigen::Index e = 0; e < request.mesh.numTets(); e += 5) request.materials.youngsModulus[e] = 3.0e7;
-  }
-  SolveInput input;
-  input.movableDisplacement = SmoothRoiField(request);
-  input.gravity = Eigen::Vector3d(0.0, -9810.0, 0.0);
-  input.nodalLoads = RowVectors3d::Zero(request.mesh.numPoints(), 3);
-  for (int id : request.sets.kept) input.nodalLoads.row(id) << 0.01, 0.02, -0.01;
-  RowVectors3d kept[2];
-  int k = 0;
-  for (SolveMethod method : {SolveMethod::DenseResponse, SolveMethod::CachedFactor}) {
-    request.options.method = method;
-    std::shared_ptr<const CondensedSystem> system;
-    Status s = Precompute(request, system);
-    ASSERT_TRUE(s.ok) << s.message;
-    SolveResult result;
-    s = Solve(*system, input, result);
-    ASSERT_TRUE(s.ok) << s.message;
-    EXPECT_LE(result.relativeResidual, 1e-9);
-    kept[k++] = result.keptDisplacement;
-  }
-  EXPECT_LT(RelativeMaxDifference(kept[0], kept[1]), 1e-9) << ElementOrderName(order);
+    PrecomputeRequest request = ShellRequest(3, 2, 3000.0, 0.49);
+    request.options.elementOrder = order;
+    if (order == ElementOrder::QuadraticNodalPressure) { // per-cell materials, contrast 1e4
+      request.materials.youngsModulus = Eigen::VectorXd::Constant(request.mesh.numTets(), 3000.0);
+      for (Eigen::Index e = 0; e < request.mesh.numTets(); e += 5)
+        request.materials.youngsModulus[e] = 3.0e7;
+    }
+    SolveInput input;
+    input.movableDisplacement = SmoothRoiField(request);
+    input.gravity = Eigen::Vector3d(0.0, -9810.0, 0.0);
+    input.nodalLoads = RowVectors3d::Zero(request.mesh.numPoints(), 3);
+    for (int id : request.sets.kept)
+      input.nodalLoads.row(id) << 0.01, 0.02, -0.01;
+    RowVectors3d kept[2];
+    int k = 0;
+    for (SolveMethod method : {SolveMethod::DenseResponse, SolveMethod::CachedFactor}) {
+      request.options.method = method;
+      std::shared_ptr<const CondensedSystem> system;
+      Status s = Precompute(request, system);
+      ASSERT_TRUE(s.ok) << s.message;
+      SolveResult result;
+      s = Solve(*system, input, result);
+      ASSERT_TRUE(s.ok) << s.message;
+      EXPECT_LE(result.relativeResidual, 1e-9);
+      kept[k++] = result.keptDisplacement;
+    }
+    EXPECT_LT(RelativeMaxDifference(kept[0], kept[1]), 1e-9) << ElementOrderName(order);
   }
 }
 
@@ -305,8 +327,10 @@ PrecomputeRequest ContrastRequest(double contrast, double lengthScale, double st
   request.materials.youngsModulus = Eigen::VectorXd::Constant(request.mesh.numTets(), 3000.0);
   for (Eigen::Index e = 0; e < request.mesh.numTets(); ++e) {
     bool inner = false;
-    for (int k = 0; k < 4; ++k) inner |= request.mesh.tets(e, k) < shell.nodesPerLayer;
-    if (inner || e % 7 == 0) request.materials.youngsModulus[e] = 3000.0 * contrast;
+    for (int k = 0; k < 4; ++k)
+      inner |= request.mesh.tets(e, k) < shell.nodesPerLayer;
+    if (inner || e % 7 == 0)
+      request.materials.youngsModulus[e] = 3000.0 * contrast;
   }
   request.mesh.points *= lengthScale;
   request.materials.youngsModulus *= stressScale;
@@ -330,9 +354,10 @@ TEST(Stability, StiffnessContrastUpTo1e6MeetsResidual) {
         SolveResult result;
         s = Solve(*system, input, result);
         ASSERT_TRUE(s.ok) << s.message;
-        std::printf("STABILITY contrast=%g method=%s interior=%d residual=%.2e cond=%.2e refinement=%d\n",
-                    contrast, MethodName(method), interior, result.relativeResidual,
-                    result.conditionEstimate, result.refinementSteps);
+        std::printf(
+            "STABILITY contrast=%g method=%s interior=%d residual=%.2e cond=%.2e refinement=%d\n",
+            contrast, MethodName(method), interior, result.relativeResidual,
+            result.conditionEstimate, result.refinementSteps);
         EXPECT_LE(result.relativeResidual, 1e-9);
         EXPECT_TRUE(result.keptDisplacement.allFinite());
       }
@@ -365,7 +390,8 @@ TEST(Stability, UnitRescalingChangesResultBy1e8AtMost) {
     ASSERT_TRUE(Solve(*system, scaled, result).ok);
     EXPECT_LE(result.relativeResidual, 1e-9);
     const RowVectors3d inMm = result.allDisplacement / sc[0];
-    if (base.size() == 0) base = inMm;
+    if (base.size() == 0)
+      base = inMm;
     else
       worst = std::max(worst, RelativeMaxDifference(inMm, base));
   }
@@ -377,14 +403,43 @@ TEST(Stability, UnitRescalingChangesResultBy1e8AtMost) {
 
 TEST(Stability, DegenerateCellsListFirstIdsAndCount) {
   PrecomputeRequest r = ShellRequest(3, 2);
-  for (int e = 10; e < 40; e += 2) std::swap(r.mesh.tets(e, 0), r.mesh.tets(e, 1)); // 15 inverted
-  r.mesh.tets(5, 3) = r.mesh.tets(5, 0);                                            // 1 flat
+  for (int e = 10; e < 40; e += 2)
+    std::swap(r.mesh.tets(e, 0), r.mesh.tets(e, 1)); // 15 inverted
+  r.mesh.tets(5, 3) = r.mesh.tets(5, 0);             // 1 flat
   std::shared_ptr<const CondensedSystem> system;
   const Status s = Precompute(r, system);
   ASSERT_FALSE(s.ok);
   EXPECT_NE(s.message.find("zero-volume cells 5;"), std::string::npos) << s.message;
   EXPECT_NE(s.message.find("inverted cells 10, 12, 14"), std::string::npos) << s.message;
   EXPECT_NE(s.message.find("(15 in all)"), std::string::npos) << s.message;
+}
+
+// Two cells on one face: with the second cell's apex below the face the mesh is valid; above it,
+// both cells keep a positive volume but overlap, and the precompute names the fold.
+TEST(Stability, FoldedCellsWarnAndValidNeighboursDoNot) {
+  for (bool folded : {false, true}) {
+    PrecomputeRequest request;
+    request.mesh.points.resize(5, 3);
+    request.mesh.points << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.2, 1, 0.3, 0.3, folded ? 0.5 : -0.5;
+    request.mesh.tets.resize(2, 4);
+    request.mesh.tets << 0, 1, 2, 3, 0, 1, 2, 4;
+    if (!folded)
+      request.mesh.tets.row(1) << 0, 2, 1, 4; // positive volume with the apex below
+    request.materials = Materials::Uniform(3000.0, 0.45);
+    request.sets.constrained = {0, 1, 2};
+    request.sets.kept = {3, 4};
+    FoldReport report;
+    const std::string w = CheckFoldedFaces(request.mesh, SharedFaces(request.mesh), &report);
+    EXPECT_EQ(report.foldedFaces, folded ? 1 : 0);
+    std::shared_ptr<const CondensedSystem> system;
+    Status s = Precompute(request, system);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_EQ(Describe(*system).foldedFaces, folded ? 1 : 0);
+    bool named = false;
+    for (const std::string& warning : s.warnings)
+      named = named || warning.find("1 pairs of tetrahedra that share a face") != std::string::npos;
+    EXPECT_EQ(named, folded) << w;
+  }
 }
 
 TEST(Stability, SliversWarnWithCountAndWorstQualityAndStillSolve) {
@@ -394,7 +449,8 @@ TEST(Stability, SliversWarnWithCountAndWorstQualityAndStillSolve) {
   const ShellMesh shell = MakeSphericalShell(sub, layers, 1.0, 2.0);
   QualityReport before;
   EXPECT_TRUE(CheckElementQuality(request.mesh, 0.02, &before).empty())
-      << "the generator's cells are all above the default threshold (worst " << before.worstQuality << ")";
+      << "the generator's cells are all above the default threshold (worst " << before.worstQuality
+      << ")";
   const double inner = request.mesh.points.row(0).norm();
   const double thickness = request.mesh.points.row(shell.nodesPerLayer).norm() - inner;
   for (int i = shell.nodesPerLayer; i < 2 * shell.nodesPerLayer; ++i)
@@ -409,7 +465,8 @@ TEST(Stability, SliversWarnWithCountAndWorstQualityAndStillSolve) {
               info.sliverCells, info.worstQuality, s.warnings[0].c_str());
   EXPECT_GE(info.sliverCells, expected);
   EXPECT_LT(info.worstQuality, 0.02);
-  EXPECT_NE(s.warnings[0].find(std::to_string(info.sliverCells) + " sliver tetrahedra"), std::string::npos);
+  EXPECT_NE(s.warnings[0].find(std::to_string(info.sliverCells) + " sliver tetrahedra"),
+            std::string::npos);
   EXPECT_NE(s.warnings[0].find("worst"), std::string::npos);
   SolveInput input;
   input.movableDisplacement = SmoothRoiField(request, 0.01);
@@ -426,10 +483,12 @@ TEST(Stability, SliversWarnWithCountAndWorstQualityAndStillSolve) {
 namespace {
 
 // Appends a copy of `piece` shifted by `offset`; returns the id offset of its nodes.
-int AppendPiece(TetMesh& mesh, const TetMesh& piece, const Eigen::RowVector3d& offset, int shareNodes = 0) {
+int AppendPiece(TetMesh& mesh, const TetMesh& piece, const Eigen::RowVector3d& offset,
+                int shareNodes = 0) {
   const int n = static_cast<int>(mesh.numPoints()), m = static_cast<int>(mesh.numTets());
   mesh.points.conservativeResize(n + piece.numPoints(), 3);
-  for (Eigen::Index i = 0; i < piece.numPoints(); ++i) mesh.points.row(n + i) = piece.points.row(i) + offset;
+  for (Eigen::Index i = 0; i < piece.numPoints(); ++i)
+    mesh.points.row(n + i) = piece.points.row(i) + offset;
   mesh.tets.conservativeResize(m + piece.numTets(), 4);
   mesh.tets.bottomRows(piece.numTets()) = piece.tets.array() + n;
   (void)shareNodes;
@@ -461,31 +520,39 @@ TEST(Stability, PieceHangingOnOneNodeOrEdgeIsAnErrorNotASingularMatrix) {
     PrecomputeRequest request = ShellRequest(3, 1);
     // A single tetrahedron that shares only a node or an edge with the tissue's outer surface: the
     // tissue holds it, but it can rotate about that node or edge.
-    const int n = static_cast<int>(request.mesh.numPoints()), m = static_cast<int>(request.mesh.numTets());
+    const int n = static_cast<int>(request.mesh.numPoints()),
+              m = static_cast<int>(request.mesh.numTets());
     const int a = request.sets.kept[0];
     // An outer neighbour of a along the surface: any node of a cell containing a, also kept.
     int b = -1;
     std::vector<char> isKept(n, 0);
-    for (int id : request.sets.kept) isKept[id] = 1;
+    for (int id : request.sets.kept)
+      isKept[id] = 1;
     for (Eigen::Index e = 0; e < m && b < 0; ++e)
       for (int k = 0; k < 4; ++k)
         if (request.mesh.tets(e, k) == a)
           for (int j = 0; j < 4; ++j)
-            if (request.mesh.tets(e, j) != a && isKept[request.mesh.tets(e, j)]) b = request.mesh.tets(e, j);
+            if (request.mesh.tets(e, j) != a && isKept[request.mesh.tets(e, j)])
+              b = request.mesh.tets(e, j);
     ASSERT_GE(b, 0);
     const Eigen::RowVector3d pa = request.mesh.points.row(a), pb = request.mesh.points.row(b);
-    const Eigen::RowVector3d out = pa.normalized() * 0.5, side = (pb - pa).cross(pa).normalized() * 0.3;
+    const Eigen::RowVector3d out = pa.normalized() * 0.5,
+                             side = (pb - pa).cross(pa).normalized() * 0.3;
     request.mesh.points.conservativeResize(n + 3, 3);
     request.mesh.points.row(n) = pa + out + side;
     request.mesh.points.row(n + 1) = pa + out - side;
     request.mesh.points.row(n + 2) = pb + out;
     request.mesh.tets.conservativeResize(m + 1, 4);
     // shared == 1: hangs on node a; shared == 2: hangs on edge (a, b).
-    if (shared == 1) request.mesh.tets.row(m) << a, n + 2, n, n + 1;
-    else request.mesh.tets.row(m) << a, b, n, n + 1;
+    if (shared == 1)
+      request.mesh.tets.row(m) << a, n + 2, n, n + 1;
+    else
+      request.mesh.tets.row(m) << a, b, n, n + 1;
     TetCorners c;
-    for (int k = 0; k < 4; ++k) c.row(k) = request.mesh.points.row(request.mesh.tets(m, k));
-    if (TetVolume(c) < 0) std::swap(request.mesh.tets(m, 2), request.mesh.tets(m, 3));
+    for (int k = 0; k < 4; ++k)
+      c.row(k) = request.mesh.points.row(request.mesh.tets(m, k));
+    if (TetVolume(c) < 0)
+      std::swap(request.mesh.tets(m, 2), request.mesh.tets(m, 3));
     const std::string msg = PrecomputeMessage(request);
     EXPECT_NE(msg.find("can move rigidly"), std::string::npos) << msg;
     EXPECT_NE(msg.find("1 cells"), std::string::npos) << msg;
@@ -515,9 +582,11 @@ TEST(Stability, LargeStrainAndInvertedCellsAreReported) {
     input.recoverInterior = interior;
     s = Solve(*system, input, result);
     ASSERT_TRUE(s.ok) << s.message;
-    std::printf("STABILITY large displacement (interior %d): strain %.1f%%, %lld inverted; %zu warnings\n",
-                interior, 100 * result.largestStrain, result.invertedCells, s.warnings.size());
-    for (const auto& w : s.warnings) std::printf("  warning: %s\n", w.c_str());
+    std::printf(
+        "STABILITY large displacement (interior %d): strain %.1f%%, %lld inverted; %zu warnings\n",
+        interior, 100 * result.largestStrain, result.invertedCells, s.warnings.size());
+    for (const auto& w : s.warnings)
+      std::printf("  warning: %s\n", w.c_str());
     EXPECT_GT(result.largestStrain, 0.1);
     ASSERT_FALSE(s.warnings.empty());
     EXPECT_NE(s.warnings[0].find("linear FEM is outside"), std::string::npos);
@@ -525,7 +594,8 @@ TEST(Stability, LargeStrainAndInvertedCellsAreReported) {
     if (interior) {
       EXPECT_GT(result.invertedCells, 0);
       bool listed = false;
-      for (const auto& w : s.warnings) listed |= w.find("inverted in the deformed result (cells ") != std::string::npos;
+      for (const auto& w : s.warnings)
+        listed |= w.find("inverted in the deformed result (cells ") != std::string::npos;
       EXPECT_TRUE(listed);
     }
   }
@@ -535,7 +605,8 @@ TEST(Stability, CheckDeformationOnAKnownField) {
   const ShellMesh shell = MakeSphericalShell(2, 1, 1.0, 2.0);
   // Uniform stretch of 20% in x: strain 0.2 everywhere, nothing inverted.
   RowVectors3d u(shell.mesh.numPoints(), 3);
-  for (Eigen::Index i = 0; i < u.rows(); ++i) u.row(i) << 0.2 * shell.mesh.points(i, 0), 0, 0;
+  for (Eigen::Index i = 0; i < u.rows(); ++i)
+    u.row(i) << 0.2 * shell.mesh.points(i, 0), 0, 0;
   std::vector<std::string> warnings;
   DeformationReport r = CheckDeformation(shell.mesh, u, warnings, 0.1);
   EXPECT_NEAR(r.largestStrain, 0.2, 1e-12);
@@ -543,12 +614,14 @@ TEST(Stability, CheckDeformationOnAKnownField) {
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("20%"), std::string::npos) << warnings[0];
   // A mirror in x (u = -2x): every cell inverted.
-  for (Eigen::Index i = 0; i < u.rows(); ++i) u.row(i) << -2.0 * shell.mesh.points(i, 0), 0, 0;
+  for (Eigen::Index i = 0; i < u.rows(); ++i)
+    u.row(i) << -2.0 * shell.mesh.points(i, 0), 0, 0;
   warnings.clear();
   r = CheckDeformation(shell.mesh, u, warnings, 0.1);
   EXPECT_EQ(static_cast<Eigen::Index>(r.invertedCells.size()), shell.mesh.numTets());
   ASSERT_EQ(warnings.size(), 2u);
-  EXPECT_NE(warnings[1].find(std::to_string(shell.mesh.numTets()) + " tetrahedra are inverted"), std::string::npos);
+  EXPECT_NE(warnings[1].find(std::to_string(shell.mesh.numTets()) + " tetrahedra are inverted"),
+            std::string::npos);
   EXPECT_NE(warnings[1].find("cells 0, 1, 2"), std::string::npos) << warnings[1];
 }
 
@@ -585,7 +658,8 @@ TEST(Stability, SinglePrecisionResponseIsRedoneInDouble) {
   std::printf("STABILITY single precision: probe deviation %.2e -> %s\n", info.responseProbeError,
               redone.precisionNote.c_str());
 
-  // A caller who accepts single precision keeps the float product, and the note says how good it is.
+  // A caller who accepts single precision keeps the float product, and the note says how good it
+  // is.
   request.options.responseTolerance = 1e-4;
   ASSERT_TRUE(Precompute(request, looseSystem).ok);
   SolveResult loose;
