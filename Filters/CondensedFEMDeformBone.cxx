@@ -1,9 +1,11 @@
 #include "CondensedFEMDeformBone.h"
 
 #include "vtkAppendFilter.h"
+#include "vtkConnectivityFilter.h"
 #include "vtkDataArray.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
+#include "vtkIdTypeArray.h"
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
@@ -13,6 +15,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <sstream>
 
 namespace faceplan {
 namespace fem_filter {
@@ -45,6 +49,73 @@ vtkSmartPointer<Array> PointArrayOrFill(vtkPointSet* bone, const char* name, dou
     out->SetValue(i, static_cast<typename Array::ValueType>(v));
   }
   return vtkSmartPointer<Array>(out.GetPointer());
+}
+
+// The connected piece of the bone (vtkConnectivityFilter's region) of each point; -1 for points
+// of no cell.
+std::vector<vtkIdType> PieceOfPoint(vtkPointSet* bone) {
+  vtkSmartPointer<vtkPointSet> copy;
+  copy.TakeReference(bone->NewInstance());
+  copy->CopyStructure(bone);
+  vtkNew<vtkIdTypeArray> index;
+  index->SetName("BonePointIndex");
+  index->SetNumberOfTuples(bone->GetNumberOfPoints());
+  for (vtkIdType i = 0; i < bone->GetNumberOfPoints(); ++i)
+    index->SetValue(i, i);
+  copy->GetPointData()->AddArray(index);
+  vtkNew<vtkConnectivityFilter> connectivity;
+  connectivity->SetInputData(copy);
+  connectivity->SetExtractionModeToAllRegions();
+  connectivity->ColorRegionsOn();
+  connectivity->Update();
+  auto* out = vtkPointSet::SafeDownCast(connectivity->GetOutputDataObject(0));
+  std::vector<vtkIdType> piece(bone->GetNumberOfPoints(), -1);
+  vtkDataArray* ids = out ? out->GetPointData()->GetArray("BonePointIndex") : nullptr;
+  vtkDataArray* regions = out ? out->GetPointData()->GetArray("RegionId") : nullptr;
+  for (vtkIdType i = 0; ids && regions && i < out->GetNumberOfPoints(); ++i)
+    piece[static_cast<vtkIdType>(ids->GetComponent(i, 0))] =
+        static_cast<vtkIdType>(regions->GetComponent(i, 0));
+  return piece;
+}
+
+// When a segment's Displacement does not follow its transform: whether the segment lies on
+// several separate pieces of the bone of which some follow the transform and some do not. That is
+// what appending several Osteotomy outputs into one data set (Append Geometry) gives: each output
+// numbers its segment 1, and the field data keeps one SegmentTransform. The note says so, or is
+// empty when the segment is simply not rigid.
+std::string AppendedSegmentsNote(vtkPointSet* bone, const RowVectors3d& undeformed,
+                                 const RowVectors3d& displacement, const NodeSets& sets,
+                                 const std::vector<SegmentTransform>& transforms) {
+  const std::vector<vtkIdType> piece = PieceOfPoint(bone);
+  // (segment, piece) -> the movable entries on it
+  std::map<std::pair<int, vtkIdType>, std::vector<size_t>> groups;
+  for (size_t k = 0; k < sets.movable.size(); ++k)
+    groups[{sets.movableSegment[k], piece[sets.movable[k]]}].push_back(k);
+  std::map<int, std::pair<int, int>> followingAndNot; // segment -> pieces that follow, that don't
+  for (const auto& [key, entries] : groups) {
+    NodeSets one;
+    RowVectors3d u(static_cast<Eigen::Index>(entries.size()), 3);
+    for (size_t e = 0; e < entries.size(); ++e) {
+      one.movable.push_back(sets.movable[entries[e]]);
+      one.movableSegment.push_back(sets.movableSegment[entries[e]]);
+      u.row(static_cast<Eigen::Index>(e)) = displacement.row(sets.movable[entries[e]]);
+    }
+    const bool follows =
+        static_cast<bool>(CheckSegmentDisplacements(undeformed, one, transforms, u));
+    auto& count = followingAndNot[key.first];
+    (follows ? count.first : count.second) += 1;
+  }
+  for (const auto& [segment, count] : followingAndNot)
+    if (count.first > 0 && count.second > 0) {
+      std::ostringstream note;
+      note << "SegmentId " << segment << " lies on " << count.first + count.second
+           << " separate pieces of the bone that move differently, with one SegmentTransform: "
+              "several Osteotomy outputs appended into one data set (Append Geometry keeps one "
+              "transform and numbers every segment 1). The general path is exact for it; connect "
+              "each Osteotomy to the Bone port instead (several connections) for the rigid path";
+      return note.str();
+    }
+  return std::string();
 }
 
 } // namespace
@@ -151,7 +222,10 @@ BoneSegments ReadBoneSegments(vtkPointSet* bone) {
   const Status check =
       CheckSegmentDisplacements(undeformed, sets, out.transforms, segmentDisplacement);
   if (!check) {
-    out.whyNot = "the bone's Displacement does not follow SegmentTransform (" + check.message + ")";
+    out.whyNot = AppendedSegmentsNote(bone, undeformed, displacement, sets, out.transforms);
+    if (out.whyNot.empty())
+      out.whyNot =
+          "the bone's Displacement does not follow SegmentTransform (" + check.message + ")";
     return out;
   }
   out.usable = true;

@@ -5,6 +5,8 @@
 #include "vtkCellArray.h"
 #include "vtkDataArray.h"
 #include "vtkDoubleArray.h"
+#include "vtkIdList.h"
+#include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
 #include "vtkPoints.h"
@@ -152,10 +154,39 @@ void BoneCache::UndeformedPoints(vtkPointSet* bone, std::vector<double>& points)
   }
 }
 
+DataStamp BoneCache::ContactStampOf(vtkPointSet* bone) {
+  DataStamp stamp = StructureStampOf(bone);
+  AddObject(stamp, bone->GetPointData()->GetArray("SegmentId"));
+  return stamp;
+}
+
+void BoneCache::ContactStructure(vtkPointSet* bone, std::vector<vtkIdType>& cells,
+                                 std::vector<double>& labels) {
+  cells.clear();
+  labels.clear();
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
+    bone->GetCellPoints(c, ids);
+    cells.push_back(bone->GetCellType(c));
+    cells.push_back(ids->GetNumberOfIds());
+    cells.insert(cells.end(), ids->begin(), ids->end());
+  }
+  for (const char* name : {"ROIMask", "SegmentId"}) {
+    vtkDataArray* array = bone->GetPointData()->GetArray(name);
+    labels.push_back(array ? array->GetNumberOfTuples() : -1); // absent differs from empty
+    for (vtkIdType i = 0; array && i < array->GetNumberOfTuples(); ++i)
+      labels.push_back(array->GetComponent(i, 0));
+  }
+}
+
 bool BoneCache::contactStillValid(vtkPointSet* bone, unsigned long tissueGeneration,
                                   double contactDistance) {
-  bool same = haveContact_ && tissueGeneration == contactTissue_ &&
-              contactDistance == contactDistance_ && StructureStampOf(bone) == contactStructure_;
+  bool same =
+      haveContact_ && tissueGeneration == contactTissue_ && contactDistance == contactDistance_;
+  if (same && ContactStampOf(bone) != contactStamp_) {
+    ContactStructure(bone, cellScratch_, labelScratch_);
+    same = cellScratch_ == contactCells_ && labelScratch_ == contactLabels_;
+  }
   if (same) {
     UndeformedPoints(bone, scratch_);
     // Points and Displacement move together in an edit: their difference may change by rounding
@@ -176,7 +207,8 @@ bool BoneCache::contactStillValid(vtkPointSet* bone, unsigned long tissueGenerat
 
 void BoneCache::contactBuilt(vtkPointSet* bone, unsigned long tissueGeneration,
                              double contactDistance) {
-  contactStructure_ = StructureStampOf(bone);
+  contactStamp_ = ContactStampOf(bone);
+  ContactStructure(bone, contactCells_, contactLabels_);
   contactTissue_ = tissueGeneration;
   contactDistance_ = contactDistance;
   UndeformedPoints(bone, contactUndeformed_);

@@ -78,19 +78,28 @@ class BoneCache {
 public:
   Status validate(vtkPointSet* bone);
   // Whether the contact built for this bone still holds: same tissue content, distance, bone cells,
-  // ROIMask and undeformed points as at the last call of `contactBuilt`.
+  // ROIMask, SegmentId and undeformed points as at the last call of `contactBuilt`. Cells, ROIMask
+  // and SegmentId are compared by stamp first and by value when the stamp differs (an Osteotomy
+  // edit hands over new arrays with the same values), so a move never rebuilds the contact.
   bool contactStillValid(vtkPointSet* bone, unsigned long tissueGeneration, double contactDistance);
   void contactBuilt(vtkPointSet* bone, unsigned long tissueGeneration, double contactDistance);
 
 private:
   static DataStamp StructureStampOf(vtkPointSet* bone);
+  static DataStamp ContactStampOf(vtkPointSet* bone);
   static void UndeformedPoints(vtkPointSet* bone, std::vector<double>& points);
+  // Cells (type, size, point ids), ROIMask and SegmentId values: what the contact depends on
+  // besides the undeformed points.
+  static void ContactStructure(vtkPointSet* bone, std::vector<vtkIdType>& cells,
+                               std::vector<double>& labels);
 
   bool validated_ = false;
   DataStamp validatedStructure_;
 
   bool haveContact_ = false;
-  DataStamp contactStructure_;
+  DataStamp contactStamp_;
+  std::vector<vtkIdType> contactCells_, cellScratch_;
+  std::vector<double> contactLabels_, labelScratch_;
   unsigned long contactTissue_ = 0;
   double contactDistance_ = -1.0;
   std::vector<double> contactUndeformed_, scratch_;

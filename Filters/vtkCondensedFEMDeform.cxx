@@ -37,6 +37,7 @@ struct vtkCondensedFEMDeform::Cache {
   unsigned long requestTissue = 0;     // the tissue generation `request` was made from
   bool requestValid = false;
   double contactRelease = -1.0; // the ReleaseDistance the contact was built with
+  int contactBuilds = 0;        // updates that (re)built the contact
   Solver solver;
 };
 
@@ -49,6 +50,10 @@ vtkCondensedFEMDeform::~vtkCondensedFEMDeform() = default;
 
 int vtkCondensedFEMDeform::GetPrecomputeCount() {
   return this->State->solver.precomputeCount();
+}
+
+int vtkCondensedFEMDeform::GetContactBuildCount() {
+  return this->State->contactBuilds;
 }
 
 namespace {
@@ -161,11 +166,11 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   this->UpdateProgress(0.05);
 
   // 3. contact, rebuilt when the tissue, the distance, the release distance or the undeformed
-  // bone changed (a bone with SegmentId is checked by the contact's own key, which covers it).
+  // bone (its cells, ROIMask, SegmentId and points minus Displacement) changed: a move of a cut or
+  // an osteotomy keeps it.
   const unsigned long tissueGeneration = cache.tissue.generation();
   if (!cache.bone.contactStillValid(bone, tissueGeneration, settings.contactDistance) ||
-      settings.releaseDistance != cache.contactRelease ||
-      bone->GetPointData()->GetArray("SegmentId")) {
+      settings.releaseDistance != cache.contactRelease) {
     status = cache.contact.update(tissue, boundary.nodes, bone, settings.contactDistance,
                                   settings.releaseDistance);
     if (!status) {
@@ -174,6 +179,7 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
     }
     cache.bone.contactBuilt(bone, tissueGeneration, settings.contactDistance);
     cache.contactRelease = settings.releaseDistance;
+    ++cache.contactBuilds;
   }
   const ContactMap& contact = cache.contact.map();
   if (contact.tiedNodes.empty()) {

@@ -155,6 +155,9 @@ public:
   /// Number of precomputes (factorizations) this filter has started; for tests and the GUI.
   int GetPrecomputeCount();
 
+  /// Number of times this filter built the tissue-bone contact map; for tests.
+  int GetContactBuildCount();
+
   /// Newer than the last output while an upstream edit arrived during the last RequestData (from a
   /// progress callback, while the precompute ran): the pipeline stamps the output after the edit,
   /// so without this the next update would keep a result of the superseded inputs.

@@ -9,13 +9,11 @@ import sys
 
 import numpy as np
 from paraview.simple import *
-from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
-from vtkmodules.util.vtkConstants import VTK_STRING
 from vtkmodules.vtkCommonDataModel import vtkPolyData
 from vtkmodules.vtkCommonCore import vtkPoints
 
-from faceplan_test_util import ErrorCatcher, check, fetch, finish, producer
+from faceplan_test_util import ErrorCatcher, WarningCatcher, check, fetch, finish, producer
 
 LoadPlugin(sys.argv[1], ns=globals())
 data = sys.argv[2]
@@ -68,21 +66,6 @@ def bone(surface, transform=None, segment=True, sliding=None, below=None):
         s.SetName("Sliding")
         pd.AddArray(s)
     return out
-
-
-class WarningCatcher:
-    def __init__(self, proxy):
-        self.messages = []
-
-        @calldata_type(VTK_STRING)
-        def on_warning(obj, event, message):
-            self.messages.append(message)
-
-        self._callback = on_warning
-        proxy.GetClientSideObject().AddObserver("WarningEvent", on_warning)
-
-    def contains(self, text):
-        return any(text in m for m in self.messages)
 
 
 def run(bones, **properties):

@@ -7,6 +7,9 @@ Le Fort I on the maxilla (Osteotomy, segment below a horizontal cut) and BSSO on
 segments' motions exactly (and zero elsewhere); the soft tissue tied to each segment follows it;
 the plan is linear in the two moves (the response to both equals the sum of the responses to each,
 which also shows that both segments reach the solver); the edits reuse the precompute.
+The appended bone carries SegmentId 1 on both segments and one SegmentTransform: the filter must
+notice when the moves differ, say why and use the exact general path; the supported way, each
+Osteotomy its own Bone connection, uses the rigid path with the same result.
 """
 import os
 import sys
@@ -21,7 +24,8 @@ from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
 from vtkmodules.vtkCommonCore import reference
 from vtkmodules.vtkCommonDataModel import vtkPolyData, vtkStaticCellLocator
-from faceplan_test_util import ErrorCatcher, check, fetch, finish, point_array, points, triangles
+from faceplan_test_util import (ErrorCatcher, WarningCatcher, check, fetch, finish, point_array, points,
+                                triangles)
 
 LEFORT = np.array([-5.0, 0.0, 1.0])  # advancement (anterior is -x) with a slight impaction
 BSSO = np.array([-6.0, 0.0, 0.0])
@@ -38,6 +42,7 @@ bsso.CutPlane1.Normal = [-1.0, 0.0, 0.0]  # the body in front of both rami moves
 bone = AppendGeometry(Input=[lefort, bsso])
 fem = CondensedFEMDeform(Input=tissue, Bone=bone, ContactDistance=1.0)
 errors = ErrorCatcher(fem)
+warnings = WarningCatcher(fem)
 
 
 def solve(lefort_move, bsso_move):
@@ -111,5 +116,38 @@ check(reused2.get("Factorization", 0) == 1, "an edit of a move reuses the factor
 strain = out.GetFieldData().GetArray("LargestStrain")
 print("bimaxillary: largest strain %.1f %%, method %s" % (100 * strain.GetValue(0) if strain else float("nan"),
       out.GetFieldData().GetAbstractArray("Method").GetValue(0)))
+
+
+
+def method_of(data):
+    return data.GetFieldData().GetAbstractArray("Method").GetValue(0)
+
+
+# Appended segments: different moves cannot follow the one transform the appended bone keeps.
+APPENDED_NOTE = "separate pieces of the bone that move differently"
+connected = CondensedFEMDeform(Input=tissue, Bone=[lefort, bsso], ContactDistance=1.0)
+connected_warnings = WarningCatcher(connected)
+for label, lefort_move in (("different moves", LEFORT), ("equal moves", BSSO)):
+    warnings.clear()
+    connected_warnings.clear()
+    u_appended, out, _ = solve(lefort_move, BSSO)
+    connected.UpdatePipeline()
+    joined = fetch(connected)
+    u_connected = point_array(joined, "Displacement")
+    scale = np.abs(u_connected).max()
+    check(np.abs(u_appended - u_connected).max() < 1e-9 * scale,
+          "%s: appended and connected bones give the same tissue motion" % label)
+    check(method_of(joined) == "RigidSegments",
+          "%s: several Bone connections use the rigid path (%s)" % (label, method_of(joined)))
+    check(not connected_warnings.contains(APPENDED_NOTE), "%s: no appended-segments note for connections"
+          % label)
+    if label == "different moves":
+        check(method_of(out) != "RigidSegments", "appended segments with different moves use the general path")
+        check(warnings.contains(APPENDED_NOTE) and warnings.contains("Bone port"),
+              "the note names appended segments and the Bone port: %s" % warnings.messages)
+    else:
+        # One transform fits both segments: the rigid path is exact, and nothing needs saying.
+        check(method_of(out) == "RigidSegments", "appended segments with equal moves may use the rigid path")
+        check(not warnings.contains(APPENDED_NOTE), "no appended-segments note when one transform fits")
 
 finish("TestOsteotomyBimaxillary")

@@ -47,6 +47,26 @@ class ErrorCatcher:
         return any(text in m for m in self.messages)
 
 
+class WarningCatcher:
+    """Collects the messages of vtkWarningMacro calls of a proxy's VTK object."""
+
+    def __init__(self, proxy):
+        self.messages = []
+
+        @calldata_type(VTK_STRING)
+        def on_warning(obj, event, message):
+            self.messages.append(message)
+
+        self._callback = on_warning
+        proxy.GetClientSideObject().AddObserver("WarningEvent", on_warning)
+
+    def clear(self):
+        self.messages = []
+
+    def contains(self, text):
+        return any(text in m for m in self.messages)
+
+
 def producer(dataset):
     """A pipeline source that outputs the given VTK data set."""
     tp = TrivialProducer()
