@@ -184,17 +184,7 @@ DeformationReport CheckBoundedCells(const CondensedSystem& sys, const Eigen::Vec
     const Eigen::Vector3d u0 = cornerDisplacement(cell.source[0]);
     for (int j = 0; j < 3; ++j)
       du.col(j) = cornerDisplacement(cell.source[j + 1]) - u0;
-    const Eigen::Matrix3d gradient = du * cell.inverseEdges;
-    ++report.cellsChecked;
-    if (!CellMayMatter(gradient, report.largestStrain))
-      continue;
-    const CellDeformation evaluated = EvaluateCellDeformation(gradient);
-    if (evaluated.largestStrain > report.largestStrain) {
-      report.largestStrain = evaluated.largestStrain;
-      report.largestStrainCell = cell.cell;
-    }
-    if (evaluated.inverted)
-      report.invertedCells.push_back(cell.cell);
+    AddCellDeformation(report, cell.cell, du * cell.inverseEdges);
   }
   std::sort(report.invertedCells.begin(),
             report.invertedCells.end()); // mesh order, as CheckDeformation

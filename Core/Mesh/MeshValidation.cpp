@@ -215,13 +215,21 @@ std::string CheckElementQuality(const TetMesh& mesh, double threshold, QualityRe
   return warning;
 }
 
-CellDeformation EvaluateCellDeformation(const Eigen::Matrix3d& gradient) {
+void AddCellDeformation(DeformationReport& report, long long cell,
+                        const Eigen::Matrix3d& gradient) {
+  ++report.cellsChecked;
+  const double norm = gradient.norm();
+  if (norm <= report.largestStrain && norm < 1.0)
+    return;
   const Eigen::Matrix3d strain = 0.5 * (gradient + gradient.transpose());
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(strain, Eigen::EigenvaluesOnly);
-  CellDeformation cell;
-  cell.largestStrain = eig.eigenvalues().cwiseAbs().maxCoeff();
-  cell.inverted = !((Eigen::Matrix3d::Identity() + gradient).determinant() > 0.0);
-  return cell;
+  const double largest = eig.eigenvalues().cwiseAbs().maxCoeff();
+  if (largest > report.largestStrain) {
+    report.largestStrain = largest;
+    report.largestStrainCell = cell;
+  }
+  if (!((Eigen::Matrix3d::Identity() + gradient).determinant() > 0.0))
+    report.invertedCells.push_back(cell);
 }
 
 void AppendDeformationWarnings(const DeformationReport& report, double strainLimit,
@@ -258,17 +266,7 @@ DeformationReport CheckDeformation(
     }
     if (!(edges.determinant() > 0.0))
       continue;
-    const Eigen::Matrix3d gradient = du * edges.inverse();
-    ++report.cellsChecked;
-    if (!CellMayMatter(gradient, report.largestStrain))
-      continue;
-    const CellDeformation cell = EvaluateCellDeformation(gradient);
-    if (cell.largestStrain > report.largestStrain) {
-      report.largestStrain = cell.largestStrain;
-      report.largestStrainCell = e;
-    }
-    if (cell.inverted)
-      report.invertedCells.push_back(e);
+    AddCellDeformation(report, e, du * edges.inverse());
   }
   AppendDeformationWarnings(report, strainLimit, warnings);
   return report;

@@ -68,20 +68,11 @@ struct DeformationReport {
   std::vector<long long> invertedCells; // det(I + grad u) <= 0
 };
 
-// One cell's displacement gradient d u_i / d x_j: its largest |principal strain| and whether the
-// deformed cell is inverted (det(I + grad) <= 0).
-struct CellDeformation {
-  double largestStrain = 0.0;
-  bool inverted = false;
-};
-CellDeformation EvaluateCellDeformation(const Eigen::Matrix3d& gradient);
-
-// False when the cell can change neither a largest strain `largestSoFar` nor the inverted list:
-// ||grad||_F bounds every principal strain, and ||grad||_F < 1 keeps det(I + grad) > 0.
-inline bool CellMayMatter(const Eigen::Matrix3d& gradient, double largestSoFar) {
-  const double norm = gradient.norm();
-  return norm > largestSoFar || norm >= 1.0;
-}
+// Adds one cell's displacement gradient (d u_i / d x_j) to a report: its largest |principal
+// strain| and whether the deformed cell is inverted (det(I + grad) <= 0). A cell that can change
+// neither the largest strain nor the inverted list is only counted (||grad||_F bounds every
+// principal strain, and ||grad||_F < 1 keeps det(I + grad) > 0).
+void AddCellDeformation(DeformationReport& report, long long cell, const Eigen::Matrix3d& gradient);
 
 // The warnings CheckDeformation appends for a report (strain over `strainLimit`, inverted cells).
 void AppendDeformationWarnings(const DeformationReport& report, double strainLimit,
