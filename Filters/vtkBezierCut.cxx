@@ -71,7 +71,9 @@ vtkBezierCut::vtkBezierCut() : Internals(new vtkInternals) {
   std::copy(this->InitialCurveV, this->InitialCurveV + 12, this->DefaultCurveV);
 }
 
-vtkBezierCut::~vtkBezierCut() { delete this->Internals; }
+vtkBezierCut::~vtkBezierCut() {
+  delete this->Internals;
+}
 
 unsigned long vtkBezierCut::GetInputConversionCount() const {
   return this->Internals->Input.conversions();

@@ -106,7 +106,7 @@ protected:
   std::string LastError;
   bool CurvesPlaced = false; // by the user; until then RequestData places them over the ROI
   // A unit square in z = 0, Plugin/BezierCut.xml's default_values digit for digit.
-  static constexpr double InitialCurveU[12] = {-0.5, -0.5,      0, -0.1666667, -0.5, 0,
+  static constexpr double InitialCurveU[12] = {-0.5,      -0.5, 0, -0.1666667, -0.5, 0,
                                                0.1666667, -0.5, 0, 0.5,        -0.5, 0};
   static constexpr double InitialCurveV[12] = {-0.5, -0.5,      0, -0.5, -0.1666667, 0,
                                                -0.5, 0.1666667, 0, -0.5, 0.5,        0};

@@ -54,7 +54,9 @@ vtkOsteotomy::~vtkOsteotomy() {
   delete this->Internals;
 }
 
-unsigned long vtkOsteotomy::GetSplitCount() const { return this->Internals->splits; }
+unsigned long vtkOsteotomy::GetSplitCount() const {
+  return this->Internals->splits;
+}
 
 vtkMTimeType vtkOsteotomy::GetMTime() {
   vtkMTimeType t = this->Superclass::GetMTime();
@@ -140,20 +142,20 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
     vtkPolyData* input = vtkPolyData::SafeDownCast(data);
     faceplan::SurfaceMesh inputMesh;
     std::string why;
-    if (!faceplan::vtkconvert::ToSurfaceMesh(
-            input, faceplan::vtkconvert::CellPolicy::SurfaceOnly, inputMesh, why)) {
+    if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly,
+                                             inputMesh, why)) {
       this->Fail(why, output, planesOutput);
       return;
     }
     std::vector<std::uint8_t> inputSides;
-    if (failed(faceplan::ClassifyCutSides(inputMesh.points, planes, this->InsideOut != 0,
-                                          inputSides)))
+    if (failed(
+            faceplan::ClassifyCutSides(inputMesh.points, planes, this->InsideOut != 0, inputSides)))
       return;
     // Convert: split the bone with VTK's clipping, both sides capped, the bookkeeping
     // interpolated.
-    cache.split = of::ClipIntoPieces(of::BookkeepingBone(input),
-                                     faceplan::ConvexPiecesOfCut(planes, this->InsideOut != 0),
-                                     cache.moves);
+    cache.split =
+        of::ClipIntoPieces(of::BookkeepingBone(input),
+                           faceplan::ConvexPiecesOfCut(planes, this->InsideOut != 0), cache.moves);
     if (failed(of::ToOsteotomyBone(cache.split, cache.moves, input->GetFieldData(), cache.bone)))
       return;
     cache.input = std::move(stamp);

@@ -78,10 +78,10 @@ Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
     fanTriangles += std::max<std::int64_t>(mesh.cellSize(c) - 2, 0);
   if (std::int64_t(topology.neighbours.size()) != n ||
       std::int64_t(topology.triangles.size()) != fanTriangles)
-    return Status::Error("the prepared cut topology (" + std::to_string(topology.neighbours.size()) +
-                         " points, " + std::to_string(topology.triangles.size()) +
-                         " triangles) does not belong to this mesh (" + std::to_string(n) +
-                         " points, " + std::to_string(fanTriangles) + " triangles)");
+    return Status::Error(
+        "the prepared cut topology (" + std::to_string(topology.neighbours.size()) + " points, " +
+        std::to_string(topology.triangles.size()) + " triangles) does not belong to this mesh (" +
+        std::to_string(n) + " points, " + std::to_string(fanTriangles) + " triangles)");
   if (std::int64_t(roiMask.size()) != n || std::int64_t(roiBoundary.size()) != n)
     return Status::Error("ROIMask and ROIBoundary need one entry per point (" + std::to_string(n) +
                          "), got " + std::to_string(roiMask.size()) + " and " +
@@ -145,7 +145,8 @@ Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
   mappingOptions.localRepair = options.localRepair;
   mappingOptions.stepSchedules = options.stepSchedules;
   mappingOptions.maxRelaxIterations = options.maxRelaxIterations;
-  const CutMapping mapping = MapCutOntoSurface(surf, mesh, topology.triangles, nbrs, moved, foot, mappingOptions);
+  const CutMapping mapping =
+      MapCutOntoSurface(surf, mesh, topology.triangles, nbrs, moved, foot, mappingOptions);
   r.intermediarySteps = mapping.intermediarySteps;
   if (!mapping.ok) {
     std::string hint = "Try a smaller cut, a larger ROI, a finer mesh or a smoother surface";

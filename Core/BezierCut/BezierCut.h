@@ -83,7 +83,7 @@ struct BezierCutResult {
 // and again (the filter while control points are dragged) builds it once with PrepareCutMesh.
 struct CutMeshTopology {
   std::vector<std::vector<std::int64_t>> neighbours; // sorted, unique, per point
-  std::vector<Tri> triangles;                         // FanTriangles(mesh)
+  std::vector<Tri> triangles;                        // FanTriangles(mesh)
 };
 
 // Validates mesh as BezierCut does and builds its topology (left empty on failure).
