@@ -10,7 +10,8 @@ end of the render (BezierCut + CondensedFEMDeform updates + the render in the GU
 into the pipeline (the two filters and the GUI's reactions to their new data), the representations'
 update (geometry extraction, data delivery) and the render itself, each as wall and process CPU
 time (all threads, llvmpipe's included: a loaded machine inflates it less). It also times the
-render of an unchanged frame, which is what software rendering costs whatever the pipeline does.
+render of an unchanged frame, which is what software rendering costs whatever the pipeline does, and
+repeats the moves with the view at a quarter of its pixels (View > Preview).
 Checks: every move changes the face, no move starts a new precompute. The frame times go into the
 result's info (the wrapper prints them; BENCHMARKS.md records them); they are not checked, since a
 test must not depend on the machine's speed.
