@@ -1,10 +1,11 @@
 """Edit latency through the ParaView pipeline (pvpython, CPU backend).
 
-Two scenes: the Badin face (ROIExtract -> BezierCut -> CondensedFEMDeform, scripts/faceplan_pipeline)
-and the ~100k-tetrahedron face-like shell of faceplan_benchmark (exported by export_shell_scene; its
+Three scenes: the Badin face (ROIExtract -> BezierCut -> CondensedFEMDeform, scripts/faceplan_pipeline),
+its BSSO (Osteotomy -> Append Geometry -> CondensedFEMDeform, scripts/osteotomy_scenes; the edits
+change the segment's translation) and the ~100k-tetrahedron face-like shell of faceplan_benchmark (exported by export_shell_scene; its
 inner sphere is the bone, cut by a Bezier plane over a polar ROI cap). After the first update each
-edit moves the cut's control points a little, so only the bone's Displacement changes; per edit it
-times BezierCut's update and CondensedFEMDeform's update (wall clock around UpdatePipeline, and the
+edit moves the cut's control points (or the segment) a little, so only the bone's Displacement
+changes; per edit it times the bone filters' update and CondensedFEMDeform's update (wall clock around UpdatePipeline, and the
 process's CPU time, which a busy shared machine inflates less) and reads SolveTimeMs from
 CondensedFEMDeform's output (overhead = update wall time - SolveTimeMs). Prints medians and writes them as JSON.
 
@@ -36,10 +37,12 @@ def precompute_count(fem):
     return fem.GetPropertyValue("PrecomputeCount")
 
 
-def run_edits(name, cut, fem, curves, edits):
-    """curves(k) -> (CurveU, CurveV) of edit k; edit 0 is the first (precomputing) update."""
-    cut.CurveU, cut.CurveV = curves(0)
-    cut.UpdatePipeline()
+def run_edits(name, bone_filters, fem, edit, edits, bone_label="BezierCut"):
+    """edit(k) changes the bone's filter for edit k (edit 0: the first, precomputing update);
+    bone_filters are updated in order and timed together as the bone's update."""
+    edit(0)
+    for f in bone_filters:
+        f.UpdatePipeline()
     start = time.perf_counter()
     fem.UpdatePipeline()
     first_ms = 1e3 * (time.perf_counter() - start)
@@ -48,9 +51,10 @@ def run_edits(name, cut, fem, curves, edits):
     precomputes = precompute_count(fem)
     cut_ms, fem_ms, solve_ms, fem_cpu_ms = [], [], [], []
     for k in range(1, edits + 1):
-        cut.CurveU, cut.CurveV = curves(k)
+        edit(k)
         t0 = time.perf_counter()
-        cut.UpdatePipeline()
+        for f in bone_filters:
+            f.UpdatePipeline()
         t1, c1 = time.perf_counter(), time.process_time()
         fem.UpdatePipeline()
         t2, c2 = time.perf_counter(), time.process_time()
@@ -74,15 +78,16 @@ def run_edits(name, cut, fem, curves, edits):
         "fem_update_cpu_ms_median": med(fem_cpu_ms),  # all threads of this process
         "solve_ms_median": med(solve_ms),
         "overhead_ms_median": med(overhead),
-        "cut_update_ms_median": med(cut_ms),
+        "bone_filter": bone_label,
+        "bone_update_ms_median": med(cut_ms),
         "whole_edit_ms_median": med(whole),
     }
     print("%-28s tets %7d  first %8.1f ms | per edit (median of %d): CondensedFEMDeform %6.2f ms "
-          "(p90 %6.2f, CPU %6.2f), SolveTimeMs %6.2f, overhead %5.2f; BezierCut %6.2f; whole edit "
+          "(p90 %6.2f, CPU %6.2f), SolveTimeMs %6.2f, overhead %5.2f; %s %6.2f; whole edit "
           "%6.2f ms"
           % (name, result["tissue_cells"], first_ms, edits, result["fem_update_ms_median"],
              result["fem_update_ms_p90"], result["fem_update_cpu_ms_median"], result["solve_ms_median"],
-             result["overhead_ms_median"], result["cut_update_ms_median"],
+             result["overhead_ms_median"], bone_label, result["bone_update_ms_median"],
              result["whole_edit_ms_median"]))
     return result
 
@@ -93,14 +98,33 @@ def face_scene(data, edits, output_mode):
     fem.Backend = "CPU"
     fem.OutputMode = output_mode
 
-    def curves(k):
+    def edit(k):
         dz = 0.25 * ((k * 7) % 9 - 4) / 4.0  # -0.25 .. 0.25 mm, a different cut each edit
-        u = [c + (dz if i % 3 == 2 else 0.0) for i, c in enumerate(fp.CURVE_U)]
-        v = [c + (dz if i % 3 == 2 else 0.0) for i, c in enumerate(fp.CURVE_V)]
-        return u, v
+        cut.CurveU = [c + (dz if i % 3 == 2 else 0.0) for i, c in enumerate(fp.CURVE_U)]
+        cut.CurveV = [c + (dz if i % 3 == 2 else 0.0) for i, c in enumerate(fp.CURVE_V)]
 
-    result = run_edits("face (%s output)" % output_mode, cut, fem, curves, edits)
+    result = run_edits("face (%s output)" % output_mode, [cut], fem, edit, edits)
     for p in (fem, cut, roi, mandible, tissue):
+        simple.Delete(p)
+    return result
+
+
+def osteotomy_scene(data, edits, output_mode):
+    """The BSSO advancement of scripts/osteotomy_scenes: each edit changes the segment's move (the
+    planes stay), as dragging the translation does; the bone's update is Osteotomy + the Append
+    Geometry that joins the fixed bones."""
+    import osteotomy_scenes as scenes
+    tissue, bone, osteotomy, skeleton, fem = scenes.build(data, "bsso")
+    fem.Backend = "CPU"
+    fem.OutputMode = output_mode
+
+    def edit(k):
+        dx = 0.25 * ((k * 7) % 9 - 4) / 4.0  # -0.25 .. 0.25 mm around the 6 mm advancement
+        osteotomy.Translation = [-6.0 + dx, 0.0, 0.0]
+
+    result = run_edits("face BSSO (%s output)" % output_mode, [osteotomy, skeleton], fem, edit, edits,
+                       bone_label="Osteotomy+Append")
+    for p in [fem, skeleton, osteotomy, bone, tissue] + list(skeleton.Input[1:]):
         simple.Delete(p)
     return result
 
@@ -133,13 +157,12 @@ def shell_scene(path, edits, output_mode):
     fem.OutputMode = output_mode
     fem.ContactDistance = 0.5
 
-    def curves(k):
+    def edit(k):
         z = 75.0 + 0.25 * ((k * 7) % 9 - 4) / 4.0  # a plane cutting the pole's cap
-        u = [-70, -70, z, -23, -70, z, 23, -70, z, 70, -70, z]
-        v = [-70, -70, z, -70, -23, z, -70, 23, z, -70, 70, z]
-        return u, v
+        cut.CurveU = [-70, -70, z, -23, -70, z, 23, -70, z, 70, -70, z]
+        cut.CurveV = [-70, -70, z, -70, -23, z, -70, 23, z, -70, 70, z]
 
-    result = run_edits("shell ~100k (%s output)" % output_mode, cut, fem, curves, edits)
+    result = run_edits("shell ~100k (%s output)" % output_mode, [cut], fem, edit, edits)
     for p in (fem, cut, roi, bone, tissue):
         simple.Delete(p)
     return result
@@ -155,7 +178,8 @@ def main():
     args = parser.parse_args()
     simple.LoadPlugin(args.plugin)  # into paraview.simple, where faceplan_pipeline finds the filters
     results = [face_scene(args.data, args.edits, "Volume"),
-               face_scene(args.data, args.edits, "Surface")]
+               face_scene(args.data, args.edits, "Surface"),
+               osteotomy_scene(args.data, args.edits, "Surface")]
     if args.shell_scene:
         results.append(shell_scene(args.shell_scene, args.edits, "Surface"))
     if args.json:

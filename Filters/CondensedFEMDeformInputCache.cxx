@@ -21,35 +21,6 @@ namespace fem_filter {
 
 namespace {
 
-void AddObject(DataStamp& stamp, vtkObject* object) {
-  stamp.arrays.push_back(object);
-  stamp.times.push_back(object ? object->GetMTime() : 0);
-}
-
-void AddCells(DataStamp& stamp, vtkCellArray* cells) {
-  AddObject(stamp, cells);
-  if (cells) {
-    AddObject(stamp, cells->GetConnectivityArray());
-    AddObject(stamp, cells->GetOffsetsArray());
-  }
-}
-
-// The cell arrays of the data set types CondensedFEMDeform takes; for any other vtkPointSet the
-// data object's own time stands for its cells.
-void AddCellsOf(DataStamp& stamp, vtkPointSet* data) {
-  if (auto* grid = vtkUnstructuredGrid::SafeDownCast(data)) {
-    AddCells(stamp, grid->GetCells());
-    AddObject(stamp, grid->GetCellTypesArray());
-  } else if (auto* poly = vtkPolyData::SafeDownCast(data)) {
-    AddCells(stamp, poly->GetVerts());
-    AddCells(stamp, poly->GetLines());
-    AddCells(stamp, poly->GetPolys());
-    AddCells(stamp, poly->GetStrips());
-  } else {
-    stamp.times.push_back(data->GetMTime());
-  }
-}
-
 template <class Matrix> bool SameMatrix(const Matrix& a, const Matrix& b) {
   return a.rows() == b.rows() && a.cols() == b.cols() && a == b;
 }
@@ -60,15 +31,6 @@ bool SameMaterials(const Materials& a, const Materials& b) {
 }
 
 } // namespace
-
-DataStamp StampOf(vtkPointSet* data) {
-  DataStamp stamp;
-  stamp.object = data;
-  stamp.times.push_back(data->GetMTime()); // points, point and cell data
-  AddObject(stamp, data->GetPoints());
-  AddCellsOf(stamp, data);
-  return stamp;
-}
 
 Status TissueCache::update(vtkUnstructuredGrid* tissue, const Settings& settings) {
   DataStamp stamp = StampOf(tissue);
@@ -112,8 +74,8 @@ DataStamp BoneCache::StructureStampOf(vtkPointSet* bone) {
   DataStamp stamp;
   stamp.object = nullptr; // an edit may hand over a new bone object with the same cells
   stamp.times.push_back(static_cast<vtkMTimeType>(bone->GetNumberOfPoints()));
-  AddCellsOf(stamp, bone);
-  AddObject(stamp, bone->GetPointData()->GetArray("ROIMask"));
+  AddCellsToStamp(stamp, bone);
+  AddToStamp(stamp, bone->GetPointData()->GetArray("ROIMask"));
   return stamp;
 }
 
@@ -156,7 +118,7 @@ void BoneCache::UndeformedPoints(vtkPointSet* bone, std::vector<double>& points)
 
 DataStamp BoneCache::ContactStampOf(vtkPointSet* bone) {
   DataStamp stamp = StructureStampOf(bone);
-  AddObject(stamp, bone->GetPointData()->GetArray("SegmentId"));
+  AddToStamp(stamp, bone->GetPointData()->GetArray("SegmentId"));
   return stamp;
 }
 

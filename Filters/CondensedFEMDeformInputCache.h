@@ -11,6 +11,7 @@
 // one. Private to FacePlan::Filters.
 #include "CondensedFEMDeformConvert.h"
 #include "CondensedFEMDeformSettings.h"
+#include "FacePlanDataStamp.h"
 
 #include "Common/Status.h"
 #include "Mesh/TetMesh.h"
@@ -24,21 +25,6 @@ class vtkUnstructuredGrid;
 
 namespace faceplan {
 namespace fem_filter {
-
-// A data set's identity and modification times; equal stamps mean equal content as long as
-// whoever changes the data calls Modified() (VTK's contract).
-struct DataStamp {
-  const void* object = nullptr;
-  std::vector<const void*> arrays;
-  std::vector<vtkMTimeType> times;
-  bool operator==(const DataStamp& other) const {
-    return object == other.object && arrays == other.arrays && times == other.times;
-  }
-  bool operator!=(const DataStamp& other) const { return !(*this == other); }
-};
-
-// Everything: the data object with its points and arrays, and its cells.
-DataStamp StampOf(vtkPointSet* data);
 
 // The tissue validated and converted (mesh, materials, boundary), redone only when it or the
 // material properties changed. `generation` counts content changes: it stays the same when a new

@@ -1,13 +1,11 @@
 #include "vtkBezierCut.h"
 
 #include "BezierCut/BezierCut.h"
-#include "BezierCut/DefaultCurves.h"
+#include "BezierCutInputCache.h"
 #include "FacePlanGather.h"
-#include "FacePlanVTKConvert.h"
 
+#include <vtkAlgorithmOutput.h>
 #include <vtkCellArray.h>
-#include <vtkCellType.h>
-#include <vtkDataArray.h>
 #include <vtkDataObject.h>
 #include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
@@ -22,7 +20,7 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 
-#include <cmath>
+#include <algorithm>
 
 vtkStandardNewMacro(vtkBezierCut);
 
@@ -49,15 +47,6 @@ void GetPoint(const std::vector<double>& c, vtkIdType i, double p[3]) {
   for (int k = 0; k < 3; ++k)
     p[k] = (i >= 0 && 3 * i + 3 <= static_cast<vtkIdType>(c.size())) ? c[3 * i + k] : 0.0;
 }
-vtkIdType CountSurfaceCells(vtkPointSet* input) {
-  vtkIdType count = 0;
-  for (vtkIdType c = 0; c < input->GetNumberOfCells(); ++c) {
-    const int type = input->GetCellType(c);
-    count += type == VTK_TRIANGLE || type == VTK_QUAD || type == VTK_POLYGON || type == VTK_PIXEL ||
-             type == VTK_TRIANGLE_STRIP;
-  }
-  return count;
-}
 std::vector<Eigen::Vector3d> ToCurve(const std::vector<double>& c) {
   std::vector<Eigen::Vector3d> out;
   for (std::size_t i = 0; i + 2 < c.size(); i += 3) out.emplace_back(c[i], c[i + 1], c[i + 2]);
@@ -65,19 +54,68 @@ std::vector<Eigen::Vector3d> ToCurve(const std::vector<double>& c) {
 }
 } // namespace
 
-vtkBezierCut::vtkBezierCut() {
+class vtkBezierCut::vtkInternals {
+public:
+  faceplan::bezier_filter::InputCache Input;
+};
+
+vtkBezierCut::vtkBezierCut() : Internals(new vtkInternals) {
   this->SetNumberOfInputPorts(1);
   this->SetNumberOfOutputPorts(2);
   // A unit square in z = 0; until the user places the curves RequestData replaces it with a patch
   // over the input's ROI (DefaultCutCurves). The values are Plugin/BezierCut.xml's default_values
   // digit for digit, so that the GUI's initial push of them does not count as placing the curves.
-  const double u[12] = {-0.5, -0.5, 0, -0.1666667, -0.5, 0, 0.1666667, -0.5, 0, 0.5, -0.5, 0};
-  const double v[12] = {-0.5, -0.5, 0, -0.5, -0.1666667, 0, -0.5, 0.1666667, 0, -0.5, 0.5, 0};
-  this->CurveU.assign(u, u + 12);
-  this->CurveV.assign(v, v + 12);
+  this->CurveU.assign(this->InitialCurveU, this->InitialCurveU + 12);
+  this->CurveV.assign(this->InitialCurveV, this->InitialCurveV + 12);
+  std::copy(this->InitialCurveU, this->InitialCurveU + 12, this->DefaultCurveU);
+  std::copy(this->InitialCurveV, this->InitialCurveV + 12, this->DefaultCurveV);
 }
 
-vtkBezierCut::~vtkBezierCut() = default;
+vtkBezierCut::~vtkBezierCut() {
+  delete this->Internals;
+}
+
+unsigned long vtkBezierCut::GetInputConversionCount() const {
+  return this->Internals->Input.conversions();
+}
+
+double* vtkBezierCut::GetDefaultCurveU() {
+  this->UpdateDefaultCurves();
+  return this->DefaultCurveU;
+}
+
+double* vtkBezierCut::GetDefaultCurveV() {
+  this->UpdateDefaultCurves();
+  return this->DefaultCurveV;
+}
+
+// The GUI asks for these while it creates the filter, before any Apply: the upstream pipeline is
+// brought up to date here as ParaView's own domains do for data information. Under MPI only rank
+// 0 is asked and the upstream update is collective, so the curves then come from what rank 0
+// already holds. Without usable input they are the constructor's (= the XML defaults), which the
+// GUI then pushes unchanged.
+void vtkBezierCut::UpdateDefaultCurves() {
+  std::copy(this->InitialCurveU, this->InitialCurveU + 12, this->DefaultCurveU);
+  std::copy(this->InitialCurveV, this->InitialCurveV + 12, this->DefaultCurveV);
+  if (this->GetNumberOfInputConnections(0) < 1)
+    return;
+  vtkAlgorithmOutput* connection = this->GetInputConnection(0, 0);
+  vtkAlgorithm* upstream = connection ? connection->GetProducer() : nullptr;
+  if (!upstream)
+    return;
+  if (!faceplan::gather::DistributedController())
+    upstream->Update(connection->GetIndex());
+  auto* input = vtkPointSet::SafeDownCast(upstream->GetOutputDataObject(connection->GetIndex()));
+  if (!input || !this->Internals->Input.update(input) || !this->Internals->Input.hasDefaultCurves())
+    return;
+  const auto& u = this->Internals->Input.defaultCurveU();
+  const auto& v = this->Internals->Input.defaultCurveV();
+  for (int k = 0; k < 4; ++k)
+    for (int c = 0; c < 3; ++c) {
+      this->DefaultCurveU[3 * k + c] = u[k][c];
+      this->DefaultCurveV[3 * k + c] = v[k][c];
+    }
+}
 
 // A control point set to a value other than the current one counts as placed by the user; the
 // GUI's initial push of the XML defaults (equal to the constructor's) does not.
@@ -188,68 +226,23 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
                output, surface);
     return false;
   }
+  // Validate and convert (kept while the input is unchanged).
+  faceplan::bezier_filter::InputCache& cache = this->Internals->Input;
+  const faceplan::Status converted = cache.update(input);
+  if (!converted) {
+    this->Fail(converted.message, output, surface);
+    return false;
+  }
   const vtkIdType n = input->GetNumberOfPoints();
-  if (n == 0) {
-    this->Fail("the input has no points", output, surface);
-    return false;
-  }
-  vtkDataArray* maskArray = input->GetPointData()->GetArray("ROIMask");
-  vtkDataArray* boundaryArray = input->GetPointData()->GetArray("ROIBoundary");
-  if (!maskArray || !boundaryArray || maskArray->GetNumberOfComponents() != 1 ||
-      boundaryArray->GetNumberOfComponents() != 1) {
-    this->Fail("the input needs one-component point arrays ROIMask and ROIBoundary; apply ROI "
-               "Extract first",
-               output, surface);
-    return false;
-  }
-  for (vtkDataArray* a : {maskArray, boundaryArray}) {
-    if (a->GetNumberOfTuples() != n) {
-      this->Fail(std::string("the point array ") + a->GetName() + " has " +
-                     std::to_string(a->GetNumberOfTuples()) + " values; it needs one per point (" +
-                     std::to_string(n) + ")",
-                 output, surface);
-      return false;
-    }
-    for (vtkIdType i = 0; i < n; ++i)
-      if (!std::isfinite(a->GetComponent(i, 0))) {
-        this->Fail(std::string("the point array ") + a->GetName() +
-                       " has a NaN or infinite value at point " + std::to_string(i),
-                   output, surface);
-        return false;
+  if (!this->CurvesPlaced && cache.hasDefaultCurves()) {
+    // Kept without Modified(): they follow the input until the user sets control points.
+    this->CurveU.clear();
+    this->CurveV.clear();
+    for (int k = 0; k < 4; ++k)
+      for (int c = 0; c < 3; ++c) {
+        this->CurveU.push_back(cache.defaultCurveU()[k][c]);
+        this->CurveV.push_back(cache.defaultCurveV()[k][c]);
       }
-  }
-
-  // Convert.
-  faceplan::SurfaceMesh mesh;
-  std::string why;
-  if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly, mesh, why)) {
-    this->Fail(why, output, surface);
-    return false;
-  }
-  const vtkIdType skipped = input->GetNumberOfCells() - CountSurfaceCells(input);
-  if (mesh.numCells() == 0) {
-    this->Fail("the input has no surface cells (triangles or polygons) to cut; lines and vertices "
-               "cannot be cut",
-               output, surface);
-    return false;
-  }
-  std::vector<std::uint8_t> mask(static_cast<std::size_t>(n)), boundary(static_cast<std::size_t>(n));
-  for (vtkIdType i = 0; i < n; ++i) {
-    mask[static_cast<std::size_t>(i)] = maskArray->GetComponent(i, 0) != 0.0;
-    boundary[static_cast<std::size_t>(i)] = boundaryArray->GetComponent(i, 0) != 0.0;
-  }
-  if (!this->CurvesPlaced) {
-    std::vector<Eigen::Vector3d> u, v;
-    if (faceplan::DefaultCutCurves(mesh.points, mask, boundary, u, v)) {
-      // Kept without Modified(): they follow the input until the user sets control points.
-      this->CurveU.clear();
-      this->CurveV.clear();
-      for (int k = 0; k < 4; ++k)
-        for (int c = 0; c < 3; ++c) {
-          this->CurveU.push_back(u[k][c]);
-          this->CurveV.push_back(v[k][c]);
-        }
-    }
   }
   faceplan::BezierCutOptions options;
   options.operation = this->Operation == FILL ? faceplan::CutOperation::Fill : faceplan::CutOperation::Cut;
@@ -259,24 +252,25 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
   // Core.
   faceplan::BezierCutResult result;
   const faceplan::Status status =
-    faceplan::BezierCut(mesh, mask, boundary, ToCurve(this->CurveU), ToCurve(this->CurveV), options, result);
+      faceplan::BezierCut(cache.mesh(), cache.topology(), cache.mask(), cache.boundary(),
+                          ToCurve(this->CurveU), ToCurve(this->CurveV), options, result);
   if (!status) {
     this->Fail(status.message, output, surface);
     return false;
   }
   for (const std::string& w : result.warnings) vtkWarningMacro(<< "Bezier Cut: " << w);
-  if (skipped > 0)
-    vtkWarningMacro(<< "Bezier Cut: " << skipped
+  if (cache.skippedCells() > 0)
+    vtkWarningMacro(<< "Bezier Cut: " << cache.skippedCells()
                     << " line or vertex cells of the input were ignored (passed through unmoved)");
 
   // Output 0: same cells and arrays, new points. They are always double precision: rounding the
   // moved points to float could flip the tiny triangles that a valid cut may contain (unmoved
   // points keep their values exactly; float to double is exact).
   output->ShallowCopy(input);
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->DeepCopy(cache.points());
   vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(n);
-  for (vtkIdType i = 0; i < n; ++i) points->SetPoint(i, input->GetPoints()->GetPoint(i));
+  points->SetData(coordinates);
   vtkNew<vtkDoubleArray> displacement;
   displacement->SetName("Displacement");
   displacement->SetNumberOfComponents(3);

@@ -79,6 +79,19 @@ public:
   /// The message of the last error ("" after a successful run).
   const char* GetLastErrorMessage() const { return this->LastError.c_str(); }
 
+  /// How many times the input was validated and converted. What depends only on the input (the
+  /// converted surface, ROI flags, edge neighbours, fan triangles, default curves) is kept while
+  /// the input is unchanged, so that an edit of the control points redoes only the cut.
+  unsigned long GetInputConversionCount() const;
+
+  ///@{
+  /// The curves the filter places itself over the current input (see SetCurveUPoint), 4 control
+  /// points each, for the GUI's initial widget positions; all zero while the input is missing or
+  /// unusable. They read the input's data, bringing the upstream pipeline up to date first.
+  double* GetDefaultCurveU() VTK_SIZEHINT(12);
+  double* GetDefaultCurveV() VTK_SIZEHINT(12);
+  ///@}
+
 protected:
   vtkBezierCut();
   ~vtkBezierCut() override;
@@ -92,11 +105,21 @@ protected:
   int SurfaceResolution = 16;
   std::string LastError;
   bool CurvesPlaced = false; // by the user; until then RequestData places them over the ROI
+  // A unit square in z = 0, Plugin/BezierCut.xml's default_values digit for digit.
+  static constexpr double InitialCurveU[12] = {-0.5,      -0.5, 0, -0.1666667, -0.5, 0,
+                                               0.1666667, -0.5, 0, 0.5,        -0.5, 0};
+  static constexpr double InitialCurveV[12] = {-0.5, -0.5,      0, -0.5, -0.1666667, 0,
+                                               -0.5, 0.1666667, 0, -0.5, 0.5,        0};
+  double DefaultCurveU[12] = {};
+  double DefaultCurveV[12] = {};
 
 private:
   vtkBezierCut(const vtkBezierCut&) = delete;
   void operator=(const vtkBezierCut&) = delete;
   void Fail(const std::string& message, vtkDataObject* output, vtkDataObject* surface);
+  void UpdateDefaultCurves();
+  class vtkInternals;
+  vtkInternals* Internals;
   // The serial filter on a whole input; false (after logging the error) when it failed.
   bool Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* surface);
 };

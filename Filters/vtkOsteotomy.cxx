@@ -1,5 +1,6 @@
 #include "vtkOsteotomy.h"
 
+#include "FacePlanDataStamp.h"
 #include "FacePlanGather.h"
 #include "FacePlanVTKConvert.h"
 #include "Osteotomy/CutPlanes.h"
@@ -16,16 +17,33 @@
 #include <vtkInformationVector.h>
 #include <vtkMultiProcessController.h>
 #include <vtkObjectFactory.h>
+#include <vtkPointSet.h>
 #include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <vector>
 
 vtkStandardNewMacro(vtkOsteotomy);
 vtkCxxSetObjectMacro(vtkOsteotomy, CutPlane1, vtkImplicitFunction);
 vtkCxxSetObjectMacro(vtkOsteotomy, CutPlane2, vtkImplicitFunction);
 
-vtkOsteotomy::vtkOsteotomy() {
+// The split bone of the last run and Core's view of it, kept while the input (by its stamp), the
+// planes and the sides stay the same.
+class vtkOsteotomy::vtkInternals {
+public:
+  bool valid = false;
+  faceplan::DataStamp input;
+  std::vector<double> key; // InsideOut, plane origins and normals
+  vtkSmartPointer<vtkPolyData> split;
+  std::vector<std::uint8_t> moves;
+  faceplan::OsteotomyBone bone;
+  unsigned long splits = 0;
+};
+
+vtkOsteotomy::vtkOsteotomy() : Internals(new vtkInternals) {
   this->SetNumberOfInputPorts(1);
   this->SetNumberOfOutputPorts(2);
 }
@@ -33,6 +51,11 @@ vtkOsteotomy::vtkOsteotomy() {
 vtkOsteotomy::~vtkOsteotomy() {
   this->SetCutPlane1(nullptr);
   this->SetCutPlane2(nullptr);
+  delete this->Internals;
+}
+
+unsigned long vtkOsteotomy::GetSplitCount() const {
+  return this->Internals->splits;
 }
 
 vtkMTimeType vtkOsteotomy::GetMTime() {
@@ -89,53 +112,59 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
     return !s;
   };
 
-  // Validate: the input, the planes, and that the cut leaves vertices on both sides.
   if (this->PivotMode != SEGMENT_CENTROID && this->PivotMode != CUSTOM_PIVOT) {
     this->Fail("PivotMode must be 0 (SegmentCentroid) or 1 (Custom), not " +
                    std::to_string(this->PivotMode),
                output, planesOutput);
     return;
   }
-  if (failed(of::ValidateInput(data)))
-    return;
-  vtkPolyData* input = vtkPolyData::SafeDownCast(data);
   std::vector<vtkImplicitFunction*> functions{this->CutPlane1};
   if (this->UseSecondPlane)
     functions.push_back(this->CutPlane2);
   std::vector<faceplan::CutPlane> planes;
-  if (failed(of::ToCutPlanes(functions, planes)))
-    return;
-  faceplan::SurfaceMesh inputMesh;
-  std::string why;
-  if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly,
-                                           inputMesh, why)) {
-    this->Fail(why, output, planesOutput);
-    return;
-  }
-  std::vector<std::uint8_t> inputSides;
-  if (failed(
-          faceplan::ClassifyCutSides(inputMesh.points, planes, this->InsideOut != 0, inputSides)))
-    return;
-
-  // Convert: split the bone with VTK's clipping, both sides capped, the bookkeeping interpolated.
+  const faceplan::Status planesStatus = of::ToCutPlanes(functions, planes);
   std::vector<double> key{this->InsideOut ? 1.0 : 0.0};
   for (const faceplan::CutPlane& p : planes) {
     key.insert(key.end(), p.origin.data(), p.origin.data() + 3);
     key.insert(key.end(), p.normal.data(), p.normal.data() + 3);
   }
-  if (!this->Split.split || this->Split.input != input ||
-      this->Split.inputTime != input->GetMTime() || this->Split.key != key) {
-    this->Split.split = of::ClipIntoPieces(
-        of::BookkeepingBone(input), faceplan::ConvexPiecesOfCut(planes, this->InsideOut != 0),
-        this->Split.moves);
-    this->Split.input = input;
-    this->Split.inputTime = input->GetMTime();
-    this->Split.key = key;
+  vtkInternals& cache = *this->Internals;
+  auto* pointSet = vtkPointSet::SafeDownCast(data);
+  faceplan::DataStamp stamp;
+  if (pointSet)
+    stamp = faceplan::StampOf(pointSet);
+  if (!(cache.valid && planesStatus && pointSet && stamp == cache.input && key == cache.key)) {
+    // Validate (the input, the planes, and that the cut leaves vertices on both sides) and split:
+    // only when the input, the planes or the sides changed.
+    cache.valid = false;
+    if (failed(of::ValidateInput(data)) || failed(planesStatus))
+      return;
+    vtkPolyData* input = vtkPolyData::SafeDownCast(data);
+    faceplan::SurfaceMesh inputMesh;
+    std::string why;
+    if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::SurfaceOnly,
+                                             inputMesh, why)) {
+      this->Fail(why, output, planesOutput);
+      return;
+    }
+    std::vector<std::uint8_t> inputSides;
+    if (failed(
+            faceplan::ClassifyCutSides(inputMesh.points, planes, this->InsideOut != 0, inputSides)))
+      return;
+    // Convert: split the bone with VTK's clipping, both sides capped, the bookkeeping
+    // interpolated.
+    cache.split =
+        of::ClipIntoPieces(of::BookkeepingBone(input),
+                           faceplan::ConvexPiecesOfCut(planes, this->InsideOut != 0), cache.moves);
+    if (failed(of::ToOsteotomyBone(cache.split, cache.moves, input->GetFieldData(), cache.bone)))
+      return;
+    cache.input = std::move(stamp);
+    cache.key = std::move(key);
+    cache.valid = true;
+    ++cache.splits;
   }
-  vtkPolyData* split = this->Split.split;
-  faceplan::OsteotomyBone bone;
-  if (failed(of::ToOsteotomyBone(split, this->Split.moves, input->GetFieldData(), bone)))
-    return;
+  vtkPolyData* input = vtkPolyData::SafeDownCast(data);
+  const faceplan::OsteotomyBone& bone = cache.bone;
   faceplan::OsteotomyMove move;
   move.move.translation = Eigen::Vector3d(this->Translation);
   move.move.rotationDegrees = Eigen::Vector3d(this->Rotation);
@@ -150,7 +179,7 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
   std::copy(result.pivot.data(), result.pivot.data() + 3, this->UsedPivot);
 
   // Outputs.
-  of::BuildBoneOutput(result, split->GetPolys(), input->GetFieldData(), output);
+  of::BuildBoneOutput(result, cache.split->GetPolys(), input->GetFieldData(), output);
   std::array<double, 6> box;
   input->GetBounds(box.data());
   of::BuildCutPlaneOutput(planes, box, planesOutput);

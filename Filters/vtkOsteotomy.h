@@ -27,11 +27,8 @@
 
 #include "FacePlanFiltersModule.h"
 #include "vtkPolyDataAlgorithm.h"
-#include "vtkSmartPointer.h" // for the split cache
 
-#include <cstdint>
 #include <string>
-#include <vector>
 
 class vtkImplicitFunction;
 
@@ -83,6 +80,11 @@ public:
   /// The pivot the last run used (the centroid in SEGMENT_CENTROID mode).
   vtkGetVector3Macro(UsedPivot, double);
 
+  /// How many times the bone was validated, split and converted. The split bone is kept while the
+  /// input, the planes and the sides stay the same, so that an edit of the move (Translation,
+  /// Rotation, pivot) redoes only the move and the output.
+  unsigned long GetSplitCount() const;
+
   /// The message of the last error ("" after a successful run).
   const char* GetLastErrorMessage() const { return this->LastError.c_str(); }
 
@@ -105,15 +107,8 @@ protected:
   double UsedPivot[3] = {0.0, 0.0, 0.0};
   std::string LastError;
 
-  // The split bone of the last run, reused while input, planes and sides stay the same: an edit
-  // of the move then skips the clipping.
-  struct SplitCache {
-    const void* input = nullptr;
-    vtkMTimeType inputTime = 0;
-    std::vector<double> key; // plane origins and normals, InsideOut
-    vtkSmartPointer<vtkPolyData> split;
-    std::vector<std::uint8_t> moves;
-  } Split;
+  class vtkInternals;
+  vtkInternals* Internals;
 
 private:
   vtkOsteotomy(const vtkOsteotomy&) = delete;

@@ -41,7 +41,30 @@ std::vector<std::vector<std::int64_t>> EdgeNeighbours(const SurfaceMesh& mesh) {
 
 } // namespace
 
+Status PrepareCutMesh(const SurfaceMesh& mesh, CutMeshTopology& topology) {
+  topology = CutMeshTopology{};
+  const Status s = ValidateSurfaceMesh(mesh);
+  if (!s)
+    return s;
+  topology.neighbours = EdgeNeighbours(mesh);
+  topology.triangles = FanTriangles(mesh);
+  return Status::Ok();
+}
+
 Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMask,
+                 const std::vector<std::uint8_t>& roiBoundary, const std::vector<Vector3d>& curveU,
+                 const std::vector<Vector3d>& curveV, const BezierCutOptions& options,
+                 BezierCutResult& result) {
+  result = BezierCutResult{};
+  CutMeshTopology topology;
+  const Status s = PrepareCutMesh(mesh, topology);
+  if (!s)
+    return s;
+  return BezierCut(mesh, topology, roiMask, roiBoundary, curveU, curveV, options, result);
+}
+
+Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
+                 const std::vector<std::uint8_t>& roiMask,
                  const std::vector<std::uint8_t>& roiBoundary, const std::vector<Vector3d>& curveU,
                  const std::vector<Vector3d>& curveV, const BezierCutOptions& options,
                  BezierCutResult& result) {
@@ -50,6 +73,15 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
   if (!s)
     return s;
   const std::int64_t n = mesh.numPoints();
+  std::int64_t fanTriangles = 0;
+  for (std::int64_t c = 0; c < mesh.numCells(); ++c)
+    fanTriangles += std::max<std::int64_t>(mesh.cellSize(c) - 2, 0);
+  if (std::int64_t(topology.neighbours.size()) != n ||
+      std::int64_t(topology.triangles.size()) != fanTriangles)
+    return Status::Error(
+        "the prepared cut topology (" + std::to_string(topology.neighbours.size()) + " points, " +
+        std::to_string(topology.triangles.size()) + " triangles) does not belong to this mesh (" +
+        std::to_string(n) + " points, " + std::to_string(fanTriangles) + " triangles)");
   if (std::int64_t(roiMask.size()) != n || std::int64_t(roiBoundary.size()) != n)
     return Status::Error("ROIMask and ROIBoundary need one entry per point (" + std::to_string(n) +
                          "), got " + std::to_string(roiMask.size()) + " and " +
@@ -108,12 +140,13 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
     return Status::Ok();
   }
 
-  const std::vector<std::vector<std::int64_t>> nbrs = EdgeNeighbours(mesh);
+  const std::vector<std::vector<std::int64_t>>& nbrs = topology.neighbours;
   CutMappingOptions mappingOptions;
   mappingOptions.localRepair = options.localRepair;
   mappingOptions.stepSchedules = options.stepSchedules;
   mappingOptions.maxRelaxIterations = options.maxRelaxIterations;
-  const CutMapping mapping = MapCutOntoSurface(surf, mesh, nbrs, moved, foot, mappingOptions);
+  const CutMapping mapping =
+      MapCutOntoSurface(surf, mesh, topology.triangles, nbrs, moved, foot, mappingOptions);
   r.intermediarySteps = mapping.intermediarySteps;
   if (!mapping.ok) {
     std::string hint = "Try a smaller cut, a larger ROI, a finer mesh or a smoother surface";

@@ -37,6 +37,7 @@
 // If all fail, an error is returned (naming ROIBoundary vertices that lie beyond the surface, the
 // usual cause), never a bad mesh.
 #include "BezierCut/BezierSurface.h"
+#include "BezierCut/MeshIntersection.h"
 #include "Common/Status.h"
 #include "Mesh/SurfaceMesh.h"
 
@@ -77,10 +78,30 @@ struct BezierCutResult {
   std::vector<std::string> warnings; // e.g. nothing moved
 };
 
+// What BezierCut derives from the bone surface alone, whatever the control points: each point's
+// edge neighbours and the fan triangulation of the cells. A caller that cuts the same bone again
+// and again (the filter while control points are dragged) builds it once with PrepareCutMesh.
+struct CutMeshTopology {
+  std::vector<std::vector<std::int64_t>> neighbours; // sorted, unique, per point
+  std::vector<Tri> triangles;                        // FanTriangles(mesh)
+};
+
+// Validates mesh as BezierCut does and builds its topology (left empty on failure).
+Status PrepareCutMesh(const SurfaceMesh& mesh, CutMeshTopology& topology);
+
 // mesh: the bone surface; roiMask / roiBoundary: one entry per point (see ROIExtract.h).
 // On failure `result` is left empty and the message says which control point/surface problem or
 // mapping problem occurred.
 Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMask,
+                 const std::vector<std::uint8_t>& roiBoundary,
+                 const std::vector<Eigen::Vector3d>& curveU,
+                 const std::vector<Eigen::Vector3d>& curveV, const BezierCutOptions& options,
+                 BezierCutResult& result);
+
+// The same cut with topology = PrepareCutMesh(mesh) built earlier for this very mesh (a topology
+// whose sizes do not fit the mesh is an error).
+Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
+                 const std::vector<std::uint8_t>& roiMask,
                  const std::vector<std::uint8_t>& roiBoundary,
                  const std::vector<Eigen::Vector3d>& curveU,
                  const std::vector<Eigen::Vector3d>& curveV, const BezierCutOptions& options,

@@ -409,12 +409,12 @@ private:
 } // namespace
 
 CutMapping MapCutOntoSurface(const BezierSurface& surface, const SurfaceMesh& mesh,
+                             const std::vector<Tri>& triangles,
                              const std::vector<std::vector<std::int64_t>>& neighbours,
                              const std::vector<std::uint8_t>& moved,
                              const std::vector<Vector2d>& footParameters,
                              const CutMappingOptions& options) {
-  const std::vector<Tri> tris = FanTriangles(mesh);
-  CutMapper mapper(surface, tris, neighbours, mesh.points, moved, footParameters);
+  CutMapper mapper(surface, triangles, neighbours, mesh.points, moved, footParameters);
   CutMapping m;
   m.ok = mapper.Direct(m.points, m.directProblem);
   m.problem = m.directProblem;

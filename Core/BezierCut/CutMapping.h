@@ -2,6 +2,7 @@
 // Maps the vertices BezierCut moves onto its surface without folding the mesh: direct projection,
 // then local repair on S, then intermediary surfaces (the fallback order BezierCut.h describes).
 #include "BezierCut/BezierSurface.h"
+#include "BezierCut/MeshIntersection.h"
 #include "Mesh/SurfaceMesh.h"
 
 #include <Eigen/Core>
@@ -27,9 +28,11 @@ struct CutMapping {
   std::string problem;                     // why the last attempt failed (when !ok)
 };
 
-// neighbours: the sorted edge neighbours of each point; moved: the points to map; footParameters:
-// the (u,v) of each ROI point's projection onto S (the unmoved ones give the boundary values).
+// triangles: FanTriangles(mesh); neighbours: the sorted edge neighbours of each point; moved: the
+// points to map; footParameters: the (u,v) of each ROI point's projection onto S (the unmoved ones
+// give the boundary values).
 CutMapping MapCutOntoSurface(const BezierSurface& surface, const SurfaceMesh& mesh,
+                             const std::vector<Tri>& triangles,
                              const std::vector<std::vector<std::int64_t>>& neighbours,
                              const std::vector<std::uint8_t>& moved,
                              const std::vector<Eigen::Vector2d>& footParameters,

@@ -193,11 +193,27 @@ std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris,
   TriangleHash hash(tris, after, nearby, h);
   std::vector<std::uint8_t> flagged(tris.size(), 0);
   std::vector<std::int64_t> cand;
+  // Triangles whose boxes are apart cannot cross: TrianglesIntersect reports a crossing only for
+  // points within 1e-9 of the pair's size of the other triangle, far inside this margin.
+  auto box = [&](std::int64_t t, Eigen::Array3d& mn, Eigen::Array3d& mx) {
+    mn = after.row(tris[t].v[0]).transpose().array();
+    mx = mn;
+    for (int k = 1; k < 3; ++k) {
+      mn = mn.min(after.row(tris[t].v[k]).transpose().array());
+      mx = mx.max(after.row(tris[t].v[k]).transpose().array());
+    }
+  };
+  Eigen::Array3d amn, amx, bmn, bmx;
   for (std::int64_t a : active) {
     hash.Candidates(a, cand);
+    box(a, amn, amx);
     for (std::int64_t b : cand) {
       if (b == a || (activeTri[b] && b < a))
         continue; // each pair once
+      box(b, bmn, bmx);
+      const double margin = 1e-6 * std::max((amx - amn).maxCoeff(), (bmx - bmn).maxCoeff());
+      if ((amn > bmx + margin).any() || (bmn > amx + margin).any())
+        continue;
       if (!TrianglesIntersect(tris[a], tris[b], after, false))
         continue;
       if (TrianglesIntersect(tris[a], tris[b], before, false))

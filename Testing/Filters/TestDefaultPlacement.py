@@ -1,6 +1,7 @@
 """Filters that start where the anatomy is (pvpython, headless): ROIExtract's region starts on the
 input's bounds, and a Bezier Cut whose control points were never set places them over the ROI, so a
-default-constructed cut on the face's mandible cuts something; control points set by the user win.
+default-constructed cut on the face's mandible cuts something; a new Bezier Cut proxy's CurveU and
+CurveV (what the GUI's handle widgets show) start at those curves; control points set by the user win.
 argv[1] is the plugin, argv[2] the Data folder.
 """
 import sys
@@ -60,6 +61,36 @@ for region in ("Sphere", "Chin", "Box"):
     check(np.all(u[:, 0] <= hi + 1e-9) and np.all(u[:, 1] >= lo - 1e-9),
           "the default operative surface lies over the %s ROI" % region)
     Delete(cut)
+
+# The GUI's widgets show the property values: a new filter's CurveU/CurveV must be the curves the
+# filter places over the ROI (not the XML's unit square at the origin), and cutting with those
+# values as given must cut the bone.
+roi.Region = "Sphere"
+roi.Region.Center = [70.0, 0.0, 58.0]
+roi.Region.Radius = 22.0
+lo, hi = roi_box(roi)
+cut = BezierCut(Input=roi)
+u = np.array(cut.CurveU).reshape(-1, 3)
+v = np.array(cut.CurveV).reshape(-1, 3)
+unit_u = np.array([-0.5, -0.5, 0, -0.1666667, -0.5, 0, 0.1666667, -0.5, 0, 0.5, -0.5, 0]).reshape(-1, 3)
+check(u.shape == (4, 3) and v.shape == (4, 3) and not np.allclose(u, unit_u),
+      "a new Bezier Cut's CurveU property is not the XML's unit square (%s)" % u.tolist())
+margin = 0.2 * (hi - lo)
+inside = np.all((u >= lo - margin) & (u <= hi + margin)) and np.all((v >= lo - margin) & (v <= hi + margin))
+check(inside, "a new Bezier Cut's control point properties lie over the ROI's box")
+check(np.array_equal(u[0], v[0]), "the curves' first control points are shared")
+cut.UpdatePropertyInformation()
+check(np.allclose(u.ravel(), cut.GetPropertyValue("DefaultCurveU")) and
+      np.allclose(v.ravel(), cut.GetPropertyValue("DefaultCurveV")),
+      "the properties equal the filter's own default curves (DefaultCurveU/V)")
+n, largest = moved(cut)
+check(n > 0 and largest > 0.0, "the curves the properties start with cut the bone (%d points moved)" % n)
+placed = BezierCut(Input=roi)
+placed.CurveU, placed.CurveV = u.ravel().tolist(), v.ravel().tolist()
+n2, _ = moved(placed)
+check(n2 == n, "the same curves typed in cut the same (%d and %d points)" % (n, n2))
+Delete(placed)
+Delete(cut)
 
 # Control points set by the user are kept: a patch far from the bone cuts nothing.
 cut = BezierCut(Input=roi)

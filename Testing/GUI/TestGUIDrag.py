@@ -6,7 +6,12 @@ sets the CurveU property (the handle widget is linked to it), Apply brings the p
 and the render view redraws. The script builds the face pipeline (CondensedFEMDeform with Surface
 output, the interactive setting), shows bone, operative surface and face, then makes 12 moves of
 control point 1 of CurveU and records, for each, the frame time: from setting the property to the
-end of the render (BezierCut + CondensedFEMDeform updates + the render in the GUI's view).
+end of the render (BezierCut + CondensedFEMDeform updates + the render in the GUI's view), split
+into the pipeline (the two filters and the GUI's reactions to their new data), the representations'
+update (geometry extraction, data delivery) and the render itself, each as wall and process CPU
+time (all threads, llvmpipe's included: a loaded machine inflates it less). It also times the
+render of an unchanged frame, which is what software rendering costs whatever the pipeline does, and
+repeats the moves with the view at a quarter of its pixels (View > Preview).
 Checks: every move changes the face, no move starts a new precompute. The frame times go into the
 result's info (the wrapper prints them; BENCHMARKS.md records them); they are not checked, since a
 test must not depend on the machine's speed.
@@ -75,17 +80,31 @@ try:
     before = precomputes()
     previous = face_displacement()
     curve = list(cut.CurveU)
-    frames_ms, update_ms, changed = [], [], []
+    frames_ms, changed = [], []
+    phases = {name: {"wall": [], "cpu": []} for name in ("pipeline", "representations", "render")}
+
+    def clock():
+        return time.perf_counter(), time.process_time()
+
+    def record(name, start, end):
+        phases[name]["wall"].append(1e3 * (end[0] - start[0]))
+        phases[name]["cpu"].append(1e3 * (end[1] - start[1]))
+
     moves = 12
     for k in range(1, moves + 1):
         curve[5] = faceplan_pipeline.CUT_Z - 0.5 - 0.25 * k  # control point 1 dragged down
-        t0 = time.perf_counter()
+        t0 = clock()
         cut.CurveU = curve
         fem.UpdatePipeline()  # Apply, as Auto Apply does: the shown outputs update, then draw
-        t1 = time.perf_counter()
-        simple.Render(view)
-        frames_ms.append(1e3 * (time.perf_counter() - t0))
-        update_ms.append(1e3 * (t1 - t0))
+        t1 = clock()
+        view.Update()  # what Render does first: the representations take the new data
+        t2 = clock()
+        view.StillRender()
+        t3 = clock()
+        record("pipeline", t0, t1)
+        record("representations", t1, t2)
+        record("render", t2, t3)
+        frames_ms.append(1e3 * (t3[0] - t0[0]))
         current = face_displacement()
         changed.append(current.shape == previous.shape and float(np.abs(current - previous).max()) > 1e-4)
         previous = current
@@ -95,8 +114,40 @@ try:
     median = statistics.median(frames_ms)
     result["info"]["frame_ms"] = [round(t, 2) for t in frames_ms]
     result["info"]["frame_ms_median"] = round(median, 2)
-    result["info"]["pipeline_update_ms_median"] = round(statistics.median(update_ms), 2)
     result["info"]["updates_per_s_median"] = round(1e3 / median, 1)
+    for name, times in phases.items():
+        result["info"][name + "_ms_median"] = round(statistics.median(times["wall"]), 2)
+        result["info"][name + "_cpu_ms_median"] = round(statistics.median(times["cpu"]), 2)
+    still_wall, still_cpu = [], []
+    for _ in range(10):
+        t0 = clock()
+        view.StillRender()
+        t1 = clock()
+        still_wall.append(1e3 * (t1[0] - t0[0]))
+        still_cpu.append(1e3 * (t1[1] - t0[1]))
+    result["info"]["unchanged_render_ms_median"] = round(statistics.median(still_wall), 2)
+    result["info"]["unchanged_render_cpu_ms_median"] = round(statistics.median(still_cpu), 2)
+    result["info"]["view_size"] = list(view.ViewSize)
+    # The same moves in a render view of a quarter of the pixels (View > Preview), to show how much of
+    # the frame is the software rasterizer's per-pixel work.
+    layout = simple.GetLayout(view)
+    width, height = view.ViewSize
+    layout.PreviewMode = [max(width // 2, 1), max(height // 2, 1)]
+    small_wall, small_cpu = [], []
+    for k in range(1, moves + 1):
+        curve[5] = faceplan_pipeline.CUT_Z - 0.5 - 0.25 * (moves - k)  # dragged back up
+        t0 = clock()
+        cut.CurveU = curve
+        fem.UpdatePipeline()
+        view.Update()
+        view.StillRender()
+        t1 = clock()
+        small_wall.append(1e3 * (t1[0] - t0[0]))
+        small_cpu.append(1e3 * (t1[1] - t0[1]))
+    result["info"]["small_view_size"] = list(view.ViewSize)
+    result["info"]["small_view_frame_ms_median"] = round(statistics.median(small_wall), 2)
+    result["info"]["small_view_frame_cpu_ms_median"] = round(statistics.median(small_cpu), 2)
+    layout.PreviewMode = [0, 0]
     result["info"]["render_view"] = view.GetRenderWindow().GetClassName()
     simple.SetActiveSource(cut)
     simple.Render(view)
