@@ -132,23 +132,40 @@ int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** in
                   << (inputObject ? inputObject->GetClassName() : "nothing"));
     return 1;
   }
+  if (input->GetNumberOfPoints() == 0) {
+    vtkErrorMacro(<< "Tissue Model From CT: the image is empty (no voxels)");
+    return 1;
+  }
   vtkDataArray* scalars = this->GetInputArrayToProcess(0, inputVector);
   if (!scalars)
     scalars = input->GetPointData()->GetScalars();
-  if (!scalars || scalars->GetNumberOfComponents() != 1 ||
-      scalars->GetNumberOfTuples() != input->GetNumberOfPoints() ||
-      input->GetNumberOfPoints() == 0) {
+  if (!scalars || scalars->GetNumberOfTuples() != input->GetNumberOfPoints()) {
     vtkErrorMacro(
-        << "Tissue Model From CT: the image has no one-component point scalars (Hounsfield units)");
+        << "Tissue Model From CT: the image has no point scalars (the CT in Hounsfield units)");
+    return 1;
+  }
+  if (scalars->GetNumberOfComponents() != 1) {
+    vtkErrorMacro(<< "Tissue Model From CT: the CT scalars '"
+                  << (scalars->GetName() ? scalars->GetName() : "") << "' have "
+                  << scalars->GetNumberOfComponents()
+                  << " components; one (Hounsfield units) is needed");
+    return 1;
+  }
+  if (this->Optimiser < NONE || this->Optimiser > LLOYD) {
+    vtkErrorMacro(<< "Tissue Model From CT: Optimiser " << this->Optimiser
+                  << " is none of 0 (None), 1 (ODT), 2 (Lloyd)");
+    return 1;
+  }
+  if (this->Seed < 0) {
+    vtkErrorMacro(<< "Tissue Model From CT: Seed must not be negative (got " << this->Seed << ")");
     return 1;
   }
 
   faceplan::CTImage ct;
   int dims[3];
   input->GetDimensions(dims);
-  double spacing[3], origin[3];
+  double spacing[3];
   input->GetSpacing(spacing);
-  input->GetOrigin(origin);
   // The image's first point (its extent may not start at 0) becomes the grid's origin.
   int extent[6];
   input->GetExtent(extent);
@@ -158,10 +175,6 @@ int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** in
     ct.grid.dims[a] = dims[a];
     ct.grid.spacing[a] = spacing[a];
     ct.grid.origin[a] = first[a];
-    if (!(spacing[a] > 0.0)) {
-      vtkErrorMacro(<< "Tissue Model From CT: the image spacing must be positive");
-      return 1;
-    }
   }
   vtkMatrix3x3* direction = input->GetDirectionMatrix();
   for (int r = 0; r < 3; ++r)
@@ -229,6 +242,10 @@ int vtkTissueModelFromCT::RequestData(vtkInformation*, vtkInformationVector** in
   tissueOut->GetCellData()->AddArray(label);
   vtkFieldData* fd = tissueOut->GetFieldData();
   AddScalar(fd, "EstimatedCells", model.estimatedCells);
+  AddScalar(fd, "MeshedCells", double(model.meshedCells));
+  AddScalar(fd, "FirstAttemptCells",
+            model.attemptCells.empty() ? 0.0 : double(model.attemptCells.front()));
+  AddScalar(fd, "MeshingAttempts", model.meshingAttempts);
   AddScalar(fd, "WorstDihedralAngle", model.quality.worstDihedralAngle);
   AddScalar(fd, "SmallestMeanRatio", model.quality.smallestMeanRatio);
   AddScalar(fd, "LargestBoundaryDistance", model.boundaryDistance.largest);

@@ -11,10 +11,13 @@
  * Port 1: the bone surface, the tissue's own facets that face bone (triangles, cell data `Label`:
  * 2 bone, 3 mandible; point data `TissuePointId`), so its points coincide with tissue points.
  * Port 2: the skin surface (triangles, `TissuePointId`). All in the image's frame and unit.
- * Field data of port 0: `EstimatedCells`, `WorstDihedralAngle`, `SmallestMeanRatio`,
+ * Field data of port 0: `EstimatedCells` (of the first attempt), `FirstAttemptCells` and
+ * `MeshedCells` (all labels), `MeshingAttempts`, `WorstDihedralAngle`, `SmallestMeanRatio`,
  * `LargestBoundaryDistance`.
- * Errors (not an image, no voxel above BoneThreshold, empty tissue, thresholds in the wrong order,
- * CellSize not positive, estimated cells over MaximumCells) give vtkErrorMacro and empty outputs.
+ * Errors (not an image, an empty, flat or non-finite image, spacing not positive, a direction
+ * matrix that is not orthonormal, no voxel above BoneThreshold, empty tissue, thresholds in the
+ * wrong order, a property out of range, estimated cells over MaximumCells) give vtkErrorMacro and
+ * empty outputs.
  */
 #ifndef vtkTissueModelFromCT_h
 #define vtkTissueModelFromCT_h
@@ -78,8 +81,8 @@ public:
   ///@}
 
   ///@{
-  /// ODT, Lloyd or no smoothing before perturbation and exudation.
-  vtkSetClampMacro(Optimiser, int, NONE, LLOYD);
+  /// ODT, Lloyd or no smoothing before perturbation and exudation (other values are an error).
+  vtkSetMacro(Optimiser, int);
   vtkGetMacro(Optimiser, int);
   ///@}
 
@@ -96,7 +99,7 @@ public:
   ///@}
 
   ///@{
-  /// Random seed of the mesher: equal seeds give equal meshes.
+  /// Random seed of the mesher (not negative): equal seeds give equal meshes.
   vtkSetMacro(Seed, int);
   vtkGetMacro(Seed, int);
   ///@}

@@ -72,9 +72,20 @@ double DistanceAlong(const LabelImage& image, const Eigen::Vector3d& q, const Ei
 
 } // namespace
 
+// Directions spread evenly over the sphere (a Fibonacci lattice).
+std::vector<Eigen::Vector3d> SphereDirections(int count) {
+  std::vector<Eigen::Vector3d> out;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / count, r = std::sqrt(1.0 - z * z);
+    out.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
+  }
+  return out;
+}
+
 BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image,
                                                const Eigen::MatrixXd& points, const Facets& facets,
-                                               double radius) {
+                                               double radius, double refineAbove) {
   BoundaryDistanceResult r;
   const auto& s = image.grid.spacing;
   const double step = std::min({s[0], s[1], s[2], radius}) / 8.0;
@@ -84,6 +95,14 @@ BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image,
       for (int dz = -1; dz <= 1; ++dz)
         if (dx || dy || dz)
           directions.push_back(image.grid.direction * Eigen::Vector3d(dx, dy, dz).normalized());
+  const std::vector<Eigen::Vector3d> fine = SphereDirections(kFineDirections);
+  // Barycentric lattice of step 1/4 without the corners (which Mesh_3 puts on the interface):
+  // three points on each edge, three inside.
+  std::vector<Eigen::Vector3d> weights;
+  for (int i = 0; i <= 4; ++i)
+    for (int j = 0; i + j <= 4; ++j)
+      if (i < 4 && j < 4 && i + j > 0)
+        weights.emplace_back(i / 4.0, j / 4.0, (4 - i - j) / 4.0);
   double sum = 0.0;
   for (Eigen::Index f = 0; f < facets.rows(); ++f) {
     const Eigen::Vector3d a = points.row(facets(f, 0)).transpose(),
@@ -93,9 +112,8 @@ BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image,
     if (n.norm() == 0.0)
       continue;
     n.normalize();
-    const Eigen::Vector3d samples[4] = {(a + b + c) / 3.0, 0.5 * (a + b), 0.5 * (b + c),
-                                        0.5 * (c + a)};
-    for (const Eigen::Vector3d& q : samples) {
+    for (const Eigen::Vector3d& w : weights) {
+      const Eigen::Vector3d q = w[0] * a + w[1] * b + w[2] * c;
       const int start = InterpolatedLabel(image, q);
       // The normal first; then the 26 grid directions, each searched only up to the best so far.
       double d = -1.0;
@@ -109,6 +127,9 @@ BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image,
       tryDirection(-n);
       for (const Eigen::Vector3d& dir : directions)
         tryDirection(dir);
+      if (d < 0 || d > refineAbove)
+        for (const Eigen::Vector3d& dir : fine)
+          tryDirection(dir);
       if (d < 0) {
         d = radius;
         ++r.notFound;

@@ -20,12 +20,16 @@ struct BoundaryDistanceResult {
   long long notFound = 0; // samples with no label change within searchRadius along the normal
 };
 
-// Samples each facet at its centroid and edge midpoints and searches along the facet normal (both
-// ways) and the 26 grid directions for the nearest change of the interpolated label (refined by
-// bisection). The shortest such distance bounds the true distance to the interface from above
-// (by at most about 8 % for an interface between the directions).
+// Samples each facet on a barycentric lattice of step 1/4 (three points per edge, three inside;
+// not the corners) and searches along the facet normal (both ways) and the 26 grid directions for
+// the nearest change of the interpolated label (refined by bisection). Samples farther than
+// `refineAbove` are searched again in kFineDirections directions spread over the sphere. Every
+// such distance is reached along a ray, so the shortest bounds the true distance to the interface
+// from above (for a locally flat interface by at most about 8 % with the grid directions, under
+// 1 % after the fine search).
+constexpr int kFineDirections = 1000;
 BoundaryDistanceResult MeasureBoundaryDistance(const LabelImage& image,
                                                const Eigen::MatrixXd& points, const Facets& facets,
-                                               double searchRadius);
+                                               double searchRadius, double refineAbove);
 
 } // namespace faceplan

@@ -3,6 +3,7 @@
 #include "TissueModelFromCT/VoxelComponents.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <string>
@@ -103,7 +104,40 @@ LabellingSummary SummariseLabels(const LabelImage& image) {
     else if (l == kMandible)
       ++s.mandibleVoxels;
   }
+  // Faces between voxels of different labels, and of labelled voxels on the image's border.
+  const ImageGrid& g = image.grid;
+  const double faceArea[3] = {g.spacing[1] * g.spacing[2], g.spacing[0] * g.spacing[2],
+                              g.spacing[0] * g.spacing[1]};
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i) {
+        const std::uint8_t l = image.labels[g.index(i, j, k)];
+        const int at[3] = {i, j, k};
+        for (int a = 0; a < 3; ++a) {
+          if (at[a] + 1 < g.dims[a]) {
+            const std::uint8_t m = image.labels[g.index(i + (a == 0), j + (a == 1), k + (a == 2))];
+            s.interfaceArea += l != m ? faceArea[a] : 0.0;
+          }
+          if (l != kAir && (at[a] == 0 || at[a] + 1 == g.dims[a]))
+            s.interfaceArea += faceArea[a];
+        }
+      }
   return s;
+}
+
+Status ValidateImageGrid(const ImageGrid& g) {
+  if (!g.direction.allFinite() ||
+      !(g.direction.transpose() * g.direction).isApprox(Eigen::Matrix3d::Identity(), 1e-6))
+    return Status::Error(
+        "the image's direction matrix must be orthonormal (a rotation, possibly mirrored)");
+  for (int a = 0; a < 3; ++a)
+    if (!(g.spacing[a] > 0.0) || !std::isfinite(g.spacing[a]))
+      return Status::Error("the image spacing must be positive and finite (axis " +
+                           std::to_string(a) + ": " + std::to_string(g.spacing[a]) + ")");
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(g.origin[a]))
+      return Status::Error("the image origin must be finite");
+  return Status::Ok();
 }
 
 Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImage& out,
@@ -115,6 +149,16 @@ Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImag
   if (ct.hounsfield.size() != n)
     return Status::Error("the image has " + std::to_string(ct.hounsfield.size()) + " values for " +
                          std::to_string(n) + " voxels");
+  if (Status s = ValidateImageGrid(ct.grid); !s)
+    return s;
+  std::size_t nonFinite = 0, firstNonFinite = 0;
+  for (std::size_t v = 0; v < n; ++v)
+    if (!std::isfinite(ct.hounsfield[v]) && nonFinite++ == 0)
+      firstNonFinite = v;
+  if (nonFinite > 0)
+    return Status::Error("the CT holds " + std::to_string(nonFinite) +
+                         " non-finite values (NaN or inf), the first at voxel " +
+                         std::to_string(firstNonFinite));
   if (!(options.skinThreshold < options.boneThreshold))
     return Status::Error(
         "thresholds in the wrong order: SkinThreshold must be below BoneThreshold");
@@ -186,6 +230,7 @@ Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImag
   const LabellingSummary counts = SummariseLabels(out);
   summary.airVoxels = counts.airVoxels;
   summary.softTissueVoxels = counts.softTissueVoxels;
+  summary.interfaceArea = counts.interfaceArea;
   summary.boneVoxels = counts.boneVoxels;
   summary.mandibleVoxels = counts.mandibleVoxels;
   if (summary.boneVoxels + summary.mandibleVoxels == 0)

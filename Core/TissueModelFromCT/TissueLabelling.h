@@ -31,15 +31,20 @@ struct LabellingSummary {
   bool mandibleSeparated = false;
   double softTissueVolume() const; // set by LabelTissue together with the voxel volume
   double voxelVolume = 0.0;
+  double interfaceArea = 0.0; // voxel faces between labels (air outside the image), area units
 };
+
+// Spacing positive and finite, origin finite, direction orthonormal.
+Status ValidateImageGrid(const ImageGrid& grid);
 
 // Air-filled cavities fully enclosed by the body (sinuses cut off by the thresholds) always become
 // soft tissue, so the skin surface is the outer surface only. Errors: "no voxel at or above
-// BoneThreshold", "the soft-tissue label is empty", and size mismatches.
+// BoneThreshold", "the soft-tissue label is empty", non-finite values, an invalid grid
+// (ValidateImageGrid) and size mismatches.
 Status LabelTissue(const CTImage& ct, const LabellingOptions& options, LabelImage& labels,
                    LabellingSummary& summary);
 
-// Counts the voxels of each label (used for images labelled elsewhere).
+// Counts the voxels of each label and the area of the voxel faces between labels.
 LabellingSummary SummariseLabels(const LabelImage& labels);
 
 } // namespace faceplan

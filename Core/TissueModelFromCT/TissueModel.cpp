@@ -63,8 +63,13 @@ double EstimateCellCount(const LabellingSummary& s, const TissueModelParameters&
   const double tissue = double(s.softTissueVoxels) * s.voxelVolume;
   const double bone = double(s.boneVoxels + s.mandibleVoxels) * s.voxelVolume;
   const double h = p.meshing.cellSize;
-  return kDelaunayCellExcess *
-         (tissue / RegularTetVolume(h) + bone / RegularTetVolume(h * p.boneCellSizeFactor));
+  const double volumeCells =
+      tissue / RegularTetVolume(h) + bone / RegularTetVolume(h * p.boneCellSizeFactor);
+  // Boundary facets no longer than CellSize, nor than the first attempt's facet distance allows.
+  const double facetEdge =
+      std::min(h, kFacetEdgePerDistance * kFacetDistanceMargins[0] * p.meshing.surfaceDistance);
+  const double boundaryFacets = s.interfaceArea / (std::sqrt(3.0) / 4.0 * facetEdge * facetEdge);
+  return kCellsPerVolumeCell * volumeCells + kCellsPerBoundaryFacet * boundaryFacets;
 }
 
 namespace {
@@ -210,6 +215,24 @@ Status ExtractTissueModel(const LabeledTetMesh& in, TissueModel& model) {
   return Status::Ok();
 }
 
+namespace {
+
+// Bounds a model misses: any non-positive cell counts for all of them.
+int MissedBounds(const TissueModel& m, double surfaceDistance) {
+  if (m.quality.nonPositive > 0)
+    return 3;
+  return int(m.quality.belowDihedralBound > 0) + int(m.boundaryDistance.largest > surfaceDistance);
+}
+
+bool Better(const TissueModel& a, const TissueModel& b, double surfaceDistance) {
+  const int ma = MissedBounds(a, surfaceDistance), mb = MissedBounds(b, surfaceDistance);
+  if (ma != mb)
+    return ma < mb;
+  return a.boundaryDistance.largest < b.boundaryDistance.largest;
+}
+
+} // namespace
+
 Status BuildTissueModelFromLabels(const LabelImage& labels, const TissueModelParameters& parameters,
                                   const LabelMesher& mesher, TissueModel& model,
                                   std::atomic<bool>* cancel, const MeshingProgress& progress) {
@@ -231,30 +254,61 @@ Status BuildTissueModelFromLabels(const LabelImage& labels, const TissueModelPar
                          std::to_string(parameters.maximumCells) + "): increase CellSize");
 
   MeshingParameters meshing = parameters.meshing;
-  // Mesh_3 bounds the distance only at facet circumcentres and before smoothing moves the
-  // vertices; asking for less leaves room for the rest of each facet.
-  meshing.surfaceDistance *= kFacetDistanceMargin;
   const double boneSize = meshing.cellSize * parameters.boneCellSizeFactor;
   meshing.labelCellSize = {{kBone, boneSize}, {kMandible, boneSize}};
   // A hard cap well above the estimate: a mesh that grows past it fails instead of exhausting
   // memory.
   if (meshing.maximumVertices == 0)
     meshing.maximumVertices = (long long)(2.0 * double(parameters.maximumCells) / 5.0) + 1000;
+  // Perturbation and exudation stop once every cell reaches their target; aiming above the bound
+  // leaves the worst cells some room.
+  meshing.sliverBound = std::min(parameters.meshing.sliverBound + kSliverTargetMargin, 30.0);
 
-  LabeledTetMesh labelled;
-  if (Status s = mesher(labels, meshing, labelled, cancel, progress); !s)
-    return s;
-  model.meshedCells = labelled.mesh.numTets();
-  model.peeledSlivers = PeelBoundarySlivers(labelled, parameters.meshing.sliverBound);
-  if (Status s = ExtractTissueModel(labelled, model); !s)
-    return s;
-
-  model.quality = MeasureTetQuality(model.tissue, parameters.meshing.sliverBound);
-  const double radius = 2.0 * parameters.meshing.surfaceDistance +
-                        *std::max_element(labels.grid.spacing.begin(), labels.grid.spacing.end());
-  Facets boundary(model.boneFacets.rows() + model.skinFacets.rows(), 3);
-  boundary << model.boneFacets, model.skinFacets;
-  model.boundaryDistance = MeasureBoundaryDistance(labels, model.tissue.points, boundary, radius);
+  // Mesh_3 bounds the distance only at facet circumcentres and before smoothing moves the
+  // vertices, and its sliver removal is best effort: the mesh is made again (kFacetDistanceMargins,
+  // the next seed) until the measured distance and quality meet the bounds.
+  const double bound = parameters.meshing.surfaceDistance;
+  const double angleBound = parameters.meshing.sliverBound;
+  const double radius =
+      2.0 * bound + *std::max_element(labels.grid.spacing.begin(), labels.grid.spacing.end());
+  TissueModel best;
+  bool haveBest = false;
+  std::vector<long long> attemptCells;
+  for (std::size_t attempt = 0; attempt < kFacetDistanceMargins.size(); ++attempt) {
+    meshing.surfaceDistance = bound * kFacetDistanceMargins[attempt];
+    meshing.seed = parameters.meshing.seed + unsigned(attempt);
+    LabeledTetMesh labelled;
+    TissueModel candidate;
+    candidate.labelling = model.labelling;
+    candidate.estimatedCells = model.estimatedCells;
+    Status meshed = mesher(labels, meshing, labelled, cancel, progress);
+    if (meshed) {
+      candidate.meshedCells = labelled.mesh.numTets();
+      candidate.peeledSlivers = PeelBoundarySlivers(labelled, angleBound);
+      meshed = ExtractTissueModel(labelled, candidate);
+    }
+    // A finer attempt that fails (vertex budget, a thin label) leaves the coarser one standing.
+    if (!meshed) {
+      if (haveBest && !(cancel && cancel->load()))
+        break;
+      return meshed;
+    }
+    candidate.quality = MeasureTetQuality(candidate.tissue, angleBound);
+    Facets boundary(candidate.boneFacets.rows() + candidate.skinFacets.rows(), 3);
+    boundary << candidate.boneFacets, candidate.skinFacets;
+    candidate.boundaryDistance = MeasureBoundaryDistance(labels, candidate.tissue.points, boundary,
+                                                         radius, kRefineDistanceAbove * bound);
+    attemptCells.push_back(candidate.meshedCells);
+    if (!haveBest || Better(candidate, best, bound)) {
+      best = std::move(candidate);
+      haveBest = true;
+    }
+    if (MissedBounds(best, bound) == 0)
+      break;
+  }
+  model = std::move(best);
+  model.attemptCells = attemptCells;
+  model.meshingAttempts = int(attemptCells.size());
 
   Status status;
   if (model.quality.nonPositive > 0)
@@ -263,12 +317,12 @@ Status BuildTissueModelFromLabels(const LabelImage& labels, const TissueModelPar
   if (model.quality.belowDihedralBound > 0)
     status.warnings.push_back(std::to_string(model.quality.belowDihedralBound) +
                               " slivers: tetrahedra with a dihedral angle below QualityBound (" +
-                              Fmt(parameters.meshing.sliverBound) + " deg); worst " +
+                              Fmt(angleBound) + " deg); worst " +
                               Fmt(model.quality.worstDihedralAngle) + " deg");
-  if (model.boundaryDistance.largest > parameters.meshing.surfaceDistance)
+  if (model.boundaryDistance.largest > bound)
     status.warnings.push_back("the boundary lies up to " + Fmt(model.boundaryDistance.largest) +
                               " from the labelled interface, more than SurfaceDistance (" +
-                              Fmt(parameters.meshing.surfaceDistance) + ")");
+                              Fmt(bound) + ")");
   model.warnings = status.warnings;
   if (progress)
     progress(1.0, "done");

@@ -8,6 +8,7 @@
 #include "TissueModelFromCT/TetQuality.h"
 #include "TissueModelFromCT/TissueLabelling.h"
 
+#include <array>
 #include <atomic>
 #include <string>
 #include <vector>
@@ -24,13 +25,24 @@ struct TissueModelParameters {
 // Parameter errors name the property: "CellSize must be positive", ...
 Status ValidateParameters(const TissueModelParameters& parameters);
 
-// Expected number of tetrahedra Mesh_3 makes for the labelled volumes (tissue at CellSize, bone
-// at its coarser size): volume over the volume of a regular tetrahedron of that edge, times the
-// factor by which Delaunay meshes exceed that count.
+// Expected number of tetrahedra (every label) of the first meshing attempt: the labelled volumes
+// over the volume of a regular tetrahedron of their edge (tissue at CellSize, bone coarser), plus
+// the cells along the boundary, whose facets the facet distance keeps shorter than CellSize on a
+// voxelised interface. Calibrated on the head CT and the synthetic shell so as not to undercount
+// (TestTissueModelMeshing.CellEstimateCoversMeshedCells, the CT test).
 double EstimateCellCount(const LabellingSummary& summary, const TissueModelParameters& parameters);
-constexpr double kDelaunayCellExcess = 2.5; // measured 1.7 (smooth shell) to 2.8 (head CT)
-// Fraction of SurfaceDistance passed to the mesher as its facet-distance criterion.
-constexpr double kFacetDistanceMargin = 0.5;
+constexpr double kCellsPerVolumeCell = 2.2;
+constexpr double kCellsPerBoundaryFacet = 1.4;
+constexpr double kFacetEdgePerDistance = 4.0; // boundary facet edge over the facet distance
+// Fractions of SurfaceDistance passed to the mesher as its facet-distance criterion, one per
+// attempt: a mesh whose measured distance or quality misses its bound is made again with the next
+// fraction and the next seed (Seed + attempt). The misses are a few facets across voxel-sized
+// features, different for every seed; smaller fractions add facets and so chances to miss.
+constexpr std::array<double, 5> kFacetDistanceMargins{{0.5, 0.4, 0.4, 0.4, 0.4}};
+// Degrees above the quality bound that sliver perturbation and exudation aim for.
+constexpr double kSliverTargetMargin = 3.0;
+// Boundary samples farther than this fraction of SurfaceDistance get the fine direction search.
+constexpr double kRefineDistanceAbove = 0.75;
 
 struct TissueModel {
   TetMesh tissue;               // soft-tissue tetrahedra, positively oriented
@@ -40,7 +52,9 @@ struct TissueModel {
   Facets skinFacets;            // tissue facets facing air, normals pointing out of the tissue
   LabellingSummary labelling;
   double estimatedCells = 0.0;
-  long long meshedCells = 0;   // every label, before the bone cells are dropped
+  long long meshedCells = 0; // every label, before the bone cells are dropped
+  int meshingAttempts = 0;   // meshes made until the bounds were met (kFacetDistanceMargins)
+  std::vector<long long> attemptCells; // every label, per attempt (the estimate is of the first)
   long long peeledSlivers = 0; // boundary slivers given to air or bone (PeelBoundarySlivers)
   TetQualitySummary quality;
   BoundaryDistanceResult boundaryDistance;
@@ -59,7 +73,8 @@ long long PeelBoundarySlivers(LabeledTetMesh& labelled, double boundDegrees, int
 Status ExtractTissueModel(const LabeledTetMesh& labelled, TissueModel& model);
 
 // The whole path from labels: budget check, meshing, extraction, quality and boundary distance.
-// Warns when the quality bound or SurfaceDistance is missed.
+// Meshes again with a smaller facet distance while the quality bound or SurfaceDistance is missed
+// (kFacetDistanceMargins); warns when the last attempt still misses one, keeping the best mesh.
 Status BuildTissueModelFromLabels(const LabelImage& labels, const TissueModelParameters& parameters,
                                   const LabelMesher& mesher, TissueModel& model,
                                   std::atomic<bool>* cancel = nullptr,

@@ -80,6 +80,13 @@ check(set(np.unique(vtk_to_numpy(bone.GetCellData().GetArray("Label")))) <= {2, 
 field = tissue.GetFieldData()
 worst = field.GetArray("WorstDihedralAngle").GetValue(0)
 check(worst >= model.QualityBound, "worst dihedral angle %.2f >= QualityBound" % worst)
+distance = field.GetArray("LargestBoundaryDistance").GetValue(0)
+check(distance <= model.SurfaceDistance, "boundary within SurfaceDistance (%.3f)" % distance)
+# The budget's estimate is calibrated on this CT: it covers the first attempt's cells (every label)
+# without overcounting by more than half.
+estimate = field.GetArray("EstimatedCells").GetValue(0)
+first = field.GetArray("FirstAttemptCells").GetValue(0)
+check(first <= estimate <= 1.5 * first, "estimate %d against the first attempt's %d cells" % (estimate, first))
 
 # ROI on the anterior mandible, a cut surface across it (z grows towards the chin in this CT).
 roi = ROIExtract(Input=OutputPort(model, 1))

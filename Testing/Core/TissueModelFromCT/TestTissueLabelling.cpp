@@ -180,10 +180,14 @@ TEST(TissueModelParameters, OverBudgetRunsAreRefusedBeforeMeshing) {
   EXPECT_FALSE(s.ok);
   EXPECT_TRUE(Contains(s.message, "exceeds MaximumCells")) << s.message;
   EXPECT_FALSE(meshed);
-  // The estimate: the shell's volume over a regular tetrahedron's, times the Delaunay excess.
+  // The estimate: the shell's volume over a regular tetrahedron's, plus the boundary facets: the
+  // staircase of a voxelised sphere has 1.5 times its area (the mean of |nx| + |ny| + |nz|).
   const double h = 0.05, tet = h * h * h / (6.0 * std::sqrt(2.0));
+  const double facet = std::sqrt(3.0) / 4.0 * h * h;
   EXPECT_NEAR(model.estimatedCells,
-              kDelaunayCellExcess * (4.0 / 3.0 * M_PI * 7.0 / tet + 4.0 / 3.0 * M_PI / (8.0 * tet)),
+              kCellsPerVolumeCell *
+                      (4.0 / 3.0 * M_PI * 7.0 / tet + 4.0 / 3.0 * M_PI / (8.0 * tet)) +
+                  kCellsPerBoundaryFacet * 1.5 * 4.0 * M_PI * (1.0 + 4.0) / facet,
               0.05 * model.estimatedCells);
 }
 
