@@ -19,9 +19,10 @@ os.makedirs(out_dir, exist_ok=True)
 LoadPlugin(plugin)
 if "TissueModelFromCT" not in dir(sys.modules["paraview.simple"]):
     sys.exit("FacePlan was built without CGAL: TissueModelFromCT is absent (see README, TissueModelFromCT)")
-ct, model, roi, cut, fem = faceplan_ct_pipeline.build(data_dir, cell_size)
-
+# Timed from the pipeline's construction: setting up the downstream filters' properties may already
+# update the model.
 start = time.time()
+ct, model, roi, cut, fem = faceplan_ct_pipeline.build(data_dir, cell_size)
 model.UpdatePipeline()
 meshed = time.time() - start
 fem.UpdatePipeline()
