@@ -75,19 +75,76 @@ DataStamp BoneCache::StructureStampOf(vtkPointSet* bone) {
   stamp.object = nullptr; // an edit may hand over a new bone object with the same cells
   stamp.times.push_back(static_cast<vtkMTimeType>(bone->GetNumberOfPoints()));
   AddCellsToStamp(stamp, bone);
-  AddToStamp(stamp, bone->GetPointData()->GetArray("ROIMask"));
+  for (const char* name : kStructureArrays)
+    AddToStamp(stamp, bone->GetPointData()->GetArray(name));
   return stamp;
+}
+
+void BoneCache::StructureSignature(vtkPointSet* bone, std::vector<unsigned char>& out) {
+  out.clear();
+  auto appendValue = [&](long long value) {
+    const auto* bytes = reinterpret_cast<const unsigned char*>(&value);
+    out.insert(out.end(), bytes, bytes + sizeof(value));
+  };
+  // The raw bytes of an array with its type and shape: equal bytes are equal values, NaN included.
+  auto appendArray = [&](vtkDataArray* array) {
+    appendValue(array ? array->GetDataType() : -1); // absent differs from empty
+    if (!array)
+      return;
+    appendValue(array->GetNumberOfComponents());
+    appendValue(array->GetNumberOfTuples());
+    const auto* bytes = static_cast<const unsigned char*>(array->GetVoidPointer(0));
+    if (bytes)
+      out.insert(out.end(), bytes,
+                 bytes +
+                     array->GetNumberOfValues() * static_cast<vtkIdType>(array->GetDataTypeSize()));
+  };
+  appendValue(bone->GetNumberOfPoints());
+  if (auto* poly = vtkPolyData::SafeDownCast(bone)) {
+    for (vtkCellArray* cells :
+         {poly->GetVerts(), poly->GetLines(), poly->GetPolys(), poly->GetStrips()}) {
+      appendArray(cells ? cells->GetOffsetsArray() : nullptr);
+      appendArray(cells ? cells->GetConnectivityArray() : nullptr);
+    }
+  } else {
+    vtkNew<vtkIdList> ids;
+    for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
+      bone->GetCellPoints(c, ids);
+      appendValue(bone->GetCellType(c));
+      appendValue(ids->GetNumberOfIds());
+      for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
+        appendValue(ids->GetId(k));
+    }
+  }
+  for (const char* name : kStructureArrays)
+    appendArray(bone->GetPointData()->GetArray(name));
+}
+
+const std::vector<unsigned char>& BoneCache::signatureOf(vtkPointSet* bone,
+                                                         const DataStamp& stamp) {
+  if (!haveSignature_ || stamp != signatureStamp_) {
+    StructureSignature(bone, signature_);
+    signatureStamp_ = stamp;
+    haveSignature_ = true;
+  }
+  return signature_;
 }
 
 Status BoneCache::validate(vtkPointSet* bone) {
   if (!bone)
     return ValidateBone(bone);
   DataStamp structure = StructureStampOf(bone);
+  // An edit through Osteotomy, Append Geometry or several Bone connections hands over new arrays
+  // with the same cells and labels: their bytes decide, not their stamps.
+  if (validated_ && structure != validatedStructure_ &&
+      signatureOf(bone, structure) == validatedSignature_)
+    validatedStructure_ = structure;
   if (validated_ && structure == validatedStructure_)
     return ValidateBoneValues(bone);
   validated_ = false;
   const Status status = ValidateBone(bone);
   if (status) {
+    validatedSignature_ = signatureOf(bone, structure);
     validatedStructure_ = std::move(structure);
     validated_ = true;
   }
@@ -116,38 +173,13 @@ void BoneCache::UndeformedPoints(vtkPointSet* bone, std::vector<double>& points)
   }
 }
 
-DataStamp BoneCache::ContactStampOf(vtkPointSet* bone) {
-  DataStamp stamp = StructureStampOf(bone);
-  AddToStamp(stamp, bone->GetPointData()->GetArray("SegmentId"));
-  return stamp;
-}
-
-void BoneCache::ContactStructure(vtkPointSet* bone, std::vector<vtkIdType>& cells,
-                                 std::vector<double>& labels) {
-  cells.clear();
-  labels.clear();
-  vtkNew<vtkIdList> ids;
-  for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
-    bone->GetCellPoints(c, ids);
-    cells.push_back(bone->GetCellType(c));
-    cells.push_back(ids->GetNumberOfIds());
-    cells.insert(cells.end(), ids->begin(), ids->end());
-  }
-  for (const char* name : {"ROIMask", "SegmentId"}) {
-    vtkDataArray* array = bone->GetPointData()->GetArray(name);
-    labels.push_back(array ? array->GetNumberOfTuples() : -1); // absent differs from empty
-    for (vtkIdType i = 0; array && i < array->GetNumberOfTuples(); ++i)
-      labels.push_back(array->GetComponent(i, 0));
-  }
-}
-
 bool BoneCache::contactStillValid(vtkPointSet* bone, unsigned long tissueGeneration,
                                   double contactDistance) {
   bool same =
       haveContact_ && tissueGeneration == contactTissue_ && contactDistance == contactDistance_;
-  if (same && ContactStampOf(bone) != contactStamp_) {
-    ContactStructure(bone, cellScratch_, labelScratch_);
-    same = cellScratch_ == contactCells_ && labelScratch_ == contactLabels_;
+  if (same) {
+    const DataStamp structure = StructureStampOf(bone);
+    same = structure == contactStamp_ || signatureOf(bone, structure) == contactSignature_;
   }
   if (same) {
     UndeformedPoints(bone, scratch_);
@@ -169,8 +201,8 @@ bool BoneCache::contactStillValid(vtkPointSet* bone, unsigned long tissueGenerat
 
 void BoneCache::contactBuilt(vtkPointSet* bone, unsigned long tissueGeneration,
                              double contactDistance) {
-  contactStamp_ = ContactStampOf(bone);
-  ContactStructure(bone, contactCells_, contactLabels_);
+  contactStamp_ = StructureStampOf(bone);
+  contactSignature_ = signatureOf(bone, contactStamp_);
   contactTissue_ = tissueGeneration;
   contactDistance_ = contactDistance;
   UndeformedPoints(bone, contactUndeformed_);

@@ -56,36 +56,42 @@ private:
   unsigned long generation_ = 0;
 };
 
-// The bone's per-edit check: its cells and ROIMask (by stamp), and its undeformed points (points
+// The bone's per-edit check: its structure (cells, ROIMask, SegmentId, Sliding; by stamp, and by
+// their bytes when the stamp differs, since an edit through Osteotomy, Append Geometry or several
+// Bone connections hands over new arrays with the same values) and its undeformed points (points
 // minus Displacement, compared by value because an edit makes a new bone whose points and
-// Displacement both move). Validation runs in full when its structure changed, else only on the
+// Displacement both move). Validation runs in full when the structure changed, else only on the
 // values an edit changes.
 class BoneCache {
 public:
   Status validate(vtkPointSet* bone);
-  // Whether the contact built for this bone still holds: same tissue content, distance, bone cells,
-  // ROIMask, SegmentId and undeformed points as at the last call of `contactBuilt`. Cells, ROIMask
-  // and SegmentId are compared by stamp first and by value when the stamp differs (an Osteotomy
-  // edit hands over new arrays with the same values), so a move never rebuilds the contact.
+  // Whether the contact built for this bone still holds: same tissue content, distance, bone
+  // structure and undeformed points as at the last call of `contactBuilt`, so a move never
+  // rebuilds the contact.
   bool contactStillValid(vtkPointSet* bone, unsigned long tissueGeneration, double contactDistance);
   void contactBuilt(vtkPointSet* bone, unsigned long tissueGeneration, double contactDistance);
 
 private:
+  static constexpr const char* kStructureArrays[] = {"ROIMask", "SegmentId", "Sliding"};
   static DataStamp StructureStampOf(vtkPointSet* bone);
-  static DataStamp ContactStampOf(vtkPointSet* bone);
+  // The structure's bytes: point count, cells (a polydata's raw offsets and connectivity, else the
+  // cells one by one) and the structure arrays with their type and shape.
+  static void StructureSignature(vtkPointSet* bone, std::vector<unsigned char>& out);
   static void UndeformedPoints(vtkPointSet* bone, std::vector<double>& points);
-  // Cells (type, size, point ids), ROIMask and SegmentId values: what the contact depends on
-  // besides the undeformed points.
-  static void ContactStructure(vtkPointSet* bone, std::vector<vtkIdType>& cells,
-                               std::vector<double>& labels);
+  // The signature of the bone with this stamp, computed once per stamp.
+  const std::vector<unsigned char>& signatureOf(vtkPointSet* bone, const DataStamp& stamp);
+
+  bool haveSignature_ = false;
+  DataStamp signatureStamp_;
+  std::vector<unsigned char> signature_;
 
   bool validated_ = false;
   DataStamp validatedStructure_;
+  std::vector<unsigned char> validatedSignature_;
 
   bool haveContact_ = false;
   DataStamp contactStamp_;
-  std::vector<vtkIdType> contactCells_, cellScratch_;
-  std::vector<double> contactLabels_, labelScratch_;
+  std::vector<unsigned char> contactSignature_;
   unsigned long contactTissue_ = 0;
   double contactDistance_ = -1.0;
   std::vector<double> contactUndeformed_, scratch_;

@@ -155,4 +155,43 @@ check(np.abs(u_stiff - displacement(fresh)).max() <= 1e-10 * np.abs(u_stiff).max
 cut.CurveU, cut.CurveV = curves(0.1)
 check(updated_count() == n6, "an edit after the changes starts no new precompute")
 
+# A bone handed over with new structure arrays (as Osteotomy or Append Geometry do on every edit):
+# the same values keep the precompute, different values start a new one and equal a fresh filter's,
+# and an array of the wrong shape is refused although the cells did not change.
+from vtkmodules.vtkCommonDataModel import vtkPolyData
+
+bone = vtkPolyData()
+bone.DeepCopy(fetch(cut))
+bone_source = producer(bone)
+fem.Bone = bone_source
+n7 = updated_count()
+u_bone = displacement(fem)
+mask = vtk_to_numpy(bone.GetPointData().GetArray("ROIMask")).copy()
+
+
+def replace_array(name, values):
+    array = numpy_to_vtk(values, deep=1)
+    array.SetName(name)
+    bone.GetPointData().RemoveArray(name)
+    bone.GetPointData().AddArray(array)
+    bone_source.MarkModified(bone_source)
+
+
+replace_array("ROIMask", mask)
+check(updated_count() == n7 and np.abs(displacement(fem) - u_bone).max() == 0.0,
+      "a new ROIMask array with the same values keeps the precompute and the result")
+smaller = mask.copy()
+smaller[np.flatnonzero(smaller)[::2]] = 0
+replace_array("ROIMask", smaller)
+n8 = updated_count()
+check(n8 == n7 + 1, "a new ROIMask array with other values starts a new precompute (%d -> %d)" % (n7, n8))
+fresh = CondensedFEMDeform(Input=tissue, Bone=bone_source, OutputMode="Surface", Backend="CPU")
+fresh.UpdatePipeline()
+check(np.abs(displacement(fem) - displacement(fresh)).max() <= 1e-10 * np.abs(displacement(fresh)).max(),
+      "after the new ROIMask the result equals a fresh filter's")
+Delete(fresh)
+replace_array("Sliding", np.zeros((bone.GetNumberOfPoints(), 2), dtype=np.uint8))
+fem.UpdatePipeline()
+check(fetch(fem).GetNumberOfPoints() == 0, "a two-component Sliding array after a valid update is refused")
+
 finish("TestCondensedFEMDeformCache")
