@@ -182,7 +182,7 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
     for (std::size_t a = 0; a < tris.size(); ++a) {
       hash.Candidates(std::int64_t(a), cand);
       for (std::int64_t b : cand) {
-        if (b <= std::int64_t(a))
+        if (b <= std::int64_t(a) || TriangleBoxesApart(tris[a], tris[b], tess.points))
           continue;
         if (TrianglesIntersect(tris[a], tris[b], tess.points, true)) {
           const Vector2d& pa = uv[tris[a].v[0]];

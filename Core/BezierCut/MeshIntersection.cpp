@@ -94,6 +94,22 @@ bool TrianglesIntersect(const Tri& A, const Tri& B, const RowVectors3d& P, bool 
   return false;
 }
 
+bool TriangleBoxesApart(const Tri& A, const Tri& B, const RowVectors3d& P) {
+  auto box = [&](const Tri& t, Eigen::Array3d& mn, Eigen::Array3d& mx) {
+    mn = P.row(t.v[0]).transpose().array();
+    mx = mn;
+    for (int k = 1; k < 3; ++k) {
+      mn = mn.min(P.row(t.v[k]).transpose().array());
+      mx = mx.max(P.row(t.v[k]).transpose().array());
+    }
+  };
+  Eigen::Array3d amn, amx, bmn, bmx;
+  box(A, amn, amx);
+  box(B, bmn, bmx);
+  const double margin = 1e-6 * std::max((amx - amn).maxCoeff(), (bmx - bmn).maxCoeff());
+  return (amn > bmx + margin).any() || (bmn > amx + margin).any();
+}
+
 TriangleHash::TriangleHash(const std::vector<Tri>& tris, const RowVectors3d& P,
                            const std::vector<std::int64_t>& ids, double cell)
     : tris_(tris), P_(P), h_(cell) {
@@ -151,8 +167,8 @@ std::vector<Tri> FanTriangles(const SurfaceMesh& mesh) {
   return tris;
 }
 
-std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris,
-                                           const RowVectors3d& before, const RowVectors3d& after,
+std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris, const RowVectors3d& before,
+                                           const RowVectors3d& after,
                                            const std::vector<std::uint8_t>& activeTri) {
   std::vector<std::int64_t> active;
   Eigen::Array3d lo = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -193,26 +209,12 @@ std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris,
   TriangleHash hash(tris, after, nearby, h);
   std::vector<std::uint8_t> flagged(tris.size(), 0);
   std::vector<std::int64_t> cand;
-  // Triangles whose boxes are apart cannot cross: TrianglesIntersect reports a crossing only for
-  // points within 1e-9 of the pair's size of the other triangle, far inside this margin.
-  auto box = [&](std::int64_t t, Eigen::Array3d& mn, Eigen::Array3d& mx) {
-    mn = after.row(tris[t].v[0]).transpose().array();
-    mx = mn;
-    for (int k = 1; k < 3; ++k) {
-      mn = mn.min(after.row(tris[t].v[k]).transpose().array());
-      mx = mx.max(after.row(tris[t].v[k]).transpose().array());
-    }
-  };
-  Eigen::Array3d amn, amx, bmn, bmx;
   for (std::int64_t a : active) {
     hash.Candidates(a, cand);
-    box(a, amn, amx);
     for (std::int64_t b : cand) {
       if (b == a || (activeTri[b] && b < a))
         continue; // each pair once
-      box(b, bmn, bmx);
-      const double margin = 1e-6 * std::max((amx - amn).maxCoeff(), (bmx - bmn).maxCoeff());
-      if ((amn > bmx + margin).any() || (bmn > amx + margin).any())
+      if (TriangleBoxesApart(tris[a], tris[b], after))
         continue;
       if (!TrianglesIntersect(tris[a], tris[b], after, false))
         continue;

@@ -23,6 +23,11 @@ std::vector<Tri> FanTriangles(const SurfaceMesh& mesh);
 // an edge or at a vertex does not count.
 bool TrianglesIntersect(const Tri& A, const Tri& B, const RowVectors3d& P, bool skipSharedVertex);
 
+// True when the triangles' bounding boxes are apart by more than 1e-6 of the larger box: such a
+// pair cannot cross (TrianglesIntersect reports a crossing only for points within 1e-9 of the
+// pair's size of the other triangle, far inside this margin), so the exact test can be skipped.
+bool TriangleBoxesApart(const Tri& A, const Tri& B, const RowVectors3d& P);
+
 // Uniform spatial hash over triangle bounding boxes.
 class TriangleHash {
 public:
@@ -42,8 +47,8 @@ private:
 
 // Triangles (among those flagged in activeTri) that intersect another triangle in `after` but did
 // not in `before`, tested against all triangles near the active region.
-std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris,
-                                           const RowVectors3d& before, const RowVectors3d& after,
+std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris, const RowVectors3d& before,
+                                           const RowVectors3d& after,
                                            const std::vector<std::uint8_t>& activeTri);
 
 // The same over the fan triangulation of `cells`, for the triangles with a point flagged in
