@@ -374,7 +374,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Violation("released and constrained nodes do not add up to the tied nodes");
 
   // A cut edit: points and Displacement move together, the undeformed bone stays. The cache must
-  // give what a fresh one gives.
+  // give what a fresh one gives. One input in four (it triples an execution's cost).
+  if (in.byte() % 4 != 0)
+    return 0;
   auto edited = vtkSmartPointer<vtkPolyData>::New();
   edited->DeepCopy(bone.data);
   vtkDataArray* d = edited->GetPointData()->GetArray("Displacement");
