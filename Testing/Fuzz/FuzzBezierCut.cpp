@@ -1,7 +1,8 @@
 // The Bezier surface and cut on random control points over a small bone (a coarse sphere, box or
-// plate), with a random ROI and options (up to 4 relaxation rounds, schedules of up to 8 steps). Promises checked: no crash; on success the topology is
-// kept, every coordinate is finite, only ROI vertices off its boundary move, unmoved vertices keep
-// their coordinates bit for bit, and moved vertices lie on the surface.
+// plate), with a random ROI and options (up to 4 relaxation rounds, schedules of up to 8 steps).
+// Promises checked: no crash; on success the topology is kept, every coordinate is finite, only ROI
+// vertices off its boundary move, unmoved vertices keep their coordinates bit for bit, and moved
+// vertices lie on the surface.
 #include "FuzzBytes.h"
 
 #include "BezierCut/BezierCut.h"
