@@ -176,23 +176,20 @@ Status ValidateBone(vtkPointSet* bone) {
   vtkNew<vtkIdList> ids;
   for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
     const int type = bone->GetCellType(c);
-    if (type == VTK_TRIANGLE || type == VTK_QUAD || type == VTK_POLYGON ||
-        type == VTK_TRIANGLE_STRIP || type == VTK_PIXEL)
+    if (type == VTK_TRIANGLE || type == VTK_QUAD || type == VTK_POLYGON || type == VTK_PIXEL)
       hasSurfaceCell = true;
     bone->GetCellPoints(c, ids);
     for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
       if (ids->GetId(k) < 0 || ids->GetId(k) >= n)
         return Error("bone cell ", c, " uses point id ", ids->GetId(k), ", outside the bone's ", n,
                      " points");
-    // VTK's closest-point search writes out of bounds on a strip whose triangles all repeat a
-    // point; strips with a repeated point in any triangle are refused.
+    // VTK's closest-point search writes out of bounds on a triangle strip none of whose triangles
+    // has a non-zero area (vtkTriangleStrip::EvaluatePosition then indexes its weights with an
+    // unset sub-id); strips are refused rather than judged triangle by triangle.
     if (type == VTK_TRIANGLE_STRIP)
-      for (vtkIdType k = 0; k + 2 < ids->GetNumberOfIds(); ++k) {
-        const vtkIdType a = ids->GetId(k), b = ids->GetId(k + 1), d = ids->GetId(k + 2);
-        if (a == b || b == d || a == d)
-          return Error("bone cell ", c, " is a triangle strip with a repeated point (", a, ", ", b,
-                       ", ", d, "); apply ParaView's Triangulate filter to the bone first");
-      }
+      return Error("bone cell ", c,
+                   " is a triangle strip, which the contact search does not take; apply "
+                   "ParaView's Triangulate filter to the bone first");
   }
   if (!hasSurfaceCell)
     return Error(

@@ -14,6 +14,8 @@
 #include "CondensedFEMDeformContact.h"
 #include "CondensedFEMDeformValidate.h"
 
+#include <Eigen/Geometry>
+
 #include "vtkCell.h"
 #include "vtkCellArray.h"
 #include "vtkCellType.h"
