@@ -517,7 +517,8 @@ TEST(CutMapping, LocalRepairStopsWhenUntanglingStalls) {
   options.localRepair = true;
   options.maxRelaxIterations = 1;
   options.stepSchedules = {};
-  const CutMapping mapping = MapCutOntoSurface(surface, m, neighbours, moved, foot, options);
+  const CutMapping mapping =
+      MapCutOntoSurface(surface, m, FanTriangles(m), neighbours, moved, foot, options);
   EXPECT_FALSE(mapping.ok);
   EXPECT_GT(mapping.repairVertexSearches, 0);
   // 452 searches when the sweeps ran to their limits.
