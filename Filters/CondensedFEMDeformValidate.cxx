@@ -26,15 +26,47 @@ template <class... Parts> Status Error(const Parts&... parts) {
   return Status::Error(msg.str());
 }
 
-// The first non-finite point coordinate, or -1.
+// Coordinates beyond this are refused: VTK's closest-point search multiplies up to four lengths
+// (its triangle's 2x2 systems), which overflows for coordinates near 1e77 and aborts on a VTK
+// assertion. No mesh in any length unit comes near it.
+constexpr double kLargestCoordinate = 1e30;
+
+bool UsableCoordinates(const double p[3]) {
+  return std::abs(p[0]) <= kLargestCoordinate && std::abs(p[1]) <= kLargestCoordinate &&
+         std::abs(p[2]) <= kLargestCoordinate;
+}
+
+// The first point with a non-finite or too large coordinate, or -1.
 vtkIdType FirstNonFinitePoint(vtkPointSet* data) {
   for (vtkIdType i = 0; i < data->GetNumberOfPoints(); ++i) {
     double p[3];
     data->GetPoint(i, p);
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+    if (!UsableCoordinates(p))
       return i;
   }
   return -1;
+}
+
+// The contact is made on the undeformed bone, points minus Displacement: its first point with a
+// non-finite or too large coordinate, or -1.
+vtkIdType FirstUnusableUndeformedPoint(vtkPointSet* bone, vtkDataArray* displacement) {
+  for (vtkIdType i = 0; i < bone->GetNumberOfPoints(); ++i) {
+    double p[3], d[3];
+    bone->GetPoint(i, p);
+    displacement->GetTuple(i, d);
+    const double u[3] = {p[0] - d[0], p[1] - d[1], p[2] - d[2]};
+    if (!UsableCoordinates(u))
+      return i;
+  }
+  return -1;
+}
+
+Status CheckUndeformedBone(vtkPointSet* bone, vtkDataArray* displacement) {
+  const vtkIdType bad = FirstUnusableUndeformedPoint(bone, displacement);
+  if (bad >= 0)
+    return Error("the bone's point ", bad, " minus its Displacement (the undeformed bone) has a ",
+                 "coordinate beyond 1e30 or not finite");
+  return Status::Ok();
 }
 
 // An array with one tuple per point (or cell) and the expected components, all finite.
@@ -120,7 +152,8 @@ Status ValidateTissue(vtkUnstructuredGrid* tissue, const Settings& settings) {
   }
   const vtkIdType bad = FirstNonFinitePoint(tissue);
   if (bad >= 0)
-    return Error("the tissue's point ", bad, " has a NaN or infinite coordinate");
+    return Error("the tissue's point ", bad,
+                 " has a NaN or infinite coordinate (or one beyond 1e30)");
   if (settings.useCellMaterials) {
     for (const char* name : {"YoungsModulus", "PoissonRatio"})
       if (vtkDataArray* a = tissue->GetCellData()->GetArray(name)) {
@@ -143,26 +176,35 @@ Status ValidateBone(vtkPointSet* bone) {
   vtkNew<vtkIdList> ids;
   for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
     const int type = bone->GetCellType(c);
-    if (type == VTK_TRIANGLE || type == VTK_QUAD || type == VTK_POLYGON ||
-        type == VTK_TRIANGLE_STRIP || type == VTK_PIXEL)
+    if (type == VTK_TRIANGLE || type == VTK_QUAD || type == VTK_POLYGON || type == VTK_PIXEL)
       hasSurfaceCell = true;
     bone->GetCellPoints(c, ids);
     for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
       if (ids->GetId(k) < 0 || ids->GetId(k) >= n)
         return Error("bone cell ", c, " uses point id ", ids->GetId(k), ", outside the bone's ", n,
                      " points");
+    // VTK's closest-point search writes out of bounds on a triangle strip none of whose triangles
+    // has a non-zero area (vtkTriangleStrip::EvaluatePosition then indexes its weights with an
+    // unset sub-id); strips are refused rather than judged triangle by triangle.
+    if (type == VTK_TRIANGLE_STRIP)
+      return Error("bone cell ", c,
+                   " is a triangle strip, which the contact search does not take; apply "
+                   "ParaView's Triangulate filter to the bone first");
   }
   if (!hasSurfaceCell)
     return Error(
         "the Bone input has no surface cells (triangles or polygons) to make contact with");
   const vtkIdType bad = FirstNonFinitePoint(bone);
   if (bad >= 0)
-    return Error("the bone's point ", bad, " has a NaN or infinite coordinate");
+    return Error("the bone's point ", bad,
+                 " has a NaN or infinite coordinate (or one beyond 1e30)");
   vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
   if (!displacement)
     return Error("the Bone input needs a 3-component point array named Displacement "
                  "(connect the output of BezierCut or Osteotomy)");
   Status s = CheckArray(displacement, "Displacement", "point", n, 3);
+  if (s)
+    s = CheckUndeformedBone(bone, displacement);
   if (!s)
     return s;
   for (const char* name : {"ROIMask", "SegmentId", "Sliding"})
@@ -177,12 +219,14 @@ Status ValidateBone(vtkPointSet* bone) {
 Status ValidateBoneValues(vtkPointSet* bone) {
   const vtkIdType bad = FirstNonFinitePoint(bone);
   if (bad >= 0)
-    return Error("the bone's point ", bad, " has a NaN or infinite coordinate");
+    return Error("the bone's point ", bad,
+                 " has a NaN or infinite coordinate (or one beyond 1e30)");
   vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
   if (!displacement)
     return Error("the Bone input needs a 3-component point array named Displacement "
                  "(connect the output of BezierCut or Osteotomy)");
-  return CheckArray(displacement, "Displacement", "point", bone->GetNumberOfPoints(), 3);
+  const Status s = CheckArray(displacement, "Displacement", "point", bone->GetNumberOfPoints(), 3);
+  return s ? CheckUndeformedBone(bone, displacement) : s;
 }
 
 std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,

@@ -121,28 +121,43 @@ public:
   }
 
   // Signed size of touched triangle k with its current points, relative to its original area:
-  // for a triangle whose vertices all moved, sigma * (area vector . n(uv of `at`)) / |a0|; for the
-  // others, (area vector . a0) / |a0|^2. Positive = correctly oriented.
-  double SignedSize(std::size_t k, const RowVectors3d& P, std::int64_t at) const {
+  // for a triangle whose vertices all moved, sigma * (area vector . normal) / |a0|, with the unit
+  // normal of S at the (u,v) of the vertex being optimised; for the others,
+  // (area vector . a0) / |a0|^2. Positive = correctly oriented.
+  double SignedSize(std::size_t k, const RowVectors3d& P, const Vector3d& normal) const {
     const double A0 = a0_[k].norm();
     if (!(A0 > 0))
       return 1.0;
     const Vector3d a1 = AreaVector(tris_[touched_[k]], P);
     if (full_[k])
-      return sigma_ * a1.dot(S_.UnitNormal(uv_[at].x(), uv_[at].y())) / A0;
+      return sigma_ * a1.dot(normal) / A0;
     return a1.dot(a0_[k]) / (A0 * A0);
   }
 
   // Untangling: each moved vertex of a flipped or degenerate triangle (and its moved neighbours)
   // moves within S to maximise the smallest signed size of its triangles (pattern search in
-  // (u,v)). Returns true when no triangle is flipped or degenerate any more.
+  // (u,v)). Returns true when no triangle is flipped or degenerate any more. Sweeps stop early
+  // when they cannot help: two sweeps in a row that move no vertex (the odd and even sweep differ
+  // in the vertices they visit; after both, every later sweep would repeat them), or
+  // kStagnantSweeps sweeps without fewer bad triangles than the fewest seen (the searches then
+  // only shuffle vertices around the same tangle; relaxation or intermediary surfaces follow).
   bool Untangle(RowVectors3d& P, int maxSweeps) {
+    constexpr int kStagnantSweeps = 16;
     std::vector<std::int64_t> bad, verts;
     std::vector<std::uint8_t> mark(moved_.size(), 0);
+    std::size_t fewestBad = std::numeric_limits<std::size_t>::max();
+    int sinceFewest = 0;
+    bool previousMovedNone = false;
     for (int sweep = 0; sweep < maxSweeps; ++sweep) {
       CollectBad(P, a0_, false, true, bad);
       if (bad.empty())
         return true;
+      if (bad.size() < fewestBad) {
+        fewestBad = bad.size();
+        sinceFewest = 0;
+      } else if (++sinceFewest >= kStagnantSweeps) {
+        break;
+      }
       verts.clear();
       for (std::int64_t tr : bad)
         for (int j = 0; j < 3; ++j) {
@@ -160,20 +175,29 @@ public:
                 verts.push_back(w);
               }
         }
+      bool movedNone = true;
       for (std::int64_t v : verts) {
         mark[v] = 0;
-        OptimizeVertex(P, v);
+        if (OptimizeVertex(P, v))
+          movedNone = false;
       }
+      if (movedNone && previousMovedNone)
+        break;
+      previousMovedNone = movedNone;
     }
     CollectBad(P, a0_, false, true, bad);
     return bad.empty();
   }
 
-  void OptimizeVertex(RowVectors3d& P, std::int64_t i) {
+  // Returns true when the vertex moved.
+  bool OptimizeVertex(RowVectors3d& P, std::int64_t i) {
+    ++vertexSearches_;
+    // One normal per trial position, shared by the vertex's triangles.
     auto worst = [&]() {
+      const Vector3d normal = S_.UnitNormal(uv_[i].x(), uv_[i].y());
       double w = std::numeric_limits<double>::infinity();
       for (std::int64_t k : incident_[i])
-        w = std::min(w, SignedSize(std::size_t(k), P, i));
+        w = std::min(w, SignedSize(std::size_t(k), P, normal));
       return w;
     };
     double h = 0;
@@ -183,7 +207,8 @@ public:
     if (!(h > 1e-12))
       h = 1e-3;
     double best = worst();
-    Vector2d bestUV = uv_[i];
+    const Vector2d startUV = uv_[i];
+    Vector2d bestUV = startUV;
     static const double dirs[8][2] = {{1, 0},
                                       {-1, 0},
                                       {0, 1},
@@ -210,6 +235,7 @@ public:
     }
     uv_[i] = bestUV;
     Place(P, i, 1.0);
+    return bestUV != startUV;
   }
 
   // Mapping through T intermediary surfaces.
@@ -244,6 +270,7 @@ public:
   }
 
   const std::vector<Vector2d>& Parameters() const { return uv_; }
+  std::int64_t VertexSearches() const { return vertexSearches_; }
 
   void ResetRegion() {
     region_.clear();
@@ -404,6 +431,7 @@ private:
       incident_; // touched triangles (indices into touched_) per moved vertex
   bool solvedOnce_ = false;
   double sigma_ = 1.0;
+  std::int64_t vertexSearches_ = 0;
 };
 
 } // namespace
@@ -435,6 +463,7 @@ CutMapping MapCutOntoSurface(const BezierSurface& surface, const SurfaceMesh& me
     }
   }
   m.parameters = mapper.Parameters();
+  m.repairVertexSearches = mapper.VertexSearches();
   return m;
 }
 

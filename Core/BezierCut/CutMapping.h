@@ -21,11 +21,12 @@ struct CutMappingOptions {
 
 struct CutMapping {
   bool ok = false;
-  RowVectors3d points;                    // all points; moved ones on S
+  RowVectors3d points;                     // all points; moved ones on S
   std::vector<Eigen::Vector2d> parameters; // (u,v) of each moved point
   int intermediarySteps = 0;               // 0: direct, 1: local repair on S, T > 1: T surfaces
   std::string directProblem;               // why direct projection failed (empty if it did not)
   std::string problem;                     // why the last attempt failed (when !ok)
+  std::int64_t repairVertexSearches = 0;   // pattern searches of one vertex in the local repair
 };
 
 // triangles: FanTriangles(mesh); neighbours: the sorted edge neighbours of each point; moved: the

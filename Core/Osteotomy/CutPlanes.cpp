@@ -16,10 +16,13 @@ Status NormalizeCutPlanes(std::vector<CutPlane>& planes) {
     const std::string name = "cut plane " + std::to_string(i + 1);
     if (!p.origin.allFinite() || !p.normal.allFinite())
       return Status::Error(name + " has a non-finite origin or normal");
-    const double length = p.normal.norm();
-    if (!(length > 0.0) || !std::isfinite(length))
+    // Scaled by its largest component first: the squared length of a normal near 1e-160 or
+    // 1e160 underflows or overflows, which would give a normal that is not of unit length.
+    const double largest = p.normal.cwiseAbs().maxCoeff();
+    if (!(largest > 0.0))
       return Status::Error(name + " has a zero-length normal");
-    p.normal /= length;
+    p.normal /= largest;
+    p.normal.normalize();
   }
   return Status::Ok();
 }

@@ -15,7 +15,7 @@ from badinput_util import (Cases, Catcher, box_tissue, cell_array, copy, plane_b
                            set_points, tets_of, unstructured)
 from faceplan_test_util import check, fetch, finish, producer
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkCommonDataModel import VTK_HEXAHEDRON, VTK_TETRA, VTK_TRIANGLE
+from vtkmodules.vtkCommonDataModel import VTK_HEXAHEDRON, VTK_TETRA, VTK_TRIANGLE, vtkCellArray
 
 cases = Cases("CondensedFEMDeform")
 PORTS = (0,)
@@ -158,6 +158,20 @@ bad = copy(BONE)
 bad.GetPolys().GetConnectivityArray().SetValue(4, -2)
 f, c = fem_on(bone=bad)
 cases.error("negative bone id", f, c, "point id -2", ports=PORTS)
+# Found by FuzzContactMapping: VTK's closest-point search aborts (coordinates near 1e150) or writes out
+# of bounds (a triangle strip whose triangles have no area) on these; the validation refuses them.
+bad = copy(BONE)
+pts = BP.copy()
+pts[40] = [1e150, 0, 0]
+set_points(bad, pts)
+f, c = fem_on(bone=bad)
+cases.error("bone coordinate 1e150", f, c, "bone's point 40", "beyond 1e30", ports=PORTS)
+bad = copy(BONE)
+strip = vtkCellArray()
+strip.InsertNextCell(4, [2, 5, 5, 5])
+bad.SetStrips(strip)
+f, c = fem_on(bone=bad)
+cases.error("bone with a triangle strip", f, c, "triangle strip", "Triangulate", ports=PORTS)
 D = vtk_to_numpy(BONE.GetPointData().GetArray("Displacement")).copy()
 M = vtk_to_numpy(BONE.GetPointData().GetArray("ROIMask")).astype(float)
 for name, values, words in (("missing", None, ("Displacement", "3-component")),

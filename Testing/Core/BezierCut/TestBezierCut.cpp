@@ -1,6 +1,7 @@
 // BezierCut contract tests: moved vertices on S, the others untouched bit for bit, topology
 // unchanged, no flipped / degenerate / newly intersecting triangles, clear errors for bad curves.
 #include "BezierCut/BezierCut.h"
+#include "BezierCut/CutMapping.h"
 #include "BezierCut/DefaultCurves.h"
 #include "BezierCut/MeshIntersection.h"
 #include "Support/FaceplanTestMeshes.h"
@@ -8,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <random>
@@ -464,4 +466,61 @@ TEST(BezierCut, DefaultCurvesCutTheCapClearOfTheBoundary) {
   SurfaceMesh point;
   point.points = RowVectors3d::Zero(1, 3);
   EXPECT_FALSE(DefaultCutCurves(point.points, {1}, {0}, U, V));
+}
+
+// The local repair on a tangle it cannot undo (found by FuzzBezierCut: a fill through the side of
+// a box whose ROI boundary lies on the fill side). Its untangling sweeps used to run to their
+// limits, hundreds of vertex searches that changed nothing; they must stop once they stall.
+TEST(CutMapping, LocalRepairStopsWhenUntanglingStalls) {
+  const SurfaceMesh m = testmesh::Box({-8, -6, -4}, {8, 6, 4}, 4.0);
+  ASSERT_EQ(m.numPoints(), 54);
+  std::vector<std::uint8_t> selected(54, 1);
+  for (int i : {14, 15, 17, 18, 19, 20, 21, 22, 23, 30})
+    selected[std::size_t(i)] = 0;
+  ROIResult roi;
+  ASSERT_TRUE(ComputeROI(m, selected, roi));
+  const Curve U = {{-18.96875, -10.09375, -4.84375},
+                   {-8.6354166666666679, -4.875, -6.9375},
+                   {-8.6770833333333339, -6.625, -8.5625},
+                   {-1.4375, -9.5, -4.46875}};
+  const Curve V = {{-18.96875, -10.09375, -4.84375},
+                   {-18.5625, -0.60416666666666696, -4.71875},
+                   {-20.9375, 1.2916666666666661, -7.84375},
+                   {-21.65625, 9.15625, -7.59375}};
+  BezierSurface surface;
+  ASSERT_TRUE(BezierSurface::Create(U, V, /*flipNormal=*/true, surface));
+  // What BezierCut hands the mapping for a fill: ROI vertices inside the patch behind S move.
+  const Eigen::Index n = m.numPoints();
+  std::vector<std::uint8_t> moved(std::size_t(n), 0);
+  std::vector<Eigen::Vector2d> foot(std::size_t(n), Eigen::Vector2d::Zero());
+  std::vector<std::vector<std::int64_t>> neighbours(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!roi.mask[std::size_t(i)])
+      continue;
+    const SurfaceProjection p = surface.Project(m.points.row(i).transpose());
+    foot[std::size_t(i)] = Eigen::Vector2d(p.u, p.v);
+    moved[std::size_t(i)] = p.inside && p.signedDistance < 0 && !roi.boundary[std::size_t(i)];
+  }
+  for (std::size_t c = 0; c + 1 < m.offsets.size(); ++c)
+    for (std::int64_t k = m.offsets[c]; k < m.offsets[c + 1]; ++k) {
+      const std::int64_t a = m.connectivity[std::size_t(k)];
+      const std::int64_t b =
+          m.connectivity[std::size_t(k + 1 < m.offsets[c + 1] ? k + 1 : m.offsets[c])];
+      neighbours[std::size_t(a)].push_back(b);
+      neighbours[std::size_t(b)].push_back(a);
+    }
+  for (auto& list : neighbours) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  CutMappingOptions options;
+  options.localRepair = true;
+  options.maxRelaxIterations = 1;
+  options.stepSchedules = {};
+  const CutMapping mapping =
+      MapCutOntoSurface(surface, m, FanTriangles(m), neighbours, moved, foot, options);
+  EXPECT_FALSE(mapping.ok);
+  EXPECT_GT(mapping.repairVertexSearches, 0);
+  // 452 searches when the sweeps ran to their limits.
+  EXPECT_LE(mapping.repairVertexSearches, 200) << mapping.repairVertexSearches;
 }

@@ -150,6 +150,19 @@ TEST(OsteotomyCut, PlaneValidation) {
   EXPECT_NEAR(ok[0].normal.norm(), 1.0, 1e-15);
 }
 
+// Normals whose squared length underflows or overflows (found by FuzzOsteotomy) still give unit
+// normals in their direction; a normal of denormals is not zero either.
+TEST(OsteotomyCut, TinyAndHugeNormalsBecomeUnitNormals) {
+  for (const double scale : {1e-160, 1e-200, 4.9e-324, 1e160, 1e300}) {
+    std::vector<CutPlane> planes(1);
+    planes[0].normal = Eigen::Vector3d(0, 3, 4) * scale;
+    ASSERT_TRUE(NormalizeCutPlanes(planes)) << scale;
+    EXPECT_NEAR(planes[0].normal.norm(), 1.0, 1e-15) << scale;
+    if (scale > 1e-300)
+      EXPECT_NEAR(planes[0].normal.z(), 0.8, 1e-15) << scale;
+  }
+}
+
 TEST(OsteotomyCut, SidesAndInsideOut) {
   RowVectors3d p(4, 3);
   p << -2, 0, 0, -1, 0, 0, 1, 0, 0, 2, 0, 0;
