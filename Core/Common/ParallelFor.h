@@ -1,6 +1,7 @@
 #pragma once
 // Splits [0, count) into one contiguous range per hardware thread; runs inline when small.
 #include <algorithm>
+#include "Common/WorkerThreads.h"
 #include <cstdint>
 #include <thread>
 #include <vector>
@@ -9,8 +10,7 @@ namespace faceplan {
 
 template <class Work>
 void ParallelFor(std::int64_t count, std::int64_t serialBelow, Work&& work) {
-  const std::int64_t threads =
-      std::max<std::int64_t>(1, std::min<std::int64_t>(std::thread::hardware_concurrency(), 16));
+  const std::int64_t threads = WorkerThreads(16);
   if (count < serialBelow || threads == 1) {
     work(std::int64_t{0}, count);
     return;

@@ -1,5 +1,6 @@
 // The Condensation stage: the dense response of the kept DOFs to the ROI DOFs.
 #include "CondensedFEM/DeformationCheck.h"
+#include "Common/WorkerThreads.h"
 #include "CondensedFEM/PrecomputeStages.h"
 
 #include "Common/BlasThreads.h"
@@ -56,8 +57,7 @@ Status BuildResponse(CondensedSystem& sys, const SparseMatrix& coupling,
                      const ProgressCallback& progress) {
   const Eigen::Index keptDofs = 3 * sys.layout.keptFree, roiDofs = coupling.cols();
   const Eigen::Index freeDofs = sys.kff.rows();
-  const int threads =
-      static_cast<int>(std::max(1u, std::min(std::thread::hardware_concurrency(), 16u)));
+  const int threads = WorkerThreads(16);
   const double bytesPerColumn = 8.0 * 5.0 * double(std::max<Eigen::Index>(freeDofs, 1));
   const Eigen::Index memoryBlock = static_cast<Eigen::Index>(1.0e9 / (bytesPerColumn * threads));
   const Eigen::Index largestBlock =

@@ -1,4 +1,5 @@
 #include "SparseSolver/CholmodFactor.h"
+#include "Common/WorkerThreads.h"
 
 #include "SparseSolver/CholmodViews.h"
 
@@ -176,7 +177,7 @@ Status CholmodFactor::factorize(const SparseMatrix& upper) {
   // At most 8 OpenBLAS threads for the supernodal BLAS calls: on the 16-core GPU machine OpenBLAS
   // with all 16 threads made this factorization many times slower than with 8 (BENCHMARKS.md, GPU
   // section), and fewer threads lose little elsewhere. A no-op when the BLAS is not OpenBLAS.
-  const int blasThreads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
+  const int blasThreads = WorkerThreads(8);
   ScopedBlasThreads cappedBlas(blasThreads);
   const int ok = cholmod_factorize(&view, impl_->factor, &impl_->common);
   if (!ok || impl_->common.status == CHOLMOD_OUT_OF_MEMORY)

@@ -1,4 +1,5 @@
 #include "SparseSolver/TrailingResponse.h"
+#include "Common/WorkerThreads.h"
 
 #include "Common/BlasThreads.h"
 
@@ -33,8 +34,7 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   for (Eigen::Index k = 0; k < weights.size(); ++k)
     weights.data()[k] = (rng() & 1u) ? 1.0 : -1.0;
 
-  const int threads =
-      static_cast<int>(std::max(1u, std::min(std::thread::hardware_concurrency(), 16u)));
+  const int threads = WorkerThreads(16);
   const Eigen::Index block = std::max<Eigen::Index>(
       1, std::min(blockColumns, (roiDofs + threads - 1) / threads)); // keep every core busy
   const Eigen::Index blocks = (roiDofs + block - 1) / block;
