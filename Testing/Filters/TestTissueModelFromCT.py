@@ -7,33 +7,17 @@ import sys
 
 import numpy as np
 from paraview.simple import *
-from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.util.vtkConstants import VTK_STRING
 from vtkmodules.vtkCommonDataModel import VTK_TETRA, vtkImageData, vtkPolyData
 from vtkmodules.vtkCommonCore import vtkPoints, vtkShortArray
 
-from faceplan_test_util import ErrorCatcher, check, fetch, finish, producer, triangles
+from faceplan_test_util import ErrorCatcher, WarningCatcher, check, fetch, finish, producer, triangles
 
 LoadPlugin(sys.argv[1], ns=globals())
 data = sys.argv[2]
 if "TissueModelFromCT" not in globals():
     print("TissueModelFromCT is not in this build (configured without CGAL): skipped")
     sys.exit(77)
-
-
-class WarningCatcher:
-    """Collects the messages of vtkWarningMacro calls of a proxy's VTK object."""
-
-    def __init__(self, proxy):
-        self.messages = []
-
-        @calldata_type(VTK_STRING)
-        def on_warning(obj, event, message):
-            self.messages.append(message)
-
-        self._callback = on_warning
-        proxy.GetClientSideObject().AddObserver("WarningEvent", on_warning)
 
 
 def tet_volumes(grid):

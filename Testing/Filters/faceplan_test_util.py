@@ -27,44 +27,39 @@ def finish(name):
     sys.exit(0)
 
 
-class ErrorCatcher:
+class _MessageCatcher:
+    """Collects the messages a proxy's VTK object sends with one event (vtkErrorMacro: ErrorEvent,
+    vtkWarningMacro: WarningEvent)."""
+
+    def __init__(self, proxy, event):
+        self.messages = []
+
+        @calldata_type(VTK_STRING)
+        def on_message(obj, event_name, message):
+            self.messages.append(message)
+
+        self._callback = on_message
+        proxy.GetClientSideObject().AddObserver(event, on_message)
+
+    def clear(self):
+        self.messages = []
+
+    def contains(self, text):
+        return any(text in m for m in self.messages)
+
+
+class ErrorCatcher(_MessageCatcher):
     """Collects the messages of vtkErrorMacro calls of a proxy's VTK object."""
 
     def __init__(self, proxy):
-        self.messages = []
-
-        @calldata_type(VTK_STRING)
-        def on_error(obj, event, message):
-            self.messages.append(message)
-
-        self._callback = on_error
-        proxy.GetClientSideObject().AddObserver("ErrorEvent", on_error)
-
-    def clear(self):
-        self.messages = []
-
-    def contains(self, text):
-        return any(text in m for m in self.messages)
+        super().__init__(proxy, "ErrorEvent")
 
 
-class WarningCatcher:
+class WarningCatcher(_MessageCatcher):
     """Collects the messages of vtkWarningMacro calls of a proxy's VTK object."""
 
     def __init__(self, proxy):
-        self.messages = []
-
-        @calldata_type(VTK_STRING)
-        def on_warning(obj, event, message):
-            self.messages.append(message)
-
-        self._callback = on_warning
-        proxy.GetClientSideObject().AddObserver("WarningEvent", on_warning)
-
-    def clear(self):
-        self.messages = []
-
-    def contains(self, text):
-        return any(text in m for m in self.messages)
+        super().__init__(proxy, "WarningEvent")
 
 
 def producer(dataset):
