@@ -83,7 +83,6 @@ void BuildStrainBounds(CondensedSystem& sys) {
     movableRow[sets.movable[k]] = static_cast<int>(k);
   for (size_t k = 0; k < sys.kept.size(); ++k)
     keptRow[sys.kept[k]] = static_cast<int>(k);
-  std::vector<int> cells;
   std::vector<CondensedSystem::BoundedCell> bounded;
   for (int e : sys.checkableCells) {
     Eigen::Matrix3d edges;
@@ -102,13 +101,12 @@ void BuildStrainBounds(CondensedSystem& sys) {
                        : movableRow[node] >= 0 ? -(movableRow[node] + 2)
                                                : -1;
     }
-    cells.push_back(e);
     bounded.push_back(cell);
   }
 
   // One displacement field per rescaled parameter direction, through the solve's own mapping.
   const SparseMatrix basis = SegmentBasis(points, sets);
-  std::vector<double> gain2(cells.size(), 0.0);
+  std::vector<double> gain2(bounded.size(), 0.0);
   RowVectors3d field(points.rows(), 3);
   for (Eigen::Index j = 0; j < parameters; ++j) {
     Eigen::VectorXd p = Eigen::VectorXd::Zero(parameters);
@@ -132,9 +130,9 @@ void BuildStrainBounds(CondensedSystem& sys) {
       field.row(sets.movable[k]) = movable.segment<3>(3 * k).transpose();
     for (int node : sys.kept)
       field.row(node) = NodeDisplacement(sys, node, roi, keptFree);
-    for (size_t c = 0; c < cells.size(); ++c) {
+    for (size_t c = 0; c < bounded.size(); ++c) {
       Eigen::Matrix3d du;
-      const int e = cells[c];
+      const int e = bounded[c].cell;
       for (int i = 0; i < 3; ++i)
         du.col(i) =
             (field.row(sys.cornerMesh.tets(e, i + 1)) - field.row(sys.cornerMesh.tets(e, 0)))
@@ -142,10 +140,10 @@ void BuildStrainBounds(CondensedSystem& sys) {
       gain2[c] += (du * bounded[c].inverseEdges).squaredNorm();
     }
   }
-  std::vector<size_t> order(cells.size());
+  std::vector<size_t> order(bounded.size());
   std::iota(order.begin(), order.end(), size_t(0));
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return gain2[a] > gain2[b]; });
-  sys.boundedCells.reserve(cells.size());
+  sys.boundedCells.reserve(bounded.size());
   for (size_t c : order) {
     sys.boundedCells.push_back(bounded[c]);
     sys.boundedCells.back().gain = std::sqrt(gain2[c]);
@@ -186,8 +184,8 @@ DeformationReport CheckBoundedCells(const CondensedSystem& sys, const Eigen::Vec
       du.col(j) = cornerDisplacement(cell.source[j + 1]) - u0;
     AddCellDeformation(report, cell.cell, du * cell.inverseEdges);
   }
-  std::sort(report.invertedCells.begin(),
-            report.invertedCells.end()); // mesh order, as CheckDeformation
+  // Cells were visited by bound; list the inverted ones in mesh order, as CheckDeformation does.
+  std::sort(report.invertedCells.begin(), report.invertedCells.end());
   AppendDeformationWarnings(report, sys.strainWarningLimit, warnings);
   return report;
 }
