@@ -8,24 +8,7 @@ from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.util.vtkConstants import VTK_STRING
 
-failures = []
-
-
-def check(cond, what):
-    """Records a failed contract check (the test keeps going, then exits non-zero)."""
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
-    return bool(cond)
-
-
-def finish(name):
-    if failures:
-        print("%s: %d check(s) failed" % (name, len(failures)))
-        sys.exit(1)
-    print("%s: all checks passed" % name)
-    sys.exit(0)
-
+from faceplan_checks import check, failures, finish  # noqa: F401 (re-exported to the tests)
 
 class _MessageCatcher:
     """Collects the messages a proxy's VTK object sends with one event (vtkErrorMacro: ErrorEvent,

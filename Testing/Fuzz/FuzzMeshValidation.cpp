@@ -1,6 +1,7 @@
 // Core's input checks on arbitrary meshes, materials, node sets and surfaces: never a crash, and
 // when every check passes, Precompute and Solve either fail with a message or give finite results.
 #include "FuzzBytes.h"
+#include "FuzzPrecompute.h"
 
 #include "CondensedFEM/CondensedFEM.h"
 #include "Mesh/MeshValidation.h"
@@ -12,6 +13,7 @@
 #include <vector>
 
 using namespace faceplan;
+using faceplan::fuzz::CheckedPrecompute;
 using faceplan::fuzz::FuzzBytes;
 using faceplan::fuzz::Violation;
 
@@ -87,14 +89,8 @@ void CheckTetMesh(FuzzBytes& in) {
   request.options.method = static_cast<SolveMethod>(in.range(0, 2));
   request.options.elementOrder = static_cast<ElementOrder>(in.range(0, 2));
   std::shared_ptr<const CondensedSystem> system;
-  const Status pre = Precompute(request, system);
-  if (pre.ok != (system != nullptr))
-    Violation("Precompute's status and system disagree");
-  if (!pre) {
-    if (pre.message.empty())
-      Violation("a Precompute error without a message");
+  if (!CheckedPrecompute(request, system))
     return;
-  }
   SolveInput input;
   const Eigen::Index rows = Eigen::Index(sets.movable.size()) + (in.flag() ? in.range(-1, 1) : 0);
   input.movableDisplacement.resize(rows < 0 ? 0 : rows, 3);

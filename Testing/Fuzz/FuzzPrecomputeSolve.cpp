@@ -4,6 +4,7 @@
 // one (the uncondensed reference for linear cells, the other condensed method for quadratic ones)
 // when the system is reasonably conditioned.
 #include "FuzzBytes.h"
+#include "FuzzPrecompute.h"
 
 #include "CondensedFEM/CondensedFEM.h"
 #include "Mesh/TetGeometry.h"
@@ -16,6 +17,7 @@
 #include <vector>
 
 using namespace faceplan;
+using faceplan::fuzz::CheckedPrecompute;
 using faceplan::fuzz::FuzzBytes;
 using faceplan::fuzz::Violation;
 
@@ -103,14 +105,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.quadraticMeanDilatation = in.flag();
 
   std::shared_ptr<const CondensedSystem> system;
-  const Status pre = Precompute(request, system);
-  if (pre.ok != (system != nullptr))
-    Violation("Precompute's status and system disagree");
-  if (!pre) {
-    if (pre.message.empty())
-      Violation("a Precompute error without a message");
+  if (!CheckedPrecompute(request, system))
     return 0;
-  }
   SolveInput input;
   input.movableDisplacement.resize(Eigen::Index(request.sets.movable.size()), 3);
   for (Eigen::Index i = 0; i < input.movableDisplacement.rows(); ++i)

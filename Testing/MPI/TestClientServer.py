@@ -9,7 +9,6 @@ missing.
     pvpython TestClientServer.py <pvserver> <FacePlan.so> <Data dir> <work dir>
 """
 import os
-import shutil
 import socket
 import subprocess
 import sys
@@ -21,9 +20,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mpi_test_util as util
 
 pvserver, plugin, data_dir, work_dir = sys.argv[1:5]
-mpiexec = util.mpiexec_or_skip()
-shutil.rmtree(work_dir, ignore_errors=True)
-os.makedirs(work_dir)
+mpiexec = util.prepare(work_dir)
 client = os.path.join(os.path.dirname(os.path.abspath(__file__)), "ClientServerRun.py")
 pvpython = sys.executable if os.path.basename(sys.executable).startswith("pvpython") else "pvpython"
 

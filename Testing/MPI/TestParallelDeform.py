@@ -16,7 +16,6 @@ missing.
 import glob
 import json
 import os
-import shutil
 import subprocess
 import sys
 
@@ -34,9 +33,7 @@ SCENES = ["face", "sphere"]
 TOLERANCE = 1e-10
 EXPECTED_ERRORS = ["YoungsModulus must be a positive number", "apply ROI Extract first"]
 
-mpiexec = util.mpiexec_or_skip()
-shutil.rmtree(work_dir, ignore_errors=True)
-os.makedirs(work_dir)
+mpiexec = util.prepare(work_dir)
 script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "RunParallelDeform.py")
 
 

@@ -5,7 +5,6 @@ Exits 77 (CTest SKIP_RETURN_CODE) when mpiexec is missing.
     pvpython TestParallelTissueModel.py <pvbatch> <FacePlan.so> <CT .vti> <work dir>
 """
 import os
-import shutil
 import sys
 
 import numpy as np
@@ -14,9 +13,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mpi_test_util as util
 
 pvbatch, plugin, ct_file, work_dir = sys.argv[1:5]
-mpiexec = util.mpiexec_or_skip()
-shutil.rmtree(work_dir, ignore_errors=True)
-os.makedirs(work_dir)
+mpiexec = util.prepare(work_dir)
 script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "RunTissueModel.py")
 results = {}
 for label, prefix in (("serial", []), ("n2", mpiexec + ["-n", "2"])):

@@ -6,22 +6,8 @@ import subprocess
 import sys
 
 SKIP = 77  # the tests' SKIP_RETURN_CODE, as in Testing/Images
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
-    return bool(cond)
-
-
-def finish(name):
-    if failures:
-        print("%s: %d check(s) failed" % (name, len(failures)))
-        sys.exit(1)
-    print("%s: all checks passed" % name)
-    sys.exit(0)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "Filters"))
+from faceplan_checks import check, failures, finish  # noqa: E402,F401 (re-exported to the drivers)
 
 
 def mpiexec_or_skip():
@@ -37,6 +23,14 @@ def mpiexec_or_skip():
         if os.geteuid() == 0:
             cmd.append("--allow-run-as-root")
     return cmd
+
+
+def prepare(work_dir):
+    """mpiexec (or SKIP, see mpiexec_or_skip) and an empty work_dir: what every driver starts with."""
+    mpiexec = mpiexec_or_skip()
+    shutil.rmtree(work_dir, ignore_errors=True)
+    os.makedirs(work_dir)
+    return mpiexec
 
 
 def clean_environment():
