@@ -171,16 +171,12 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
     out.Tessellate(per, tess, &uv);
     std::vector<Tri> tris = FanTriangles(tess);
     std::vector<std::int64_t> all(tris.size());
-    double edge = 0;
-    for (std::size_t t = 0; t < tris.size(); ++t) {
+    for (std::size_t t = 0; t < tris.size(); ++t)
       all[t] = std::int64_t(t);
-      edge = std::max(edge, (tess.points.row(tris[t].v[0]) - tess.points.row(tris[t].v[1])).norm());
-      edge = std::max(edge, (tess.points.row(tris[t].v[0]) - tess.points.row(tris[t].v[2])).norm());
-    }
-    TriangleHash hash(tris, tess.points, all, std::max(edge, 1e-12 * L));
+    const TriangleBoxTree tree(tris, tess.points, all);
     std::vector<std::int64_t> cand;
     for (std::size_t a = 0; a < tris.size(); ++a) {
-      hash.Candidates(std::int64_t(a), cand);
+      tree.Candidates(std::int64_t(a), cand);
       for (std::int64_t b : cand) {
         if (b <= std::int64_t(a) || TriangleBoxesApart(tris[a], tris[b], tess.points))
           continue;

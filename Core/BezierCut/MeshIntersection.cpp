@@ -110,50 +110,50 @@ bool TriangleBoxesApart(const Tri& A, const Tri& B, const RowVectors3d& P) {
   return (amn > bmx + margin).any() || (bmn > amx + margin).any();
 }
 
-TriangleHash::TriangleHash(const std::vector<Tri>& tris, const RowVectors3d& P,
-                           const std::vector<std::int64_t>& ids, double cell)
-    : tris_(tris), P_(P), h_(cell) {
-  for (std::int64_t t : ids) {
-    Eigen::Array3i lo, hi;
-    Range(t, lo, hi);
-    for (int x = lo[0]; x <= hi[0]; ++x)
-      for (int y = lo[1]; y <= hi[1]; ++y)
-        for (int z = lo[2]; z <= hi[2]; ++z)
-          map_[Key(x, y, z)].push_back(t);
+TriangleBoxTree::TriangleBoxTree(const std::vector<Tri>& tris, const RowVectors3d& P,
+                                 const std::vector<std::int64_t>& ids)
+    : tris_(tris), P_(P), ids_(ids) {
+  // KdBVH indexes its objects with int: the objects are positions in ids_.
+  std::vector<int> objects;
+  if (ids_.size() < std::size_t(std::numeric_limits<int>::max())) {
+    objects.reserve(ids_.size());
+    boxes_.reserve(ids_.size());
+    for (std::size_t k = 0; k < ids_.size(); ++k) {
+      objects.push_back(int(k));
+      boxes_.push_back(GrownBox(ids_[k]));
+    }
   }
+  tree_.init(objects.begin(), objects.end(), boxes_.begin(), boxes_.end());
 }
 
-void TriangleHash::Candidates(std::int64_t t, std::vector<std::int64_t>& out) const {
+TriangleBoxTree::Box TriangleBoxTree::GrownBox(std::int64_t t) const {
+  Box box(P_.row(tris_[t].v[0]).transpose());
+  for (int k = 1; k < 3; ++k)
+    box.extend(P_.row(tris_[t].v[k]).transpose());
+  const double margin = 1e-6 * box.sizes().maxCoeff();
+  box.min().array() -= margin;
+  box.max().array() += margin;
+  return box;
+}
+
+void TriangleBoxTree::Candidates(std::int64_t t, std::vector<std::int64_t>& out) const {
+  struct Collect {
+    const Box query;
+    const TriangleBoxTree& self;
+    std::vector<std::int64_t>& found;
+    bool intersectVolume(const Box& volume) const { return volume.intersects(query); }
+    bool intersectObject(int k) {
+      // A leaf's volume holds up to two objects: test each object's own box.
+      if (self.boxes_[std::size_t(k)].intersects(query))
+        found.push_back(self.ids_[std::size_t(k)]);
+      return false; // keep searching
+    }
+  };
   out.clear();
-  Eigen::Array3i lo, hi;
-  Range(t, lo, hi);
-  for (int x = lo[0]; x <= hi[0]; ++x)
-    for (int y = lo[1]; y <= hi[1]; ++y)
-      for (int z = lo[2]; z <= hi[2]; ++z) {
-        auto it = map_.find(Key(x, y, z));
-        if (it != map_.end())
-          out.insert(out.end(), it->second.begin(), it->second.end());
-      }
+  Collect collect{GrownBox(t), *this, out};
+  Eigen::BVIntersect(tree_, collect);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
-}
-
-void TriangleHash::Range(std::int64_t t, Eigen::Array3i& lo, Eigen::Array3i& hi) const {
-  Eigen::Array3d mn = P_.row(tris_[t].v[0]).transpose().array(), mx = mn;
-  for (int k = 1; k < 3; ++k) {
-    mn = mn.min(P_.row(tris_[t].v[k]).transpose().array());
-    mx = mx.max(P_.row(tris_[t].v[k]).transpose().array());
-  }
-  for (int d = 0; d < 3; ++d) {
-    lo[d] = int(std::floor(mn[d] / h_));
-    hi[d] = int(std::floor(mx[d] / h_));
-    if (hi[d] - lo[d] > 64)
-      hi[d] = lo[d] + 64; // guard against huge triangles
-  }
-}
-
-std::int64_t TriangleHash::Key(int x, int y, int z) {
-  return (std::int64_t(x) * 73856093) ^ (std::int64_t(y) * 19349663) ^ (std::int64_t(z) * 83492791);
 }
 
 std::vector<Tri> FanTriangles(const SurfaceMesh& mesh) {
@@ -172,7 +172,6 @@ std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris, const R
                                            const std::vector<std::uint8_t>& activeTri) {
   std::vector<std::int64_t> active;
   Eigen::Array3d lo = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  double edgeSum = 0;
   for (std::size_t t = 0; t < tris.size(); ++t) {
     if (!activeTri[t])
       continue;
@@ -180,37 +179,31 @@ std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris, const R
     for (int k = 0; k < 3; ++k) {
       lo = lo.min(after.row(tris[t].v[k]).transpose().array());
       hi = hi.max(after.row(tris[t].v[k]).transpose().array());
-      edgeSum += (after.row(tris[t].v[k]) - after.row(tris[t].v[(k + 1) % 3])).norm();
     }
   }
   std::vector<std::int64_t> result;
   if (active.empty())
     return result;
-  double h = 2.0 * edgeSum / (3.0 * double(active.size()));
-  const double ext = (hi - lo).maxCoeff();
-  if (!(h > 0))
-    h = ext > 0 ? ext : 1.0;
-  h = std::max(h, ext / 200.0); // at most ~200^3 cells over the active region
-  // Every triangle whose box meets the active region's box (grown by one cell).
+  // Every triangle that TriangleBoxesApart may not rule out against some active triangle: its box
+  // grown by 1e-6 of its extent meets the active region's box grown by 1e-6 of the region's.
+  const Eigen::Array3d grownLo = lo - 1e-6 * (hi - lo).maxCoeff();
+  const Eigen::Array3d grownHi = hi + 1e-6 * (hi - lo).maxCoeff();
   std::vector<std::int64_t> nearby;
   for (std::size_t t = 0; t < tris.size(); ++t) {
-    bool meets = true;
     Eigen::Array3d mn = after.row(tris[t].v[0]).transpose().array(), mx = mn;
     for (int k = 1; k < 3; ++k) {
       mn = mn.min(after.row(tris[t].v[k]).transpose().array());
       mx = mx.max(after.row(tris[t].v[k]).transpose().array());
     }
-    for (int d = 0; d < 3; ++d)
-      if (mx[d] < lo[d] - h || mn[d] > hi[d] + h)
-        meets = false;
-    if (meets)
+    const double margin = 1e-6 * (mx - mn).maxCoeff();
+    if (!((mx + margin < grownLo).any() || (mn - margin > grownHi).any()))
       nearby.push_back(std::int64_t(t));
   }
-  TriangleHash hash(tris, after, nearby, h);
+  TriangleBoxTree tree(tris, after, nearby);
   std::vector<std::uint8_t> flagged(tris.size(), 0);
   std::vector<std::int64_t> cand;
   for (std::int64_t a : active) {
-    hash.Candidates(a, cand);
+    tree.Candidates(a, cand);
     for (std::int64_t b : cand) {
       if (b == a || (activeTri[b] && b < a))
         continue; // each pair once

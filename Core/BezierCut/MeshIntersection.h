@@ -4,9 +4,10 @@
 #include "Mesh/SurfaceMesh.h"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <unsupported/Eigen/BVH>
 
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 namespace faceplan {
@@ -28,21 +29,26 @@ bool TrianglesIntersect(const Tri& A, const Tri& B, const RowVectors3d& P, bool 
 // pair's size of the other triangle, far inside this margin), so the exact test can be skipped.
 bool TriangleBoxesApart(const Tri& A, const Tri& B, const RowVectors3d& P);
 
-// Uniform spatial hash over triangle bounding boxes.
-class TriangleHash {
+// Bounding-volume tree (Eigen's KdBVH) over the boxes of some triangles. Unlike a uniform grid it
+// does not degrade when triangle sizes or aspect ratios vary (a stretched Bezier patch, a large
+// osteotomy cap beside a fine mesh), and it never drops a triangle however large.
+class TriangleBoxTree {
 public:
-  TriangleHash(const std::vector<Tri>& tris, const RowVectors3d& P,
-               const std::vector<std::int64_t>& ids, double cell);
-  // Candidate triangles whose cells overlap those of triangle t (sorted, unique).
+  TriangleBoxTree(const std::vector<Tri>& tris, const RowVectors3d& P,
+                  const std::vector<std::int64_t>& ids);
+  // The triangles among `ids` that TriangleBoxesApart may not rule out against triangle t: every
+  // one whose box, grown by 1e-6 of its largest extent, meets t's box grown the same way (a
+  // superset of the pairs not apart, sorted, unique, t itself included when it is among ids).
   void Candidates(std::int64_t t, std::vector<std::int64_t>& out) const;
 
 private:
-  void Range(std::int64_t t, Eigen::Array3i& lo, Eigen::Array3i& hi) const;
-  static std::int64_t Key(int x, int y, int z);
+  using Box = Eigen::AlignedBox<double, 3>;
+  Box GrownBox(std::int64_t t) const;
   const std::vector<Tri>& tris_;
   const RowVectors3d& P_;
-  double h_;
-  std::unordered_map<std::int64_t, std::vector<std::int64_t>> map_;
+  std::vector<std::int64_t> ids_;
+  std::vector<Box> boxes_; // GrownBox of ids_[k]
+  Eigen::KdBVH<double, 3, int> tree_;
 };
 
 // Triangles (among those flagged in activeTri) that intersect another triangle in `after` but did
