@@ -178,8 +178,8 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
     for (std::size_t a = 0; a < tris.size(); ++a) {
       tree.Candidates(std::int64_t(a), cand);
       for (std::int64_t b : cand) {
-        if (b <= std::int64_t(a) || TriangleBoxesApart(tris[a], tris[b], tess.points))
-          continue;
+        if (b <= std::int64_t(a))
+          continue; // each pair once; the tree already left out pairs whose boxes are apart
         if (TrianglesIntersect(tris[a], tris[b], tess.points, true)) {
           const Vector2d& pa = uv[tris[a].v[0]];
           const Vector2d& pb = uv[tris[b].v[0]];

@@ -17,16 +17,28 @@ double Cross2(const Vector2d& a, const Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();
 }
 
-// Does segment pq meet the interior of triangle abc (touching an edge or vertex of the triangle, or
+// A triangle's corners, unit normal (zero when degenerate) and longest edge, computed once per
+// pair instead of once per segment test.
+struct TriangleFrame {
+  Vector3d a, b, c, n;
+  double longestEdge;
+  TriangleFrame(const Tri& t, const RowVectors3d& P)
+      : a(P.row(t.v[0]).transpose()), b(P.row(t.v[1]).transpose()), c(P.row(t.v[2]).transpose()) {
+    n = (b - a).cross(c - a);
+    const double nn = n.norm();
+    n = nn > 0 ? Vector3d(n / nn) : Vector3d::Zero();
+    longestEdge = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  }
+  bool degenerate() const { return n.isZero(0.0); }
+};
+
+// Does segment pq meet the interior of triangle T (touching an edge or vertex of the triangle, or
 // the segment only touching it with an endpoint on its border, does not count)?
-bool SegmentHitsTriangle(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b,
-                         const Vector3d& c) {
-  Vector3d n = (b - a).cross(c - a);
-  const double nn = n.norm();
-  if (!(nn > 0))
+bool SegmentHitsTriangle(const Vector3d& p, const Vector3d& q, const TriangleFrame& T) {
+  if (T.degenerate())
     return false; // degenerate triangles are reported by the flip check
-  n /= nn;
-  const double scale = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm(), (q - p).norm()});
+  const Vector3d &a = T.a, &b = T.b, &c = T.c, &n = T.n;
+  const double scale = std::max(T.longestEdge, (q - p).norm());
   const double eps = 1e-9 * scale;
   const double dp = (p - a).dot(n), dq = (q - a).dot(n);
   if ((dp > eps && dq > eps) || (dp < -eps && dq < -eps))
@@ -74,6 +86,18 @@ bool SegmentHitsTriangle(const Vector3d& p, const Vector3d& q, const Vector3d& a
 
 } // namespace
 
+// True when every corner of `other` lies on the same side of T's plane, farther than 1e-6 of the
+// pair's longest edge: then no segment test below can report a crossing, since each of them accepts
+// only points within 1e-9 of that length (times sqrt(3) in the coplanar branch) of both planes.
+bool SeparatedByPlane(const TriangleFrame& T, const TriangleFrame& other, double margin) {
+  if (T.degenerate())
+    return false;
+  const double d[3] = {(other.a - T.a).dot(T.n), (other.b - T.a).dot(T.n),
+                       (other.c - T.a).dot(T.n)};
+  return (d[0] > margin && d[1] > margin && d[2] > margin) ||
+         (d[0] < -margin && d[1] < -margin && d[2] < -margin);
+}
+
 bool TrianglesIntersect(const Tri& A, const Tri& B, const RowVectors3d& P, bool skipSharedVertex) {
   int shared = 0;
   for (int i = 0; i < 3; ++i)
@@ -82,13 +106,16 @@ bool TrianglesIntersect(const Tri& A, const Tri& B, const RowVectors3d& P, bool 
         ++shared;
   if (shared >= 2 || (shared == 1 && skipSharedVertex))
     return false;
-  auto row = [&](std::int64_t k) { return Vector3d(P.row(k).transpose()); };
-  const Vector3d a[3] = {row(A.v[0]), row(A.v[1]), row(A.v[2])};
-  const Vector3d b[3] = {row(B.v[0]), row(B.v[1]), row(B.v[2])};
+  const TriangleFrame a(A, P), b(B, P);
+  const double margin = 1e-6 * std::max(a.longestEdge, b.longestEdge);
+  if (SeparatedByPlane(a, b, margin) || SeparatedByPlane(b, a, margin))
+    return false;
+  const Vector3d* ac[3] = {&a.a, &a.b, &a.c};
+  const Vector3d* bc[3] = {&b.a, &b.b, &b.c};
   for (int e = 0; e < 3; ++e) {
-    if (SegmentHitsTriangle(a[e], a[(e + 1) % 3], b[0], b[1], b[2]))
+    if (SegmentHitsTriangle(*ac[e], *ac[(e + 1) % 3], b))
       return true;
-    if (SegmentHitsTriangle(b[e], b[(e + 1) % 3], a[0], a[1], a[2]))
+    if (SegmentHitsTriangle(*bc[e], *bc[(e + 1) % 3], a))
       return true;
   }
   return false;
@@ -207,8 +234,6 @@ std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris, const R
     for (std::int64_t b : cand) {
       if (b == a || (activeTri[b] && b < a))
         continue; // each pair once
-      if (TriangleBoxesApart(tris[a], tris[b], after))
-        continue;
       if (!TrianglesIntersect(tris[a], tris[b], after, false))
         continue;
       if (TrianglesIntersect(tris[a], tris[b], before, false))
