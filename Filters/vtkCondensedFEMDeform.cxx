@@ -1,5 +1,6 @@
 #include "vtkCondensedFEMDeform.h"
 
+#include "Common/LargeAllocations.h"
 #include "CondensedFEMDeformBone.h"
 #include "CondensedFEMDeformContact.h"
 #include "CondensedFEMDeformConvert.h"
@@ -42,6 +43,8 @@ struct vtkCondensedFEMDeform::Cache {
 };
 
 vtkCondensedFEMDeform::vtkCondensedFEMDeform() : State(new Cache) {
+  // Each precompute frees tens of MB when the next replaces it: keep that from staying resident.
+  faceplan::ReturnLargeAllocationsToSystem();
   this->SetNumberOfInputPorts(2);
   this->SetNumberOfOutputPorts(2);
 }
