@@ -13,6 +13,16 @@
 
 using namespace faceplan;
 
+// GCC names the sanitizers with macros, clang with __has_feature.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define FACEPLAN_SANITIZED_ALLOCATOR 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) ||                         \
+    __has_feature(memory_sanitizer)
+#define FACEPLAN_SANITIZED_ALLOCATOR 1
+#endif
+#endif
+
 namespace {
 
 double ResidentMiB() {
@@ -34,7 +44,7 @@ void UseAndFree(std::size_t bytes) {
 } // namespace
 
 TEST(LargeAllocations, FreedBlocksLeaveTheProcess) {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if defined(FACEPLAN_SANITIZED_ALLOCATOR)
   GTEST_SKIP() << "the sanitizers' allocators ignore mallopt";
 #elif !defined(__GLIBC__)
   GTEST_SKIP() << "not glibc: nothing to set";
