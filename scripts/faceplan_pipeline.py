@@ -28,6 +28,17 @@ def build(data_dir):
     return tissue, mandible, roi, cut, fem
 
 
+def drag_render_settings(view):
+    """The render view setting README.md recommends while a widget is dragged with Auto Apply:
+    FXAA off. ParaView's default FXAA is a full-screen pass whose cost grows with the view's pixels
+    and, with software rendering (Mesa llvmpipe), is a large part of every frame; without it edges
+    are aliased, nothing else changes. Returns the settings applied (name -> value)."""
+    settings = {"UseFXAA": 0}
+    for name, value in settings.items():
+        view.SetPropertyWithName(name, value)
+    return settings
+
+
 # One colour map and range for displacement, bone and face alike, so the two can be compared.
 DISPLACEMENT_RANGE_MM = (0.0, 6.0)
 
