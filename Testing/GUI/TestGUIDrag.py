@@ -6,14 +6,16 @@ sets the CurveU property (the handle widget is linked to it), Apply brings the p
 and the render view redraws. The script builds the face pipeline (CondensedFEMDeform with Surface
 output, the interactive setting), shows bone, operative surface and face, then makes 12 moves of
 control point 1 of CurveU and records, for each, the frame time: from setting the property to the
-end of the render (BezierCut + CondensedFEMDeform updates + the render in the GUI's view), split
-into the pipeline (the two filters and the GUI's reactions to their new data), the representations'
-update (geometry extraction, data delivery) and the render itself, each as wall and process CPU
-time (all threads, llvmpipe's included: a loaded machine inflates it less).
+new picture on the screen, split into the pipeline (the two filters and the GUI's reactions to their
+new data), the representations' update (geometry extraction, data delivery), the render into the
+view's framebuffer and the paint (Qt's event loop run until idle, as it runs between two mouse
+moves: the view's widget shows the new frame, Qt composes the window and the panels that changed
+redraw), each as wall and process CPU time (all threads, llvmpipe's included: a loaded machine
+inflates it less).
 
 The moves are made twice: first with ParaView's default render settings (keys `default_*`), then
 with the drag setting README.md recommends (faceplan_pipeline.drag_render_settings: FXAA off), the
-main figures. It also times the render of an unchanged frame with each, which is what software
+main figures. It also times an unchanged frame (render + paint) with each, which is what software
 rendering costs whatever the pipeline does, and repeats the moves with the drag setting in a view
 of a quarter of the pixels (View > Preview). Each figure set says whether it reaches the target of
 30 updates per second (`*target_met`).
@@ -21,6 +23,8 @@ Checks: every move changes the face, no move starts a new precompute. The frame 
 result's info (the wrapper prints them; BENCHMARKS.md records them); they are not checked, since a
 test must not depend on the machine's speed.
 """
+import ctypes
+import ctypes.util
 import json
 import os
 import statistics
@@ -57,6 +61,19 @@ def median_ms(values):
     return round(statistics.median(values), 2)
 
 
+def qt_event_loop():
+    """QCoreApplication::processEvents(ExcludeUserInputEvents) of the GUI's Qt 5, called through
+    ctypes (the GUI's Python has no Qt bindings); None when it cannot be found."""
+    try:
+        core = ctypes.CDLL(ctypes.util.find_library("Qt5Core") or "libQt5Core.so.5")
+        run = getattr(core, "_ZN16QCoreApplication13processEventsE6QFlagsIN10QEventLoop17ProcessEventsFlagEE")
+    except (OSError, AttributeError):
+        return None
+    run.argtypes = [ctypes.c_int]  # QFlags<ProcessEventsFlag>: one int, passed as one
+    run.restype = None
+    return lambda: run(1)  # 1 = QEventLoop::ExcludeUserInputEvents
+
+
 try:
     import numpy as np
     from paraview import simple
@@ -65,6 +82,9 @@ try:
     sys.path.insert(0, os.environ["FACEPLAN_GUI_SCRIPTS"])
     import faceplan_pipeline
 
+    process_events = qt_event_loop()
+    if not check(process_events is not None, "the GUI's Qt event loop can be run from the script"):
+        raise RuntimeError("QCoreApplication::processEvents not found: the paint cannot be timed")
     simple.LoadPlugin(os.environ["FACEPLAN_GUI_PLUGIN"])  # into paraview.simple
     tissue, mandible, roi, cut, fem = faceplan_pipeline.build(os.environ["FACEPLAN_GUI_DATA"])
     fem.OutputMode = "Surface"
@@ -93,6 +113,9 @@ try:
     fem.UpdatePipeline()
     simple.Render(view)
     result["info"]["first_update_s"] = time.perf_counter() - start
+    for _ in range(20):  # the window's layout settles: the view gets its size in the GUI
+        process_events()
+        time.sleep(0.05)
     before = precomputes()
     curve = list(cut.CurveU)
     state = {"previous": face_displacement(), "changed": [], "down": True}
@@ -101,7 +124,8 @@ try:
         """MOVES moves of control point 1 (alternately down and back up, so that every move
         changes the face); records the frame figures under info[prefix + ...]."""
         frames_wall, frames_cpu = [], []
-        phases = {name: {"wall": [], "cpu": []} for name in ("pipeline", "representations", "render")}
+        phases = {name: {"wall": [], "cpu": []}
+                  for name in ("pipeline", "representations", "render", "paint")}
 
         def record(name, t_start, t_end):
             phases[name]["wall"].append(1e3 * (t_end[0] - t_start[0]))
@@ -118,11 +142,14 @@ try:
             t2 = clock()
             view.StillRender()
             t3 = clock()
+            process_events()  # what the GUI does before the next mouse move: paint
+            t4 = clock()
             record("pipeline", t0, t1)
             record("representations", t1, t2)
             record("render", t2, t3)
-            frames_wall.append(1e3 * (t3[0] - t0[0]))
-            frames_cpu.append(1e3 * (t3[1] - t0[1]))
+            record("paint", t3, t4)
+            frames_wall.append(1e3 * (t4[0] - t0[0]))
+            frames_cpu.append(1e3 * (t4[1] - t0[1]))
             current = face_displacement()
             previous = state["previous"]
             state["changed"].append(current.shape == previous.shape
@@ -140,15 +167,19 @@ try:
             for name, times in phases.items():
                 info[prefix + name + "_ms_median"] = median_ms(times["wall"])
                 info[prefix + name + "_cpu_ms_median"] = median_ms(times["cpu"])
-            still_wall, still_cpu = [], []
+            still = {name: {"wall": [], "cpu": []} for name in ("render", "paint")}
             for _ in range(10):
                 t0 = clock()
                 view.StillRender()
                 t1 = clock()
-                still_wall.append(1e3 * (t1[0] - t0[0]))
-                still_cpu.append(1e3 * (t1[1] - t0[1]))
-            info[prefix + "unchanged_render_ms_median"] = median_ms(still_wall)
-            info[prefix + "unchanged_render_cpu_ms_median"] = median_ms(still_cpu)
+                process_events()
+                t2 = clock()
+                for name, (a, b) in (("render", (t0, t1)), ("paint", (t1, t2))):
+                    still[name]["wall"].append(1e3 * (b[0] - a[0]))
+                    still[name]["cpu"].append(1e3 * (b[1] - a[1]))
+            for name, times in still.items():
+                info[prefix + "unchanged_" + name + "_ms_median"] = median_ms(times["wall"])
+                info[prefix + "unchanged_" + name + "_cpu_ms_median"] = median_ms(times["cpu"])
         return len(frames_wall)
 
     result["info"]["target_updates_per_s"] = TARGET_UPDATES_PER_S
@@ -157,6 +188,7 @@ try:
     result["info"]["drag_settings"] = faceplan_pipeline.drag_render_settings(view)
     moves.append(drag("", True))
     result["info"]["view_size"] = list(view.ViewSize)
+    result["info"]["window_size"] = list(view.GetRenderWindow().GetSize())
     # The same moves in a render view of a quarter of the pixels (View > Preview), to show how much of
     # the frame is the software rasterizer's per-pixel work.
     layout = simple.GetLayout(view)
