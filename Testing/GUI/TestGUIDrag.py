@@ -109,6 +109,9 @@ try:
         fem.UpdatePropertyInformation()
         return fem.GetPropertyValue("PrecomputeCount")
 
+    # Bezier Cut is the active source while its handles are dragged: its properties panel (with the
+    # Curve U / Curve V widgets) is the one shown and repainted.
+    simple.SetActiveSource(cut)
     start = time.perf_counter()
     fem.UpdatePipeline()
     simple.Render(view)
@@ -202,7 +205,6 @@ try:
           "every move changes the face (%d of %d)" % (sum(state["changed"]), len(state["changed"])))
     check(precomputes() == before, "no move starts a new precompute")
     result["info"]["render_view"] = view.GetRenderWindow().GetClassName()
-    simple.SetActiveSource(cut)
     simple.Render(view)
 except Exception:
     result["error"] = traceback.format_exc()
