@@ -190,8 +190,7 @@ try:
     moves = [drag("default_", True)]
     result["info"]["drag_settings"] = faceplan_pipeline.drag_render_settings(view)
     moves.append(drag("", True))
-    result["info"]["view_size"] = list(view.ViewSize)
-    result["info"]["window_size"] = list(view.GetRenderWindow().GetSize())
+    result["info"]["view_size"] = list(view.ViewSize)  # in run_gui_test.py's 1280x1024 window
     # The same moves in a render view of a quarter of the pixels (View > Preview), to show how much of
     # the frame is the software rasterizer's per-pixel work.
     layout = simple.GetLayout(view)
