@@ -204,6 +204,24 @@ def boundary_faces(tets):
     return faces[cnt[inv] == 1]
 
 
+def folded_faces(xyz, tets):
+    """Interior faces whose two tets lie on the same side of the face: the tets overlap although
+    each has a positive volume."""
+    loc = np.array([[1, 3, 2], [0, 2, 3], [0, 3, 1], [0, 1, 2]])
+    faces = tets[:, loc].reshape(-1, 3)
+    _, face_of, count = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True,
+                                  return_counts=True)
+    face_of = face_of.ravel()
+    shared = np.where(count[face_of] == 2)[0]
+    pairs = shared[np.argsort(face_of[shared], kind="stable")].reshape(-1, 2)
+    f = xyz[faces[pairs[:, 0]]]
+    normal = np.cross(f[:, 1] - f[:, 0], f[:, 2] - f[:, 0])
+    opposite = tets.ravel()[pairs]          # face k of a tet is opposite its local node k
+    side_a = np.einsum("ij,ij->i", normal, xyz[opposite[:, 0]] - f[:, 0])
+    side_b = np.einsum("ij,ij->i", normal, xyz[opposite[:, 1]] - f[:, 0])
+    return int((side_a * side_b >= 0).sum())
+
+
 def n_components_ug(ug):
     c = vtkConnectivityFilter()
     c.SetInputData(ug)
@@ -231,7 +249,8 @@ def quality(ug):
     out = {}
     for name, setter in (("radius_ratio", "SetTetQualityMeasureToRadiusRatio"),
                          ("aspect_ratio", "SetTetQualityMeasureToAspectRatio"),
-                         ("min_dihedral_deg", "SetTetQualityMeasureToMinAngle")):
+                         ("min_dihedral_deg", "SetTetQualityMeasureToMinAngle"),
+                         ("mean_ratio", "SetTetQualityMeasureToMeanRatio")):
         q = vtkMeshQuality()
         q.SetInputData(ug)
         getattr(q, setter)()
@@ -243,8 +262,9 @@ def quality(ug):
 
 def fmt_quality(q):
     return ("radius ratio (1 = ideal) min %.3f mean %.3f max %.2f; aspect ratio min %.3f mean %.3f "
-            "max %.2f; min dihedral angle min %.2f mean %.2f deg" % (
-                q["radius_ratio"] + q["aspect_ratio"] + q["min_dihedral_deg"][:2]))
+            "max %.2f; min dihedral angle min %.2f mean %.2f deg; mean ratio (1 = ideal) min %.4f "
+            "mean %.3f" % (q["radius_ratio"] + q["aspect_ratio"] + q["min_dihedral_deg"][:2]
+                           + q["mean_ratio"][:2]))
 
 
 def write_xml(ds, path):
@@ -284,10 +304,8 @@ def decimate(xyz, tris, reduction):
     return poly_arrays(c.GetOutput())
 
 
-def tetgen(xyz, tris, switches, workdir):
-    """Run TetGen on a closed triangle surface, return (points, tets)."""
-    base = os.path.join(workdir, "surf")
-    with open(base + ".smesh", "w") as f:
+def write_smesh(path, xyz, tris):
+    with open(path, "w") as f:
         f.write("%d 3 0 0\n" % len(xyz))
         for i, p in enumerate(xyz):
             f.write("%d %.17g %.17g %.17g\n" % (i, p[0], p[1], p[2]))
@@ -295,6 +313,12 @@ def tetgen(xyz, tris, switches, workdir):
         for t in tris:
             f.write("3 %d %d %d\n" % (t[0], t[1], t[2]))
         f.write("0\n0\n")
+
+
+def tetgen(xyz, tris, switches, workdir):
+    """Run TetGen on a closed triangle surface, return (points, tets)."""
+    base = os.path.join(workdir, "surf")
+    write_smesh(base + ".smesh", xyz, tris)
     for ext in (".1.node", ".1.ele", ".1.face"):
         if os.path.exists(base + ext):
             os.remove(base + ext)
@@ -388,6 +412,8 @@ def check_tet_file(path):
     xyz = get_points(ug)
     d = tet_dets(xyz, tets)
     assert (d > 0).all(), "%s: %d tets with det <= 0" % (path, int((d <= 0).sum()))
+    folds = folded_faces(xyz, tets)
+    assert folds == 0, "%s: %d folded faces (overlapping tets)" % (path, folds)
     ncomp = n_components_ug(ug)
     assert ncomp == 1, "%s: %d components" % (path, ncomp)
     bc = ug.GetPointData().GetArray("BoneContact")
@@ -401,7 +427,7 @@ def check_tet_file(path):
                 boundary_nodes=int(len(bnodes)), bone_contact_nodes=int(bc.sum()),
                 min_volume_mm3=float(d.min() / 6), total_volume_mm3=float(d.sum() / 6),
                 extent_mm=[round(b[1] - b[0], 2), round(b[3] - b[2], 2), round(b[5] - b[4], 2)],
-                quality=q, slivers_lt5deg_lt10deg=list(sliver_counts(xyz, tets)))
+                folded_faces=folds, quality=q, slivers_lt5deg_lt10deg=list(sliver_counts(xyz, tets)))
 
 
 def check_surface_file(path):
@@ -452,20 +478,82 @@ def distances_to(pd, xyz):
     return out
 
 
-def make_face(info):
+# TetGen on the face's boundary surface: -Y keeps the boundary triangles (so the tissue-bone
+# contact is the source's), q1.2 bounds the radius-edge ratio, a45 (mm^3) the volume, which keeps
+# the problem size close to the source's 37,688 tets.
+FACE_TETGEN = "pq1.2a45Y"
+# How far a boundary vertex that pokes through the facing lip is pushed back along its normal.
+FACE_UNTANGLE_MM = 0.1
+
+
+def self_intersections(xyz, tris, workdir):
+    """Pairs of intersecting triangles (indices into tris) as `tetgen -d` reports them."""
+    import re
+    base = os.path.join(workdir, "selfcheck")
+    write_smesh(base + ".smesh", xyz, tris)
+    r = subprocess.run(["tetgen", "-d", base + ".smesh"], stdout=subprocess.PIPE,
+                       stderr=subprocess.STDOUT, text=True)
+    index = {tuple(sorted(t)): k for k, t in enumerate(tris.tolist())}
+    found = re.findall(r"\((\d+), (\d+), (\d+)\) and \((\d+), (\d+), (\d+)\)", r.stdout)
+    return [(index[tuple(sorted(map(int, m[:3])))], index[tuple(sorted(map(int, m[3:])))])
+            for m in found]
+
+
+def vertex_normal(xyz, tris, v):
+    ring = tris[(tris == v).any(axis=1)]
+    n = np.cross(xyz[ring[:, 1]] - xyz[ring[:, 0]], xyz[ring[:, 2]] - xyz[ring[:, 0]]).sum(axis=0)
+    return n / np.linalg.norm(n)
+
+
+def untangle_surface(xyz, tris, workdir):
+    """Minimal local repair of a self-intersecting closed surface, so that TetGen can mesh it.
+    The Badin face's lips touch at the mouth corners, where a vertex of one lip pokes 0.015 mm
+    through the other lip's surface. In each group of intersecting pairs, the vertex shared by all
+    the first triangles (the one poking through) moves FACE_UNTANGLE_MM along its outward
+    normal, back to its own side. Returns the repaired points and the ids of the moved vertices."""
+    xyz = xyz.copy()
+    pairs = self_intersections(xyz, tris, workdir)
+    first = {}
+    for a, b in pairs:
+        first.setdefault(b, set()).add(a)
+    moved = set()
+    for group in first.values():
+        shared = set.intersection(*(set(tris[a].tolist()) for a in group))
+        moved |= shared
+    for v in sorted(moved):
+        xyz[v] += FACE_UNTANGLE_MM * vertex_normal(xyz, tris, v)
+    left = self_intersections(xyz, tris, workdir)
+    log("  boundary surface: %d intersecting triangle pairs; moved vertices %s by %g mm along "
+        "their normals; %d pairs left" % (len(pairs), sorted(moved), FACE_UNTANGLE_MM, len(left)))
+    assert not left, "face boundary still intersects itself"
+    return xyz, sorted(moved)
+
+
+def make_face(info, workdir):
     log("== face (Badin model, ArtiSynth), scaled x1000 to mm")
     src = os.path.join(SHARED, "artisynth_models", "face", "derived", "face_skullconformed_tet.vtu")
     ug = read_vtu(src)
-    xyz = get_points(ug) * 1000.0
-    tets, keep = ugrid_tets(ug)
-    log("  source: %d points, %d cells, %d of them VTK_TETRA"
-        % (ug.GetNumberOfPoints(), ug.GetNumberOfCells(), int(keep.sum())))
+    src_xyz = get_points(ug) * 1000.0
+    src_tets, keep = ugrid_tets(ug)
+    src_tets, _, _ = orient_tets(src_xyz, src_tets, "source")
+    log("  source: %d points, %d cells, %d of them VTK_TETRA, %d folded faces"
+        % (ug.GetNumberOfPoints(), ug.GetNumberOfCells(), int(keep.sum()),
+           folded_faces(src_xyz, src_tets)))
+    # Only the source's boundary surface is kept: its split hexahedra overlap (folded faces).
+    surf_xyz, surf_tris, surf_used = compact(src_xyz, boundary_faces(src_tets))
+    surf_xyz, moved = untangle_surface(surf_xyz, surf_tris, workdir)
+    xyz, tets = tetgen(surf_xyz, surf_tris, FACE_TETGEN, workdir)
+    assert np.array_equal(xyz[:len(surf_xyz)], surf_xyz), "TetGen renumbered the surface points"
     tets, nre, nzero = orient_tets(xyz, tets, "face_tissue")
+    assert nzero == 0
+    assert len(np.unique(boundary_faces(tets))) == len(surf_xyz), "TetGen changed the boundary"
     vol = tet_dets(xyz, tets) / 6
     tiny = int((vol < 1e-6 * vol.mean()).sum())
-    xyz, tets, used = compact(xyz, tets)
-    node_id = nps.vtk_to_numpy(ug.GetPointData().GetArray("ansys_node_id"))[used]
-    elem_id = nps.vtk_to_numpy(ug.GetCellData().GetArray("ansys_elem_id"))[keep]
+    src_node_id = nps.vtk_to_numpy(ug.GetPointData().GetArray("ansys_node_id"))
+    node_id = np.full(len(xyz), -1, dtype=np.int64)
+    node_id[:len(surf_xyz)] = src_node_id[surf_used]
+    log("  tetgen -%s: %d points (%d on the boundary), %d tets"
+        % (FACE_TETGEN, len(xyz), len(surf_xyz), len(tets)))
 
     fdir = os.path.join(OUT, "face")
     bones = {}
@@ -486,7 +574,9 @@ def make_face(info):
     label = np.where(contact, nearest, 0).astype(np.uint8)
 
     stats = dict(boundary_nodes=int(len(bnodes)), reoriented=nre, zero_volume=nzero,
-                 tiny_volume_below_1e6th_of_mean=tiny, non_tet_cells_dropped=int((~keep).sum()))
+                 tiny_volume_below_1e6th_of_mean=tiny, tetgen_switches=FACE_TETGEN,
+                 untangled_boundary_vertices=[int(v) for v in moved],
+                 untangle_mm=FACE_UNTANGLE_MM)
     for thr in (0.1, 0.5, 1.0, 2.0):
         stats["mandible_within_%gmm" % thr] = int((dist[bnodes, 0] <= thr).sum())
         stats["any_bone_within_%gmm" % thr] = int((dmin[bnodes] <= thr).sum())
@@ -503,11 +593,11 @@ def make_face(info):
                    point_arrays=[("BoneContact", contact.astype(np.uint8)),
                                  ("ContactBone", label),
                                  ("BoneDistance", dmin.astype(np.float32)),
-                                 ("ansys_node_id", node_id.astype(np.int32))],
-                   cell_arrays=[("ansys_elem_id", elem_id.astype(np.int32))])
+                                 ("ansys_node_id", node_id.astype(np.int32))])
     path = os.path.join(fdir, "face_tissue.vtu")
     write_xml(tissue, path)
     info["face/face_tissue.vtu"] = check_tet_file(path)
+    log("  quality: " + fmt_quality(info["face/face_tissue.vtu"]["quality"]))
     for name, _, _ in FACE_BONES:
         info["face/%s.vtp" % name] = check_surface_file(os.path.join(fdir, name + ".vtp"))
     info["face_stats"] = stats
@@ -672,7 +762,7 @@ def main():
         sys.exit("shared data not found at %s (set FACEPLAN_SHARED_DATA)" % SHARED)
     info = {}
     with tempfile.TemporaryDirectory() as wd:
-        make_face(info)
+        make_face(info, wd)
         for name, cfg in ORGANS.items():
             make_organ(name, cfg, info, wd)
         make_ct(info)
