@@ -123,10 +123,11 @@ std::string AppendedSegmentsNote(vtkPointSet* bone, const RowVectors3d& undeform
 vtkSmartPointer<vtkPointSet> MergeBones(const std::vector<vtkPointSet*>& bones) {
   if (bones.size() == 1)
     return vtkSmartPointer<vtkPointSet>(bones[0]);
-  bool anySegments = false, anySliding = false;
+  bool anySegments = false, anySliding = false, anyReleased = false;
   for (vtkPointSet* bone : bones) {
     anySegments |= bone->GetPointData()->GetArray("SegmentId") != nullptr;
     anySliding |= bone->GetPointData()->GetArray("Sliding") != nullptr;
+    anyReleased |= bone->GetPointData()->GetArray("Released") != nullptr;
   }
   vtkNew<vtkAppendFilter> append;
   append->MergePointsOff();
@@ -147,6 +148,8 @@ vtkSmartPointer<vtkPointSet> MergeBones(const std::vector<vtkPointSet*>& bones) 
       pd->AddArray(PointArrayOrFill<vtkIntArray>(bone, "SegmentId", 0.0, offset));
     if (anySliding)
       pd->AddArray(PointArrayOrFill<vtkUnsignedCharArray>(bone, "Sliding", 0.0));
+    if (anyReleased)
+      pd->AddArray(PointArrayOrFill<vtkUnsignedCharArray>(bone, "Released", 0.0));
     const int segments = SegmentCountOf(bone);
     vtkDataArray* own = bone->GetFieldData()->GetArray("SegmentTransform");
     for (int v = 0; v < 12 * segments; ++v)

@@ -18,8 +18,8 @@ namespace fem_filter {
 
 // One bone from the connections: points and cells appended, SegmentId of each connection offset
 // by the segments of the ones before it, SegmentTransform concatenated in that order; a point
-// array one connection lacks is filled (ROIMask 1, SegmentId 0, Sliding 0). One connection is
-// returned as it is.
+// array one connection lacks is filled (ROIMask 1, SegmentId 0, Sliding 0, Released 0). One
+// connection is returned as it is.
 vtkSmartPointer<vtkPointSet> MergeBones(const std::vector<vtkPointSet*>& bones);
 
 // The bone's rigid segments as Core numbers them: `segmentOfPoint` (bone point -> 1..s, 0 when the

@@ -52,10 +52,15 @@ long RegionOf(vtkPointSet* bone, vtkIdType point) {
   return 2 * segment + side;
 }
 
-// Marks tied nodes within `releaseDistance` of an undeformed bone point of another region.
+// Marks tied nodes whose bone point the bone's Released array flags (tissue the surgeon detached
+// there) and those within `releaseDistance` of an undeformed bone point of another region.
 void MarkReleased(vtkPointSet* tissue, vtkPointSet* undeformed, vtkPointSet* bone,
                   double releaseDistance, ContactMap& map) {
   map.released.assign(map.tiedNodes.size(), 0);
+  if (vtkDataArray* flags = bone->GetPointData()->GetArray("Released"))
+    for (size_t t = 0; t < map.tiedNodes.size(); ++t)
+      if (flags->GetComponent(map.nearestBonePoint[t], 0) > 0.0)
+        map.released[t] = 1;
   if (!(releaseDistance > 0.0))
     return;
   std::map<long, vtkSmartPointer<vtkPolyData>> regions;
@@ -83,7 +88,8 @@ void MarkReleased(vtkPointSet* tissue, vtkPointSet* undeformed, vtkPointSet* bon
     double x[3], dist2;
     tissue->GetPoint(map.tiedNodes[t], x);
     for (auto& [label, locator] : locators)
-      if (label != own && locator->FindClosestPointWithinRadius(releaseDistance, x, dist2) >= 0) {
+      if (!map.released[t] && label != own &&
+          locator->FindClosestPointWithinRadius(releaseDistance, x, dist2) >= 0) {
         map.released[t] = 1;
         break;
       }
@@ -165,6 +171,10 @@ ContactCache::Key ContactCache::MakeKey(vtkPointSet* tissue,
   if (vtkDataArray* ids = bone->GetPointData()->GetArray("SegmentId"))
     for (vtkIdType i = 0; i < ids->GetNumberOfTuples(); ++i)
       key.segmentIds.push_back(ids->GetComponent(i, 0));
+  if (vtkDataArray* flags = bone->GetPointData()->GetArray("Released"))
+    for (vtkIdType i = 0; i < flags->GetNumberOfTuples(); ++i)
+      key.releasedFlags.push_back(flags->GetComponent(i, 0));
+  key.hasReleasedFlags = bone->GetPointData()->GetArray("Released") != nullptr;
   vtkNew<vtkIdList> ids;
   for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
     bone->GetCellPoints(c, ids);
@@ -189,9 +199,10 @@ Status ContactCache::update(vtkPointSet* tissue, const std::vector<vtkIdType>& t
   // so compare with a tolerance relative to the bone's size instead of bit for bit.
   bool same = valid_ && key.undeformedBone.size() == key_.undeformedBone.size() &&
               key.mask == key_.mask && key.segmentIds == key_.segmentIds &&
-              key.release == key_.release && key.boneCells == key_.boneCells &&
-              key.tissuePoints == key_.tissuePoints && key.tissueBoundary == key_.tissueBoundary &&
-              key.distance == key_.distance;
+              key.releasedFlags == key_.releasedFlags &&
+              key.hasReleasedFlags == key_.hasReleasedFlags && key.release == key_.release &&
+              key.boneCells == key_.boneCells && key.tissuePoints == key_.tissuePoints &&
+              key.tissueBoundary == key_.tissueBoundary && key.distance == key_.distance;
   if (same) {
     double bounds[6];
     bone->GetBounds(bounds);

@@ -4,9 +4,10 @@
 // its closest point there, found with a VTK cell locator; its displacement is the bone's
 // Displacement interpolated at that point. Tied nodes where the bone's ROIMask is 0 stay fixed.
 // Each tied node also records the bone point that weighs most at its closest point (its SegmentId
-// and Sliding flag count), the bone's normal there, and whether it is released: within
-// ReleaseDistance of a bone point of another region (another SegmentId, or the other side of the
-// ROIMask boundary), that is of a cut line, a cut face or the ROI's boundary.
+// and Sliding flag count), the bone's normal there, and whether it is released: that bone point is
+// flagged by the bone's point array Released (> 0: the surgeon detached the tissue there), or it
+// lies within ReleaseDistance of a bone point of another region (another SegmentId, or the other
+// side of the ROIMask boundary), that is of a cut line, a cut face or the ROI's boundary.
 // Private to FacePlan::Filters; inputs are validated before.
 #include "Common/Status.h"
 #include "Mesh/NodeSets.h"
@@ -30,14 +31,14 @@ struct ContactMap {
   std::vector<char> movable;               // 1 when the bone's ROIMask at the closest point is > 0
   std::vector<vtkIdType> nearestBonePoint; // the closest cell's point of largest weight
   std::vector<double> normals;             // 3 per tied node: the closest cell's unit normal
-  std::vector<char> released;              // 1 when within ReleaseDistance of another region
+  std::vector<char> released; // 1 when flagged Released or within ReleaseDistance of another region
 };
 
 enum class ContactModelChoice { Tied = 0, Sliding = 1, ByArray = 2 };
 
 // The contact map for one tissue and bone, rebuilt only when what it depends on changed: the
-// undeformed bone's points, its cells, its ROIMask, the tissue's points and boundary nodes, and
-// the distance. A cut edit (new Displacement on the same bone) keeps it.
+// undeformed bone's points, its cells, its ROIMask, SegmentId and Released, the tissue's points and
+// boundary nodes, and the distances. A cut edit (new Displacement on the same bone) keeps it.
 class ContactCache {
 public:
   Status update(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
@@ -47,7 +48,8 @@ public:
 
 private:
   struct Key {
-    std::vector<double> undeformedBone, mask, segmentIds, tissuePoints;
+    std::vector<double> undeformedBone, mask, segmentIds, releasedFlags, tissuePoints;
+    bool hasReleasedFlags = false;
     std::vector<vtkIdType> boneCells, tissueBoundary;
     double distance = -1.0, release = -1.0;
   };
@@ -69,7 +71,7 @@ NodeSets MakeNodeSets(const ContactMap& map, const std::vector<vtkIdType>& tissu
 // The bone's displacement at each movable tied node, in NodeSets::movable order.
 RowVectors3d MovableDisplacements(const ContactMap& map, vtkDataArray* boneDisplacement);
 
-// The number of tied nodes that were released.
+// The number of tied nodes that were released (by ReleaseDistance or the Released array).
 size_t ReleasedCount(const ContactMap& map);
 
 } // namespace fem_filter

@@ -56,10 +56,10 @@ private:
   unsigned long generation_ = 0;
 };
 
-// The bone's per-edit check: its structure (cells, ROIMask, SegmentId, Sliding; by stamp, and by
-// their bytes when the stamp differs, since an edit through Osteotomy, Append Geometry or several
-// Bone connections hands over new arrays with the same values) and its undeformed points (points
-// minus Displacement, compared by value because an edit makes a new bone whose points and
+// The bone's per-edit check: its structure (cells, ROIMask, SegmentId, Sliding, Released; by stamp,
+// and by their bytes when the stamp differs, since an edit through Osteotomy, Append Geometry or
+// several Bone connections hands over new arrays with the same values) and its undeformed points
+// (points minus Displacement, compared by value because an edit makes a new bone whose points and
 // Displacement both move). Validation runs in full when the structure changed, else only on the
 // values an edit changes.
 class BoneCache {
@@ -72,7 +72,7 @@ public:
   void contactBuilt(vtkPointSet* bone, unsigned long tissueGeneration, double contactDistance);
 
 private:
-  static constexpr const char* kStructureArrays[] = {"ROIMask", "SegmentId", "Sliding"};
+  static constexpr const char* kStructureArrays[] = {"ROIMask", "SegmentId", "Sliding", "Released"};
   static DataStamp StructureStampOf(vtkPointSet* bone);
   // The structure's bytes: point count, cells (a polydata's raw offsets and connectivity, else the
   // cells one by one) and the structure arrays with their type and shape.

@@ -207,12 +207,19 @@ Status ValidateBone(vtkPointSet* bone) {
     s = CheckUndeformedBone(bone, displacement);
   if (!s)
     return s;
-  for (const char* name : {"ROIMask", "SegmentId", "Sliding"})
+  for (const char* name : {"ROIMask", "SegmentId", "Sliding", "Released"})
     if (vtkDataArray* array = bone->GetPointData()->GetArray(name)) {
       s = CheckArray(array, name, "point", n, 1);
       if (!s)
         return s;
     }
+  // A flag, not a measure: a float array here is more likely a resampled or interpolated field
+  // than a choice of where the tissue was detached.
+  if (vtkDataArray* released = bone->GetPointData()->GetArray("Released"))
+    if (released->GetDataType() != VTK_UNSIGNED_CHAR)
+      return Error("the point array Released is of type ", released->GetDataTypeAsString(),
+                   "; it needs uint8 (unsigned char): 1 where the tissue is detached from the "
+                   "bone, 0 where it stays tied");
   return Status::Ok();
 }
 

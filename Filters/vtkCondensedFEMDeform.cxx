@@ -169,8 +169,8 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   this->UpdateProgress(0.05);
 
   // 3. contact, rebuilt when the tissue, the distance, the release distance or the undeformed
-  // bone (its cells, ROIMask, SegmentId and points minus Displacement) changed: a move of a cut or
-  // an osteotomy keeps it.
+  // bone (its cells, ROIMask, SegmentId, Released and points minus Displacement) changed: a move of
+  // a cut or an osteotomy keeps it.
   const unsigned long tissueGeneration = cache.tissue.generation();
   if (!cache.bone.contactStillValid(bone, tissueGeneration, settings.contactDistance) ||
       settings.releaseDistance != cache.contactRelease) {
@@ -206,10 +206,15 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   const BoneSegments segments = ReadBoneSegments(bone);
   if (!segments.usable && bone->GetPointData()->GetArray("SegmentId"))
     vtkWarningMacro(<< "rigid-segment path not used: " << segments.whyNot);
-  if (settings.releaseDistance > 0.0)
-    vtkWarningMacro(
-        << ReleasedCount(contact)
-        << " tied nodes released within ReleaseDistance of a cut or the ROI's boundary");
+  const bool releasedArray = bone->GetPointData()->GetArray("Released") != nullptr;
+  if (settings.releaseDistance > 0.0 || releasedArray)
+    vtkWarningMacro(<< ReleasedCount(contact) << " tied nodes released "
+                    << (settings.releaseDistance > 0.0
+                            ? (releasedArray ? "within ReleaseDistance of a cut or the ROI's "
+                                               "boundary, or on bone points marked Released"
+                                             : "within ReleaseDistance of a cut or the ROI's "
+                                               "boundary")
+                            : "on bone points marked Released"));
   if (!cache.requestValid || cache.requestTissue != tissueGeneration) {
     cache.request = faceplan::PrecomputeRequest();
     cache.request.mesh = cache.tissue.mesh();

@@ -7,8 +7,10 @@
  * Input port 1 ("Bone"): one or more surfaces (several connections are merged: their SegmentIds
  * renumbered, their SegmentTransforms concatenated) with a point vector array `Displacement` (the
  * output of vtkBezierCut or Osteotomy) and optionally `ROIMask`, `SegmentId` (int, 0 = not moved
- * rigidly), `Sliding` (uint8, for ContactModel ByArray) and field data `SegmentTransform` (12
- * doubles [R|t] row-major per segment; a NaN transform marks a segment as not rigid). When the
+ * rigidly), `Sliding` (uint8, for ContactModel ByArray), `Released` (uint8: 1 where the surgeon
+ * detached the tissue; tied nodes whose nearest bone point is flagged become free) and field data
+ * `SegmentTransform` (12 doubles [R|t] row-major per segment; a NaN transform marks a segment as
+ * not rigid). When the
  * bone carries SegmentId and SegmentTransform and its Displacement follows them, the rigid-segment
  * path (Method field data `RigidSegments`) is used; otherwise a warning says why not.
  * Contact: tissue boundary nodes within ContactDistance of the undeformed bone (bone points minus
