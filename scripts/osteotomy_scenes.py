@@ -15,26 +15,68 @@ SCENES = {
 }
 
 
+# Where each operation detaches the soft tissue from the bone it cuts: the surgeon degloves the bone
+# around the osteotomy through a vestibular incision, and the tissue there no longer follows the
+# bone. A box in the undeformed bone's coordinates (x, z ranges in mm; y unbounded) and which side
+# of the cut it covers ("fixed": the bone that stays, "both": the segment too). The regions are a
+# matter of the surgical approach, not of the cut's geometry, so the scene marks them (bone point
+# array Released) rather than the Osteotomy filter from its planes.
+#   Le Fort I: the maxilla above the cut, up to the infraorbital rim and back to the buttress.
+#   BSSO: the mandible's body and ramus either side of the split, where the lateral cortex is
+#         exposed.
+#   genioplasty: the anterior mandible above the chin cut, up to the tooth roots.
+DETACHED = {
+    "lefort1": dict(x=(-1e9, 1e9), z=(-1e9, 135.0), side="fixed"),
+    "bsso": dict(x=(85.0, 110.0), z=(-1e9, 1e9), side="both"),
+    "genioplasty": dict(x=(-1e9, 90.0), z=(-1e9, 85.0), side="fixed"),
+}
+# The teeth of both jaws, where lips and cheeks rest on the bone and slide over it (bone point array
+# Sliding, ContactModel ByArray): the band of the occlusal plane in front of the molars.
+TEETH = dict(x=(-1e9, 80.0), z=(88.0, 110.0))
+
+
 def configure_contact(fem):
-    """Tissue contact that matches the operation, where the plugin offers it: the soft tissue slides
-    over the bone (lips over teeth) and is released within 5 mm of the cut, where the surgeon
-    detaches it. A larger ReleaseDistance is no better model: it also frees the tissue on the
-    segment (the unoperated bones count as another region, and the teeth of both jaws lie within
-    10 mm of each other), so that the tissue stops following the move. These settings still exceed
-    the small-strain limit; docs/OSTEOTOMY-STRAIN.md says why. Returns what was set, for the printed
-    summary."""
-    chosen = []
-    props = fem.ListProperties()
-    if "ContactModel" in props:
-        try:
-            fem.ContactModel = "Sliding"
-            chosen.append("ContactModel=Sliding")
-        except (ValueError, AttributeError):
-            pass
-    if "ReleaseDistance" in props:
-        fem.ReleaseDistance = 5.0
-        chosen.append("ReleaseDistance=5 mm")
-    return chosen or ["tied contact (ContactModel/ReleaseDistance not available)"]
+    """Tissue contact that matches the operation: tied to bone (the segment carries its tissue
+    along), free where the surgeon detached it (the bones' Released arrays, set by `build`) and
+    sliding over the teeth (ContactModel ByArray with the bones' Sliding arrays). Returns what was
+    set, for the printed summary."""
+    fem.ContactModel = "ByArray"
+    fem.ReleaseDistance = 0.0
+    return ["ContactModel=ByArray (Sliding on the teeth)", "Released where degloved"]
+
+
+_CONTACT_FLAGS = """
+import numpy as np
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+out = self.GetOutput()
+out.ShallowCopy(self.GetInput())
+pd = out.GetPointData()
+x = vtk_to_numpy(out.GetPoints().GetData()) - vtk_to_numpy(pd.GetArray("Displacement"))
+segment = vtk_to_numpy(pd.GetArray("ROIMask")) > 0
+
+
+def inside(box):
+    return ((x[:, 0] >= box["x"][0]) & (x[:, 0] <= box["x"][1]) & (x[:, 2] >= box["z"][0])
+            & (x[:, 2] <= box["z"][1]))
+
+
+detached = %r
+teeth = %r
+released = np.zeros(len(x), dtype=bool)
+if detached:
+    released = inside(detached) & (~segment if detached["side"] == "fixed" else True)
+for name, values in (("Released", released), ("Sliding", inside(teeth))):
+    a = numpy_to_vtk(values.astype(np.uint8), deep=1)
+    a.SetName(name)
+    pd.AddArray(a)
+"""
+
+
+def contact_flags(bone, detached=None):
+    """The bone with point arrays Released (1 inside the `detached` box, see DETACHED) and Sliding
+    (1 on the teeth). `bone` must carry Displacement and ROIMask."""
+    return simple.ProgrammableFilter(Input=bone, Script=_CONTACT_FLAGS % (detached, TEETH),
+                                     OutputDataSetType="vtkPolyData")
 
 
 # The arrays an Osteotomy output carries, all zero: a bone that stays where it is. Append Geometry
@@ -61,7 +103,8 @@ def unmoved(bone):
 def build(data_dir, scene):
     """Returns (tissue, bone reader, osteotomy, skeleton, fem) proxies for a scene; LoadPlugin must have run
     first. The soft tissue is tied to all three bones: the operated one (Osteotomy's output) and
-    the others, which stay put (appended with Append Geometry)."""
+    the others, which stay put (appended with Append Geometry), each with its Released and Sliding
+    arrays (contact_flags)."""
     bone_name, planes, translation, _ = SCENES[scene]
     tissue = simple.XMLUnstructuredGridReader(registrationName="face_tissue.vtu",
                                               FileName=[data_dir + "/face/face_tissue.vtu"])
@@ -76,7 +119,8 @@ def build(data_dir, scene):
         osteotomy.CutPlane2.Origin, osteotomy.CutPlane2.Normal = planes[1]
     osteotomy.Translation = translation
     skeleton = simple.AppendGeometry(registrationName="Skeleton",
-                                     Input=[osteotomy] + [unmoved(other) for other in others])
+                                     Input=[contact_flags(osteotomy, DETACHED[scene])]
+                                     + [contact_flags(unmoved(other)) for other in others])
     fem = simple.CondensedFEMDeform(registrationName="CondensedFEMDeform", Input=tissue, Bone=skeleton)
     fem.ContactDistance = 1.0
     return tissue, bone, osteotomy, skeleton, fem

@@ -1,7 +1,7 @@
 """Where an osteotomy scene's largest strains are, and why (pvpython).
 
     pvpython scripts/osteotomy_strain_diagnosis.py <FacePlan.so> <Data dir> lefort1|bsso|genioplasty
-        [--tied] [--segment-tied] [--release MM] [--detach MM] [--top N] [--save file.npz]
+        [--tied] [--sliding] [--segment-tied] [--release MM] [--detach MM] [--top N] [--save file.npz]
 
 Runs the scene's pipeline (scripts/osteotomy_scenes.py; by default with the demo's contact) and
 lists the cells of largest small strain: the strain, the cell's shape quality (vtkMeshQuality mean
@@ -10,7 +10,8 @@ on the same side of that face: the two overlap) and the state of each of its nod
 contact sees it: M = tied to the moving segment, F = tied to bone that stays, R = tied but released,
 i = free (interior or untied boundary). The contact is recomputed here the way CondensedFEMDeform
 builds it (closest point on the undeformed bone within ContactDistance; ROIMask there; released
-within ReleaseDistance of a bone point of another segment or ROIMask side).
+where the bone's Released array flags the point of largest weight, or within ReleaseDistance of a
+bone point of another segment or ROIMask side).
 """
 import argparse
 import os
@@ -33,6 +34,7 @@ parser.add_argument("plugin")
 parser.add_argument("data")
 parser.add_argument("scene", choices=sorted(osteotomy_scenes.SCENES))
 parser.add_argument("--tied", action="store_true", help="Tied contact instead of the demo's")
+parser.add_argument("--sliding", action="store_true", help="Sliding contact everywhere instead of the demo's")
 parser.add_argument("--release", type=float, default=None, help="ReleaseDistance (mm)")
 parser.add_argument("--top", type=int, default=8)
 parser.add_argument("--segment-tied", action="store_true",
@@ -47,6 +49,8 @@ tissue_proxy, _, _, skeleton, fem = osteotomy_scenes.build(args.data, args.scene
 contact = osteotomy_scenes.configure_contact(fem)
 if args.tied:
     fem.ContactModel = "Tied"
+if args.sliding:
+    fem.ContactModel = "Sliding"
 if args.release is not None:
     fem.ReleaseDistance = args.release
 if args.detach > 0:
@@ -187,7 +191,8 @@ for node in boundary:
     undeformed.GetCell(int(cid)).EvaluatePosition(closest, [0.0] * 3, s, pc, dd, w)
     movable = float(np.dot(w, mask[ids])) > 1e-12  # (paraview.simple shadows the builtin sum)
     own = region[ids[int(np.argmax(w))]]
-    released = False
+    flags = bone.GetPointData().GetArray("Released")
+    released = bool(flags is not None and flags.GetValue(ids[int(np.argmax(w))]) > 0)
     for lab, loc in point_locators.items():
         if release > 0 and lab != own:
             released |= loc.FindClosestPointWithinRadius(release, xyz[node].tolist(), reference(0.0)) >= 0
