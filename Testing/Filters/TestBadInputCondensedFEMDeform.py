@@ -14,7 +14,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from badinput_util import (Cases, Catcher, box_tissue, cell_array, copy, plane_bone, point_array, polydata,
                            set_points, tets_of, unstructured)
 from faceplan_test_util import check, fetch, finish, producer
-from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import VTK_HEXAHEDRON, VTK_TETRA, VTK_TRIANGLE, vtkCellArray
 
 cases = Cases("CondensedFEMDeform")
@@ -190,6 +190,23 @@ for name, values, words in (("too short", M[:-1], ("ROIMask", "one per point")),
     point_array(bad, "ROIMask", values)
     f, c = fem_on(bone=bad)
     cases.error("bone ROIMask %s" % name, f, c, *words, ports=PORTS)
+
+# Released (uint8 flags): the wrong length or shape, a NaN and a type other than uint8 are refused.
+R = np.zeros(len(M), dtype=np.uint8)
+for name, values, words in (("too short", R[:-1], ("Released", "one per point")),
+                            ("2 components", np.zeros((len(R), 2), dtype=np.uint8), ("Released", "2 components")),
+                            ("NaN", np.where(np.arange(len(R)) == 50, np.nan, 0.0), ("Released", "NaN")),
+                            ("of type double", np.ones(len(R)), ("Released", "double", "uint8"))):
+    bad = copy(BONE)
+    flags = numpy_to_vtk(np.ascontiguousarray(values), deep=1)
+    flags.SetName("Released")
+    bad.GetPointData().AddArray(flags)
+    f, c = fem_on(bone=bad)
+    cases.error("bone Released %s" % name, f, c, *words, ports=PORTS)
+    f, c = fem_on(bone=bad)
+    f.Bone = [producer(bad), producer(BONE)]
+    cases.error("bone Released %s, one of two connections" % name, f, c, "Bone connection 0", *words,
+                ports=PORTS)
 
 # Legal but extreme: finite output and a warning.
 bad = copy(BONE)

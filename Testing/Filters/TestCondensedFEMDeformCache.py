@@ -190,6 +190,41 @@ fresh.UpdatePipeline()
 check(np.abs(displacement(fem) - displacement(fresh)).max() <= 1e-10 * np.abs(displacement(fresh)).max(),
       "after the new ROIMask the result equals a fresh filter's")
 Delete(fresh)
+
+
+def contact_builds():
+    fem.UpdatePropertyInformation()
+    return fem.GetPropertyValue("ContactBuildCount")
+
+
+# Released flags: new arrays with the same bytes keep the contact and the precompute; other flags
+# rebuild the contact, free other nodes (a new precompute) and equal a fresh filter's result.
+flags = np.zeros(bone.GetNumberOfPoints(), dtype=np.uint8)
+replace_array("Released", flags)
+n9, c9 = updated_count(), contact_builds()
+check(n9 == n8, "a Released array of zeros frees nothing: the precompute stays (%d -> %d)" % (n8, n9))
+u_zero_flags = displacement(fem)
+replace_array("Released", flags.copy())
+check(updated_count() == n9 and contact_builds() == c9 and np.abs(displacement(fem) - u_zero_flags).max() == 0.0,
+      "a new Released array with the same values keeps the contact, the precompute and the result")
+tied_mask = smaller > 0
+flags[np.flatnonzero(tied_mask)[::3]] = 1
+replace_array("Released", flags)
+n10, c10 = updated_count(), contact_builds()
+check(c10 == c9 + 1, "a Released array with other values rebuilds the contact (%d -> %d)" % (c9, c10))
+check(n10 == n9 + 1, "and frees other nodes: a new precompute (%d -> %d)" % (n9, n10))
+check(np.abs(displacement(fem) - u_zero_flags).max() > 0.0, "and changes the result")
+fresh = CondensedFEMDeform(Input=tissue, Bone=bone_source, OutputMode="Surface", Backend="CPU")
+fresh.UpdatePipeline()
+check(np.abs(displacement(fem) - displacement(fresh)).max() <= 1e-10 * np.abs(displacement(fresh)).max(),
+      "after the new Released flags the result equals a fresh filter's")
+Delete(fresh)
+replace_array("Released", flags.astype(np.float64))
+fem.UpdatePipeline()
+check(fetch(fem).GetNumberOfPoints() == 0, "a double Released array after a valid update is refused")
+replace_array("Released", flags)
+fem.UpdatePipeline()
+check(fetch(fem).GetNumberOfPoints() > 0, "and the uint8 one is taken again")
 replace_array("Sliding", np.zeros((bone.GetNumberOfPoints(), 2), dtype=np.uint8))
 fem.UpdatePipeline()
 check(fetch(fem).GetNumberOfPoints() == 0, "a two-component Sliding array after a valid update is refused")

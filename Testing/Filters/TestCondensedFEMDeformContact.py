@@ -1,6 +1,6 @@
 """Contract tests of CondensedFEMDeform's operation contact (pvpython, headless): the rigid-segment
 path chosen on its own and equal to the general path, several Bone connections merged, the
-Sliding and ByArray contact models, and ReleaseDistance.
+Sliding and ByArray contact models, ReleaseDistance and the bone's Released array.
 
 The bones are built here with VTK (maxilla moved rigidly as one segment, mandible fixed), so the
 test does not depend on the Osteotomy filter. argv[1] is the plugin, argv[2] the Data folder.
@@ -31,7 +31,7 @@ def rotation(ax, ay, az):
     return rz @ ry @ rx
 
 
-def bone(surface, transform=None, segment=True, sliding=None, below=None):
+def bone(surface, transform=None, segment=True, sliding=None, below=None, released=None):
     """The surface with its points below z = `below` (all when None) moved by `transform` (3x4
     [R|t], None = nothing moves), with Displacement, ROIMask, SegmentId and field data
     SegmentTransform as the Osteotomy filter writes them (without its cut faces)."""
@@ -65,6 +65,10 @@ def bone(surface, transform=None, segment=True, sliding=None, below=None):
         s = numpy_to_vtk(np.full(n, sliding, dtype=np.uint8), deep=True)
         s.SetName("Sliding")
         pd.AddArray(s)
+    if released is not None:
+        r = numpy_to_vtk(np.ascontiguousarray(released, dtype=np.uint8), deep=True)
+        r.SetName("Released")
+        pd.AddArray(r)
     return out
 
 
@@ -143,5 +147,41 @@ check(not errors.messages, "release runs without errors: %s" % errors.messages)
 counts = [int(m.split("): ")[-1].split()[0]) for m in warnings.messages if "tied nodes released" in m]
 check(counts and counts[0] > 0, "some tied nodes are released: %s" % counts)
 check(u_released is not None and rel(u_released, u_rigid) > 1e-6, "released nodes change the result")
+
+# 5. Released: tied nodes whose bone point is flagged become free. The tissue nodes the data file
+# ties to the mandible (ContactBone 1) are held at zero while tied; flag the mandible's points on
+# one side (y > 0) and those nodes there move, as free nodes do, while the other side stays held.
+mandible_points = vtk_to_numpy(mandible.GetPoints().GetData())
+tissue_data = fetch(tissue)
+tissue_points = vtk_to_numpy(tissue_data.GetPoints().GetData())
+on_mandible = (vtk_to_numpy(tissue_data.GetPointData().GetArray("BoneContact")) > 0) & (
+    vtk_to_numpy(tissue_data.GetPointData().GetArray("ContactBone")) == 1)
+flagged_side = on_mandible & (tissue_points[:, 1] > 3.0)
+held_side = on_mandible & (tissue_points[:, 1] < -3.0)
+u_tied, _, errors, _ = run([moved, fixed], OutputMode="Volume")
+u_zero, _, errors_zero, _ = run([moved, producer(bone(mandible, None, released=np.zeros(len(mandible_points))))],
+                                OutputMode="Volume")
+check(not errors_zero.messages and u_zero is not None and np.abs(u_zero - u_tied).max() == 0.0,
+      "Released = 0 everywhere gives the tied result")
+u_free, _, errors, warnings = run(
+    [moved, producer(bone(mandible, None, released=mandible_points[:, 1] > 0.0))], OutputMode="Volume")
+check(not errors.messages, "Released runs without errors: %s" % errors.messages)
+check(flagged_side.sum() > 20 and held_side.sum() > 20,
+      "both sides hold mandible-tied nodes (%d, %d)" % (flagged_side.sum(), held_side.sum()))
+check(u_free is not None and np.all(np.linalg.norm(u_tied[flagged_side], axis=1) == 0.0),
+      "tied to the fixed mandible, the nodes are held at zero")
+moving_free = np.linalg.norm(u_free[flagged_side], axis=1) > 0.0
+check(moving_free.all(), "Released nodes are free in the result: %d of %d move"
+      % (moving_free.sum(), flagged_side.sum()))
+check(np.all(np.linalg.norm(u_free[held_side], axis=1) == 0.0),
+      "nodes tied to unflagged bone points stay held")
+counts = [int(m.split("): ")[-1].split()[0]) for m in warnings.messages if "marked Released" in m]
+check(counts and counts[0] >= flagged_side.sum(),
+      "the warning counts the released nodes (%s, at least %d)" % (counts, flagged_side.sum()))
+# With two connections the flags of the one that has them are kept, the other's filled with 0.
+u_merged, _, errors, _ = run([producer(bone(mandible, None, released=mandible_points[:, 1] > 0.0)), moved],
+                             OutputMode="Volume")
+check(u_merged is not None and rel(u_merged, u_free) <= 1e-12,
+      "Released survives the merge of Bone connections in either order")
 
 finish("TestCondensedFEMDeformContact")
