@@ -208,6 +208,13 @@ for name, values, words in (("too short", R[:-1], ("Released", "one per point"))
     cases.error("bone Released %s, one of two connections" % name, f, c, "Bone connection 0", *words,
                 ports=PORTS)
 
+bad = copy(BONE)
+flags = numpy_to_vtk(np.ones(len(R), dtype=np.uint8), deep=1)
+flags.SetName("Released")
+bad.GetPointData().AddArray(flags)
+f, c = fem_on(bone=bad)
+cases.error("bone Released everywhere", f, c, "no constrained node", ports=PORTS)
+
 # Legal but extreme: finite output and a warning.
 bad = copy(BONE)
 point_array(bad, "ROIMask", np.zeros_like(M))
