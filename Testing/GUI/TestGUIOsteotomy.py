@@ -88,13 +88,15 @@ try:
     pxm = servermanager.vtkSMProxyManager.GetProxyManager()
     builder = pxm.GetUndoStackBuilder()
     check(builder is not None and builder.IsA("pqUndoStackBuilder"), "the proxy manager holds the GUI's pqUndoStackBuilder")
-    stack = builder.GetUndoStack()
+    # Not named `stack`: ParaView's Programmable Filter (the scene's contact flags run one on every
+    # move) imports numpy's names into the shell's namespace each time it executes.
+    undo_stack = builder.GetUndoStack()
     spxm = servermanager.ProxyManager().SMProxyManager
 
     def gui_undo_redo(redo):
         previous = builder.GetIgnoreAllChanges()
         builder.SetIgnoreAllChanges(True)
-        (stack.Redo if redo else stack.Undo)()
+        (undo_stack.Redo if redo else undo_stack.Undo)()
         for group in ("sources", "lookup_tables", "representations", "scalar_bars"):
             spxm.UpdateRegisteredProxies(group, 1)
         spxm.UpdateRegisteredProxies(1)
@@ -106,7 +108,7 @@ try:
     builder.Begin(label)
     osteotomy.Translation = move1
     builder.EndAndPushToStack()
-    check(stack.CanUndo() and stack.GetUndoSetLabel(0) == label, "the move is on top of the GUI's undo stack")
+    check(undo_stack.CanUndo() and undo_stack.GetUndoSetLabel(0) == label, "the move is on top of the GUI's undo stack")
     d1, b1, s1, t1 = solve()
     simple.Render(view)
     check(t1 == move1, "the new Translation is on the proxy")
@@ -116,7 +118,7 @@ try:
     check(change > 1.0, "the soft tissue follows the segment (max change %.3f mm)" % change)
 
     gui_undo_redo(redo=False)
-    check(stack.CanRedo() and stack.GetRedoSetLabel(0) == label, "after undo the move is on the redo stack")
+    check(undo_stack.CanRedo() and undo_stack.GetRedoSetLabel(0) == label, "after undo the move is on the redo stack")
     d2, b2, s2, t2 = solve()
     check(t2 == move0, "undo restores Translation")
     check(close(b2, b0), "undo gives back the first bone")
