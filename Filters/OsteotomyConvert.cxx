@@ -33,6 +33,15 @@ vtkSmartPointer<vtkDoubleArray> ZeroArray(const char* name, int components, vtkI
 
 } // namespace
 
+bool IsBookkeepingArray(const std::string& name) {
+  return name == "Displacement" || name == "ROIMask" || name == "SegmentId";
+}
+
+bool IsCarriedArray(vtkDataArray* array) {
+  return array->GetName() && !IsBookkeepingArray(array->GetName()) &&
+         array->GetNumberOfComponents() == 1;
+}
+
 Status ValidateInput(vtkDataSet* data) {
   vtkPolyData* input = vtkPolyData::SafeDownCast(data);
   if (!input)
@@ -103,6 +112,11 @@ vtkSmartPointer<vtkPolyData> BookkeepingBone(vtkPolyData* input) {
   bone->GetPointData()->AddArray(displacement);
   bone->GetPointData()->AddArray(mask);
   bone->GetPointData()->AddArray(segment);
+  vtkPointData* carried = input->GetPointData();
+  for (int a = 0; a < carried->GetNumberOfArrays(); ++a)
+    if (vtkDataArray* array = carried->GetArray(a))
+      if (IsCarriedArray(array))
+        bone->GetPointData()->AddArray(array);
   return bone;
 }
 

@@ -9,8 +9,10 @@
 #include <vtkSmartPointer.h>
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
+class vtkDataArray;
 class vtkDataSet;
 class vtkFieldData;
 class vtkImplicitFunction;
@@ -27,8 +29,16 @@ Status ValidateInput(vtkDataSet* input);
 Status ToCutPlanes(const std::vector<vtkImplicitFunction*>& functions,
                    std::vector<CutPlane>& planes);
 
+// The point arrays that Osteotomy writes itself (Displacement, ROIMask, SegmentId).
+bool IsBookkeepingArray(const std::string& name);
+
+// The input's point arrays that the output carries: named, one component, not bookkeeping. Vectors
+// and normals are left behind, since the move would invalidate them.
+bool IsCarriedArray(vtkDataArray* array);
+
 // The input triangulated, with double points and the bookkeeping arrays as doubles (zero where the
-// input has none), so that clipping interpolates them along cut edges.
+// input has none), so that clipping interpolates them along cut edges. The input's carried arrays
+// (a scene's Released and Sliding flags, say) come along and are interpolated the same way.
 vtkSmartPointer<vtkPolyData> BookkeepingBone(vtkPolyData* input);
 
 // Core's view of the split bone: its triangles, the interpolated bookkeeping arrays, the input's

@@ -1,5 +1,7 @@
 #include "OsteotomyOutput.h"
 
+#include "OsteotomyConvert.h"
+
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDoubleArray.h>
@@ -15,8 +17,9 @@
 namespace faceplan {
 namespace osteotomy_filter {
 
-void BuildBoneOutput(const OsteotomyResult& result, vtkCellArray* triangles,
-                     vtkFieldData* inputField, vtkPolyData* output) {
+void BuildBoneOutput(const OsteotomyResult& result, vtkPolyData* split, vtkFieldData* inputField,
+                     vtkPolyData* output) {
+  vtkCellArray* triangles = split->GetPolys();
   const vtkIdType n = result.points.rows();
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
@@ -45,6 +48,11 @@ void BuildBoneOutput(const OsteotomyResult& result, vtkCellArray* triangles,
   output->GetPointData()->SetActiveVectors("Displacement");
   output->GetPointData()->AddArray(mask);
   output->GetPointData()->AddArray(segment);
+  vtkPointData* carried = split->GetPointData();
+  for (int a = 0; a < carried->GetNumberOfArrays(); ++a)
+    if (vtkDataArray* array = carried->GetArray(a))
+      if (IsCarriedArray(array) && array->GetNumberOfTuples() == n)
+        output->GetPointData()->AddArray(array);
 
   vtkNew<vtkFieldData> field;
   field->ShallowCopy(inputField);

@@ -14,9 +14,11 @@ namespace faceplan {
 namespace osteotomy_filter {
 
 // Port 0: the moved points, the split bone's triangles, point arrays Displacement, ROIMask (uint8)
-// and SegmentId (int), the input's field data with SegmentTransform and SegmentNote replaced.
-void BuildBoneOutput(const OsteotomyResult& result, vtkCellArray* triangles,
-                     vtkFieldData* inputField, vtkPolyData* output);
+// and SegmentId (int), the split's carried point arrays (the input's one-component arrays,
+// interpolated at the points the cut added), the input's field data with SegmentTransform and
+// SegmentNote replaced.
+void BuildBoneOutput(const OsteotomyResult& result, vtkPolyData* split, vtkFieldData* inputField,
+                     vtkPolyData* output);
 
 // Port 1: each plane's section of the box as one polygon, cell array CutPlane = 1, 2.
 void BuildCutPlaneOutput(const std::vector<CutPlane>& planes, const std::array<double, 6>& box,

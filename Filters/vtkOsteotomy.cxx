@@ -179,7 +179,7 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
   std::copy(result.pivot.data(), result.pivot.data() + 3, this->UsedPivot);
 
   // Outputs.
-  of::BuildBoneOutput(result, cache.split->GetPolys(), input->GetFieldData(), output);
+  of::BuildBoneOutput(result, cache.split, input->GetFieldData(), output);
   std::array<double, 6> box;
   input->GetBounds(box.data());
   of::BuildCutPlaneOutput(planes, box, planesOutput);

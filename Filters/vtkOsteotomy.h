@@ -15,8 +15,10 @@
  * 1 on the segment, OR-ed with the input's), `SegmentId` (int: 0 unmoved, this segment
  * 1 + the input's largest id), and field data `SegmentTransform` (12 doubles per segment id,
  * row-major [R | t] from the undeformed bone; NaN where a segment's motion is not rigid) and
- * `SegmentNote` (one string per segment, empty when rigid, else why not). Other point arrays
- * of the input are not passed on: clipping would interpolate them and the move invalidates normals.
+ * `SegmentNote` (one string per segment, empty when rigid, else why not). The input's other
+ * one-component point arrays (labels, flags such as CondensedFEMDeform's Released and Sliding) are
+ * passed on, interpolated at the points the cut adds; vectors and normals are not, since the move
+ * would invalidate them.
  * Output port 1: the cut plane(s) clipped to the input's bounds (cell array `CutPlane`: 1 or 2).
  * Errors (vtkErrorMacro, empty outputs): input not a triangle surface, NaN coordinates,
  * non-finite planes or move, a cut with no vertex on one of its sides. The input is not modified.

@@ -405,4 +405,43 @@ oq = fetch(qb)
 offs = vtk_to_numpy(oq.GetPolys().GetOffsetsArray()) if oq.GetNumberOfCells() else np.array([0])
 check(oq.GetNumberOfCells() > 0 and np.all(np.diff(offs) == 3), "quads: output is triangles only")
 
+# The input's other one-component point arrays come along: equal at the input's points,
+# interpolated between them at the points the cut adds (a uint8 flag rounds to 0 or 1). Vectors
+# (normals) are left out.
+flagged = vtkPolyData()
+flagged.DeepCopy(sphere_data)
+flag_values = (points(sphere_data)[:, 0] > 0.0).astype(np.uint8)
+weight_values = points(sphere_data)[:, 1].astype(float) * 2.0
+for name, values in (("Released", flag_values), ("Weight", weight_values),
+                     ("Normals", points(sphere_data).astype(float))):
+    a = numpy_to_vtk(values, deep=1)
+    a.SetName(name)
+    flagged.GetPointData().AddArray(a)
+carry = Osteotomy(Input=producer(flagged))
+carry.CutPlane1.Origin = [0.1, 0.2, 0.3]
+carry.CutPlane1.Normal = [0, 0, 1]
+carry.Translation = [1.0, 2.0, 3.0]
+carry.UpdatePipeline()
+oc = fetch(carry)
+released_out, weight_out = point_array(oc, "Released"), point_array(oc, "Weight")
+check(released_out is not None and oc.GetPointData().GetArray("Released").GetDataTypeAsString() == "unsigned char",
+      "carried: the input's uint8 array is on the output, still uint8")
+if released_out is not None and weight_out is not None:
+    X0c = points(oc).astype(float) - point_array(oc, "Displacement")
+    # Each output point's undeformed position is an input point or lies on the cut plane.
+    from vtkmodules.vtkCommonDataModel import vtkStaticPointLocator
+    loc = vtkStaticPointLocator()
+    loc.SetDataSet(sphere_data)
+    loc.BuildLocator()
+    nearest = np.array([loc.FindClosestPoint(x.tolist()) for x in X0c])
+    same = np.linalg.norm(X0c - points(sphere_data)[nearest], axis=1) < 1e-12
+    check(same.sum() > 100 and np.array_equal(released_out[same], flag_values[nearest[same]])
+          and np.allclose(weight_out[same], weight_values[nearest[same]], atol=1e-12),
+          "carried: values equal the input's at its points (%d points)" % same.sum())
+    new_points = ~same
+    check(new_points.sum() > 10 and np.allclose(weight_out[new_points], 2.0 * X0c[new_points, 1], atol=0.05),
+          "carried: interpolated at the %d points the cut adds" % new_points.sum())
+    check(set(np.unique(released_out)) <= {0, 1}, "carried: the flag stays 0 or 1")
+check(oc.GetPointData().GetArray("Normals") is None, "carried: a 3-component array (normals) is left out")
+
 finish("TestOsteotomy")

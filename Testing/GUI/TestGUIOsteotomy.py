@@ -88,8 +88,8 @@ try:
     pxm = servermanager.vtkSMProxyManager.GetProxyManager()
     builder = pxm.GetUndoStackBuilder()
     check(builder is not None and builder.IsA("pqUndoStackBuilder"), "the proxy manager holds the GUI's pqUndoStackBuilder")
-    # Not named `stack`: ParaView's Programmable Filter (the scene's contact flags run one on every
-    # move) imports numpy's names into the shell's namespace each time it executes.
+    # Not named `stack`: ParaView's Programmable Filter (the scene makes its unmoved bones with
+    # one) imports numpy's names into the shell's namespace each time it executes.
     undo_stack = builder.GetUndoStack()
     spxm = servermanager.ProxyManager().SMProxyManager
 
