@@ -63,12 +63,12 @@ Status BezierCut(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& roiMa
   return BezierCut(mesh, topology, roiMask, roiBoundary, curveU, curveV, options, result);
 }
 
-Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
-                 const std::vector<std::uint8_t>& roiMask,
-                 const std::vector<std::uint8_t>& roiBoundary, const std::vector<Vector3d>& curveU,
-                 const std::vector<Vector3d>& curveV, const BezierCutOptions& options,
-                 BezierCutResult& result) {
-  result = BezierCutResult{};
+namespace {
+
+// The checks both BezierCut overloads make before the surface is used.
+Status ValidateCutInputs(const SurfaceMesh& mesh, const CutMeshTopology& topology,
+                         const std::vector<std::uint8_t>& roiMask,
+                         const std::vector<std::uint8_t>& roiBoundary) {
   Status s = ValidateSurfaceMesh(mesh);
   if (!s)
     return s;
@@ -86,11 +86,15 @@ Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
     return Status::Error("ROIMask and ROIBoundary need one entry per point (" + std::to_string(n) +
                          "), got " + std::to_string(roiMask.size()) + " and " +
                          std::to_string(roiBoundary.size()));
-  BezierSurface surf;
-  s = BezierSurface::Create(curveU, curveV, options.flipNormal, surf);
-  if (!s)
-    return s;
+  return Status::Ok();
+}
 
+// The cut itself, once the inputs are checked and the surface made.
+Status CutOntoSurface(const SurfaceMesh& mesh, const CutMeshTopology& topology,
+                      const std::vector<std::uint8_t>& roiMask,
+                      const std::vector<std::uint8_t>& roiBoundary, const BezierSurface& surf,
+                      const BezierCutOptions& options, BezierCutResult& result) {
+  const std::int64_t n = mesh.numPoints();
   std::int64_t numROI = 0;
   for (std::int64_t i = 0; i < n; ++i)
     numROI += roiMask[i] ? 1 : 0;
@@ -188,6 +192,37 @@ Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
     r.mappingNote = "direct projection would fold the mesh (" + mapping.directProblem + ")";
   result = std::move(r);
   return Status::Ok();
+}
+
+} // namespace
+
+Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
+                 const std::vector<std::uint8_t>& roiMask,
+                 const std::vector<std::uint8_t>& roiBoundary, const std::vector<Vector3d>& curveU,
+                 const std::vector<Vector3d>& curveV, const BezierCutOptions& options,
+                 BezierCutResult& result) {
+  result = BezierCutResult{};
+  Status s = ValidateCutInputs(mesh, topology, roiMask, roiBoundary);
+  if (!s)
+    return s;
+  BezierSurface surf;
+  s = BezierSurface::Create(curveU, curveV, options.flipNormal, surf);
+  if (!s)
+    return s;
+  return CutOntoSurface(mesh, topology, roiMask, roiBoundary, surf, options, result);
+}
+
+Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
+                 const std::vector<std::uint8_t>& roiMask,
+                 const std::vector<std::uint8_t>& roiBoundary, const BezierSurface& surface,
+                 const BezierCutOptions& options, BezierCutResult& result) {
+  result = BezierCutResult{};
+  const Status s = ValidateCutInputs(mesh, topology, roiMask, roiBoundary);
+  if (!s)
+    return s;
+  if (!(surface.Size() > 0))
+    return Status::Error("no surface: make it with BezierSurface::Create first");
+  return CutOntoSurface(mesh, topology, roiMask, roiBoundary, surface, options, result);
 }
 
 } // namespace faceplan

@@ -72,7 +72,7 @@ struct BezierCutResult {
                                    // T > 1: mapped through T intermediary surfaces
   double maxDistanceToSurface = 0; // max over moved vertices of |x - S(u,v)| (should be ~1e-15)
   SurfaceMesh operativeSurface;    // triangles of S for display
-  RowVectors3d operativeNormals;  // unit normal (flip applied) at each operativeSurface point
+  RowVectors3d operativeNormals;   // unit normal (flip applied) at each operativeSurface point
   std::vector<Eigen::Vector2d> operativeParameters; // (u,v) of each operativeSurface point
   std::string mappingNote;           // why intermediary surfaces were needed (informational)
   std::vector<std::string> warnings; // e.g. nothing moved
@@ -106,5 +106,13 @@ Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
                  const std::vector<Eigen::Vector3d>& curveU,
                  const std::vector<Eigen::Vector3d>& curveV, const BezierCutOptions& options,
                  BezierCutResult& result);
+
+// The same cut onto a surface already made by BezierSurface::Create, for callers that check or
+// reuse the surface themselves. The surface's own orientation is used (options.flipNormal is not
+// read); a default-constructed surface is an error.
+Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
+                 const std::vector<std::uint8_t>& roiMask,
+                 const std::vector<std::uint8_t>& roiBoundary, const BezierSurface& surface,
+                 const BezierCutOptions& options, BezierCutResult& result);
 
 } // namespace faceplan

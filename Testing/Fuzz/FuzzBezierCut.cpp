@@ -87,8 +87,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       Violation("a projection onto a valid surface is not finite or leaves [0,1]^2");
   }
 
+  // A valid surface is cut onto directly (one Create per input: it is most of an execution); the
+  // curves are given to the cut only when Create refused them, and the cut must refuse them too.
+  CutMeshTopology topology;
+  if (!PrepareCutMesh(bone, topology))
+    Violation("a valid bone was refused");
   BezierCutResult result;
-  const Status cut = BezierCut(bone, roi.mask, roi.boundary, curveU, curveV, options, result);
+  const Status cut =
+      created ? BezierCut(bone, topology, roi.mask, roi.boundary, surface, options, result)
+              : BezierCut(bone, topology, roi.mask, roi.boundary, curveU, curveV, options, result);
   if (!cut) {
     if (cut.message.empty())
       Violation("a cut error without a message");

@@ -4,8 +4,8 @@
 #include "BezierCut/CutMapping.h"
 #include "BezierCut/DefaultCurves.h"
 #include "BezierCut/MeshIntersection.h"
-#include "Support/FaceplanTestMeshes.h"
 #include "ROIExtract/ROIExtract.h"
+#include "Support/FaceplanTestMeshes.h"
 
 #include <gtest/gtest.h>
 
@@ -27,7 +27,8 @@ Vector3d DeCasteljau(const Curve& P, double u) {
   double t = u * k - s;
   Vector3d q[4] = {P[3 * s], P[3 * s + 1], P[3 * s + 2], P[3 * s + 3]};
   for (int r = 3; r > 0; --r)
-    for (int i = 0; i < r; ++i) q[i] = (1 - t) * q[i] + t * q[i + 1];
+    for (int i = 0; i < r; ++i)
+      q[i] = (1 - t) * q[i] + t * q[i + 1];
   return q[0];
 }
 Vector3d RefSurface(const Curve& U, const Curve& V, double u, double v) {
@@ -36,26 +37,33 @@ Vector3d RefSurface(const Curve& U, const Curve& V, double u, double v) {
 
 Curve Line(const Vector3d& a, const Vector3d& b, int segments = 1) {
   Curve c;
-  for (int i = 0; i <= 3 * segments; ++i) c.push_back(a + (b - a) * (double(i) / (3 * segments)));
+  for (int i = 0; i <= 3 * segments; ++i)
+    c.push_back(a + (b - a) * (double(i) / (3 * segments)));
   return c;
 }
 
-Vector3d Row(const RowVectors3d& P, Eigen::Index i) { return P.row(i).transpose(); }
+Vector3d Row(const RowVectors3d& P, Eigen::Index i) {
+  return P.row(i).transpose();
+}
 Vector3d AreaVec(const RowVectors3d& P, const std::int64_t* t) {
   return 0.5 * (Row(P, t[1]) - Row(P, t[0])).cross(Row(P, t[2]) - Row(P, t[0]));
 }
 
 // Moller-Trumbore: does the open segment pq cross the interior of triangle abc?
-bool SegTri(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+bool SegTri(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b,
+            const Vector3d& c) {
   const Vector3d d = q - p, e1 = b - a, e2 = c - a, h = d.cross(e2);
   const double det = e1.dot(h);
-  if (std::abs(det) < 1e-14 * e1.norm() * e2.norm() * d.norm()) return false;
+  if (std::abs(det) < 1e-14 * e1.norm() * e2.norm() * d.norm())
+    return false;
   const Vector3d s = p - a;
   const double f = 1.0 / det, u = f * s.dot(h);
-  if (u <= 1e-9 || u >= 1 - 1e-9) return false;
+  if (u <= 1e-9 || u >= 1 - 1e-9)
+    return false;
   const Vector3d qq = s.cross(e1);
   const double v = f * d.dot(qq);
-  if (v <= 1e-9 || u + v >= 1 - 1e-9) return false;
+  if (v <= 1e-9 || u + v >= 1 - 1e-9)
+    return false;
   const double t = f * e2.dot(qq);
   return t > 1e-9 && t < 1 - 1e-9;
 }
@@ -66,8 +74,8 @@ struct ContractReport {
 };
 
 // `expectedNormal` (if nonzero): triangles whose vertices all moved must face it.
-ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, const Curve& U, const Curve& V,
-                             const Vector3d& expectedNormal) {
+ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, const Curve& U,
+                             const Curve& V, const Vector3d& expectedNormal) {
   ContractReport c;
   const Eigen::Index n = m.numPoints();
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -78,7 +86,8 @@ ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, con
     } else {
       const auto& uv = r.parameters[i];
       EXPECT_TRUE(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1);
-      c.maxOffSurface = std::max(c.maxOffSurface, (Row(r.points, i) - RefSurface(U, V, uv.x(), uv.y())).norm());
+      c.maxOffSurface =
+          std::max(c.maxOffSurface, (Row(r.points, i) - RefSurface(U, V, uv.x(), uv.y())).norm());
       EXPECT_LT((Row(r.points, i) - Row(m.points, i) - Row(r.displacement, i)).norm(), 1e-12);
     }
   }
@@ -87,7 +96,8 @@ ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, con
     const std::int64_t* ids = m.cell(t);
     tris.push_back(ids);
     const int mv = r.moved[ids[0]] + r.moved[ids[1]] + r.moved[ids[2]];
-    if (mv == 0) continue;
+    if (mv == 0)
+      continue;
     touched.push_back(ids);
     const Vector3d a0 = AreaVec(m.points, ids), a1 = AreaVec(r.points, ids);
     if (a1.norm() <= 1e-8 * a0.norm()) {
@@ -95,8 +105,10 @@ ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, con
       continue;
     }
     if (mv == 3 && expectedNormal.squaredNorm() > 0) {
-      if (a1.dot(expectedNormal) <= 0) ++c.flipped;
-      if (a0.dot(expectedNormal) > 0 && a1.dot(a0) <= 0) ++c.flipped;
+      if (a1.dot(expectedNormal) <= 0)
+        ++c.flipped;
+      if (a0.dot(expectedNormal) > 0 && a1.dot(a0) <= 0)
+        ++c.flipped;
     } else if (a1.dot(a0) <= 0) {
       ++c.flipped;
     }
@@ -104,17 +116,20 @@ ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, con
   // Brute force: triangles touching moved vertices against all triangles sharing no vertex.
   for (const std::int64_t* a : touched)
     for (const std::int64_t* b : tris) {
-      if (a == b) continue;
+      if (a == b)
+        continue;
       bool share = false;
       for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) share |= a[i] == b[j];
-      if (share) continue;
+        for (int j = 0; j < 3; ++j)
+          share |= a[i] == b[j];
+      if (share)
+        continue;
       bool hit = false;
       for (int e = 0; e < 3 && !hit; ++e) {
-        hit |= SegTri(Row(r.points, a[e]), Row(r.points, a[(e + 1) % 3]), Row(r.points, b[0]), Row(r.points, b[1]),
-                      Row(r.points, b[2]));
-        hit |= SegTri(Row(r.points, b[e]), Row(r.points, b[(e + 1) % 3]), Row(r.points, a[0]), Row(r.points, a[1]),
-                      Row(r.points, a[2]));
+        hit |= SegTri(Row(r.points, a[e]), Row(r.points, a[(e + 1) % 3]), Row(r.points, b[0]),
+                      Row(r.points, b[1]), Row(r.points, b[2]));
+        hit |= SegTri(Row(r.points, b[e]), Row(r.points, b[(e + 1) % 3]), Row(r.points, a[0]),
+                      Row(r.points, a[1]), Row(r.points, a[2]));
       }
       c.intersecting += hit;
     }
@@ -123,7 +138,8 @@ ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, con
 
 ROIResult RoiWhere(const SurfaceMesh& m, const std::function<bool(const Vector3d&)>& pred) {
   std::vector<std::uint8_t> sel(m.numPoints());
-  for (Eigen::Index i = 0; i < m.numPoints(); ++i) sel[i] = pred(Row(m.points, i));
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i)
+    sel[i] = pred(Row(m.points, i));
   ROIResult r;
   EXPECT_TRUE(ComputeROI(m, sel, r).ok);
   return r;
@@ -134,7 +150,8 @@ ROIResult RoiWhere(const SurfaceMesh& m, const std::function<bool(const Vector3d
 // ---------------------------------------------------------------- the surface itself
 
 TEST(BezierSurface, EvaluationMatchesDeCasteljauAndDerivatives) {
-  Curve U = {{0, 0, 0}, {1, 0, 0.5}, {2, 0, 0.5}, {3, 0, 0}, {4, 0, -0.5}, {5, 0.2, -0.5}, {6, 0.3, 0}};
+  Curve U = {{0, 0, 0},    {1, 0, 0.5},    {2, 0, 0.5}, {3, 0, 0},
+             {4, 0, -0.5}, {5, 0.2, -0.5}, {6, 0.3, 0}};
   Curve V = {{0, 0, 0}, {0, 1, 0.2}, {0.1, 2, 0.2}, {0, 3, 0}};
   BezierSurface S;
   Status s = BezierSurface::Create(U, V, false, S);
@@ -150,9 +167,11 @@ TEST(BezierSurface, EvaluationMatchesDeCasteljauAndDerivatives) {
     S.Derivatives(u, v, P, Su, Sv, Suu, Svv);
     const double h = 1e-6;
     if (std::abs(u - 0.5) > 2 * h) { // not across the joint
-      EXPECT_LT((Su - (RefSurface(U, V, u + h, v) - RefSurface(U, V, u - h, v)) / (2 * h)).norm(), 1e-5);
+      EXPECT_LT((Su - (RefSurface(U, V, u + h, v) - RefSurface(U, V, u - h, v)) / (2 * h)).norm(),
+                1e-5);
     }
-    EXPECT_LT((Sv - (RefSurface(U, V, u, v + h) - RefSurface(U, V, u, v - h)) / (2 * h)).norm(), 1e-5);
+    EXPECT_LT((Sv - (RefSurface(U, V, u, v + h) - RefSurface(U, V, u, v - h)) / (2 * h)).norm(),
+              1e-5);
     EXPECT_NEAR(S.UnitNormal(u, v).dot(Su.cross(Sv).normalized()), 1.0, 1e-12);
   }
   EXPECT_LT((S.Evaluate(0, 0) - U[0]).norm(), 1e-15);
@@ -175,7 +194,8 @@ TEST(BezierSurface, ProjectionIsClosestPoint) {
     const SurfaceProjection p = S.Project(x);
     double best = 1e300;
     for (int i = 0; i <= 300; ++i)
-      for (int j = 0; j <= 300; ++j) best = std::min(best, (RefSurface(U, V, i / 300.0, j / 300.0) - x).norm());
+      for (int j = 0; j <= 300; ++j)
+        best = std::min(best, (RefSurface(U, V, i / 300.0, j / 300.0) - x).norm());
     const double d = (p.point - x).norm();
     EXPECT_LE(d, best + 1e-9) << "not the closest point for " << x.transpose();
     if (p.inside) {
@@ -218,9 +238,9 @@ TEST(BezierSurface, IllDefinedControlPointsAreNamed) {
   Curve coincident = U;
   coincident[2] = coincident[1];
   Curve parallel = Line({0, 0, 0}, {0.5, 0, 0});
-  Curve loop = {{0, 0, 0}, {2, 1.5, 0}, {-1, 1.5, 0}, {1, 0, 0}};   // a loop: crosses itself
-  Curve fold = {{0, 0, 0}, {2, 0, 0}, {2, 0.3, 0}, {0, -0.1, 0}};   // turns back across itself
-  Curve cusp = {{0, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 0}};        // tangent vanishes
+  Curve loop = {{0, 0, 0}, {2, 1.5, 0}, {-1, 1.5, 0}, {1, 0, 0}}; // a loop: crosses itself
+  Curve fold = {{0, 0, 0}, {2, 0, 0}, {2, 0.3, 0}, {0, -0.1, 0}}; // turns back across itself
+  Curve cusp = {{0, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 0}};      // tangent vanishes
   Curve allSame(4, Vector3d(1, 1, 1));
   Curve nan = U;
   nan[3].x() = std::nan("");
@@ -238,7 +258,8 @@ TEST(BezierSurface, IllDefinedControlPointsAreNamed) {
   for (const Case& c : cases) {
     Status s = BezierSurface::Create(c.u, c.v, false, S);
     EXPECT_FALSE(s.ok) << c.expect;
-    EXPECT_NE(s.message.find(c.expect), std::string::npos) << "expected '" << c.expect << "' in: " << s.message;
+    EXPECT_NE(s.message.find(c.expect), std::string::npos)
+        << "expected '" << c.expect << "' in: " << s.message;
   }
   EXPECT_TRUE(BezierSurface::Create(U, V, false, S).ok);
 }
@@ -300,10 +321,38 @@ TEST(BezierCut, PlaneCutOfSphereCap) {
   EXPECT_EQ(CountNewIntersections(m, m.points, r.points, r.moved), 0);
 }
 
+TEST(BezierCut, OntoAMadeSurfaceEqualsFromCurves) {
+  SurfaceMesh m = testmesh::Icosphere(3);
+  ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.3; });
+  Curve U = Line({-1.5, -1.5, 0.7}, {1.5, -1.5, 0.7}),
+        V = Line({-1.5, -1.5, 0.7}, {-1.5, 1.5, 0.8});
+  CutMeshTopology topology;
+  ASSERT_TRUE(PrepareCutMesh(m, topology).ok);
+  for (const bool flip : {false, true}) {
+    BezierCutOptions options;
+    options.flipNormal = flip;
+    BezierCutResult fromCurves, ontoSurface;
+    ASSERT_TRUE(BezierCut(m, topology, roi.mask, roi.boundary, U, V, options, fromCurves).ok);
+    BezierSurface surface;
+    ASSERT_TRUE(BezierSurface::Create(U, V, flip, surface).ok);
+    options.flipNormal = !flip; // not read: the surface's own orientation counts
+    ASSERT_TRUE(BezierCut(m, topology, roi.mask, roi.boundary, surface, options, ontoSurface).ok);
+    EXPECT_GT(fromCurves.numMoved, 0);
+    EXPECT_EQ(ontoSurface.moved, fromCurves.moved);
+    EXPECT_TRUE(ontoSurface.points == fromCurves.points); // bit for bit
+  }
+  BezierCutResult r;
+  const Status none = BezierCut(m, topology, roi.mask, roi.boundary, BezierSurface{}, {}, r);
+  EXPECT_FALSE(none.ok);
+  EXPECT_NE(none.message.find("no surface"), std::string::npos) << none.message;
+  EXPECT_EQ(r.points.rows(), 0);
+}
+
 TEST(BezierCut, FlipNormalCutsTheOtherSide) {
   SurfaceMesh m = testmesh::Icosphere(3);
   ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.3; });
-  Curve U = Line({-1.5, -1.5, 0.7}, {1.5, -1.5, 0.7}), V = Line({-1.5, -1.5, 0.7}, {-1.5, 1.5, 0.7});
+  Curve U = Line({-1.5, -1.5, 0.7}, {1.5, -1.5, 0.7}),
+        V = Line({-1.5, -1.5, 0.7}, {-1.5, 1.5, 0.7});
   BezierCutOptions o;
   o.flipNormal = true; // normal -z: the ROI band between the boundary and z = 0.7 is cut
   BezierCutResult r;
@@ -359,7 +408,7 @@ TEST(BezierCut, CurvedCompositeSurface) {
   // An arch in x (one segment) swept along a gently bent two-segment line in y.
   Curve U = {{-1.5, -1.5, 0.4}, {-0.5, -1.5, 0.9}, {0.5, -1.5, 0.9}, {1.5, -1.5, 0.4}};
   Curve V = {{-1.5, -1.5, 0.4}, {-1.5, -1, 0.4}, {-1.5, -0.5, 0.45}, {-1.5, 0, 0.45},
-             {-1.5, 0.5, 0.45}, {-1.5, 1, 0.4}, {-1.5, 1.5, 0.4}};
+             {-1.5, 0.5, 0.45}, {-1.5, 1, 0.4},  {-1.5, 1.5, 0.4}};
   BezierCutResult r;
   Status s = BezierCut(m, roi.mask, roi.boundary, U, V, {}, r);
   ASSERT_TRUE(s.ok) << s.message;
@@ -422,7 +471,8 @@ TEST(BezierCut, SlabThroughIntermediarySurfacesOnly) {
 TEST(BezierCut, NothingOnTheSideMovesNothing) {
   SurfaceMesh m = testmesh::Icosphere(2);
   ROIResult roi = RoiWhere(m, [](const Vector3d& p) { return p.z() > 0.3; });
-  Curve U = Line({-1.5, -1.5, 1.2}, {1.5, -1.5, 1.2}), V = Line({-1.5, -1.5, 1.2}, {-1.5, 1.5, 1.2});
+  Curve U = Line({-1.5, -1.5, 1.2}, {1.5, -1.5, 1.2}),
+        V = Line({-1.5, -1.5, 1.2}, {-1.5, 1.5, 1.2});
   BezierCutResult r;
   Status s = BezierCut(m, roi.mask, roi.boundary, U, V, {}, r);
   ASSERT_TRUE(s.ok) << s.message;
