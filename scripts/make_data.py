@@ -31,6 +31,9 @@ import tempfile
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import tet_folds  # noqa: E402
+
 from vtkmodules.util import numpy_support as nps
 from vtkmodules.vtkCommonCore import vtkPoints, vtkIdList
 from vtkmodules.vtkCommonDataModel import (vtkCellArray, vtkPolyData, vtkUnstructuredGrid,
@@ -205,21 +208,10 @@ def boundary_faces(tets):
 
 
 def folded_faces(xyz, tets):
-    """Interior faces whose two tets lie on the same side of the face: the tets overlap although
-    each has a positive volume."""
-    loc = np.array([[1, 3, 2], [0, 2, 3], [0, 3, 1], [0, 1, 2]])
-    faces = tets[:, loc].reshape(-1, 3)
-    _, face_of, count = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True,
-                                  return_counts=True)
-    face_of = face_of.ravel()
-    shared = np.where(count[face_of] == 2)[0]
-    pairs = shared[np.argsort(face_of[shared], kind="stable")].reshape(-1, 2)
-    f = xyz[faces[pairs[:, 0]]]
-    normal = np.cross(f[:, 1] - f[:, 0], f[:, 2] - f[:, 0])
-    opposite = tets.ravel()[pairs]          # face k of a tet is opposite its local node k
-    side_a = np.einsum("ij,ij->i", normal, xyz[opposite[:, 0]] - f[:, 0])
-    side_b = np.einsum("ij,ij->i", normal, xyz[opposite[:, 1]] - f[:, 0])
-    return int((side_a * side_b >= 0).sum())
+    """Interior faces whose two tets lie on the same side of the face (or one of them on it): the
+    tets overlap although each has a positive volume."""
+    _, sides = tet_folds.face_pair_sides(xyz, tets)
+    return int((sides >= 0).sum())
 
 
 def n_components_ug(ug):

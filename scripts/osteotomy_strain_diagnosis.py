@@ -23,6 +23,7 @@ from paraview.simple import LoadPlugin
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import osteotomy_scenes  # noqa: E402
+import tet_folds  # noqa: E402
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy  # noqa: E402
 from vtkmodules.vtkCommonCore import reference, vtkPoints  # noqa: E402
 from vtkmodules.vtkCommonDataModel import (vtkGenericCell, vtkPolyData, vtkStaticCellLocator,  # noqa: E402
@@ -131,18 +132,8 @@ def quality(measure):
 mean_ratio, min_angle = quality("MeanRatio"), quality("MinAngle")
 
 # Folds: two tets that share a face but lie on the same side of it overlap (each alone is positive).
-LOCAL_FACES = np.array([[1, 3, 2], [0, 2, 3], [0, 3, 1], [0, 1, 2]])
-face_nodes = conn[:, LOCAL_FACES].reshape(-1, 3)
-_, face_of, face_count = np.unique(np.sort(face_nodes, axis=1), axis=0, return_inverse=True,
-                                   return_counts=True)
-face_of = face_of.ravel()
-shared = np.where(face_count[face_of] == 2)[0]
-pairs = shared[np.argsort(face_of[shared], kind="stable")].reshape(-1, 2)
-f = xyz[face_nodes[pairs[:, 0]]]
-normal = np.cross(f[:, 1] - f[:, 0], f[:, 2] - f[:, 0])
-side_a = np.einsum("ij,ij->i", normal, xyz[conn.ravel()[pairs[:, 0]]] - f[:, 0])
-side_b = np.einsum("ij,ij->i", normal, xyz[conn.ravel()[pairs[:, 1]]] - f[:, 0])
-fold_pairs = pairs[side_a * side_b > 0]
+pairs, sides = tet_folds.face_pair_sides(xyz, conn)
+fold_pairs = pairs[sides > 0]
 folded = np.zeros(len(conn), bool)
 folded[fold_pairs.ravel() // 4] = True
 
