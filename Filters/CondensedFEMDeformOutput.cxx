@@ -84,8 +84,17 @@ void AddFieldData(const SolveOutcome& outcome, const Settings& settings,
   AddScalar(fd, "SolveTimeMs", result.timings[Stage::Total].ms);
   AddScalar(fd, "PrecomputeTimeMs", outcome.precomputeMs);
   AddScalar(fd, "PrecomputeReused",
-            outcome.freshPrecompute || settings.fullReference() ? 0.0 : 1.0);
-  AddString(fd, "Method", MethodName(result.method));
+            outcome.freshPrecompute || settings.fullReference() || outcome.largeDeformation ? 0.0
+                                                                                           : 1.0);
+  AddString(fd, "Method",
+            outcome.largeDeformation ? "LargeDeformation" : MethodName(result.method));
+  AddString(fd, "Model", outcome.largeDeformation ? "NeoHookean" : "LinearElastic");
+  if (outcome.largeDeformation) {
+    const LargeDeformationReport& report = outcome.largeDeformationReport;
+    AddScalar(fd, "LoadSteps", report.loadSteps);
+    AddScalar(fd, "NewtonIterations", report.newtonIterations);
+    AddScalar(fd, "SmallestVolumeRatio", report.smallestVolumeRatio);
+  }
   AddString(fd, "Backend", result.backend);
   if (settings.verify)
     AddScalar(fd, "VerifyMaxRelativeError", outcome.verifyError);

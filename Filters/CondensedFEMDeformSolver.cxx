@@ -71,7 +71,12 @@ Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Set
   chooseBackend(settings, request, outcome.notes);
 
   Status status;
-  if (settings.fullReference()) {
+  if (settings.largeDeformation()) {
+    // Newton iterations on the whole mesh: no precompute to cache, nothing to hand to a worker.
+    outcome.largeDeformation = true;
+    status = SolveLargeDeformation(request, input, LargeDeformationOptions(), outcome.result,
+                                   outcome.largeDeformationReport);
+  } else if (settings.fullReference()) {
     status = SolveFullReference(request, input, outcome.result);
   } else {
     auto fraction = std::make_shared<std::atomic<double>>(0.0);
@@ -109,8 +114,10 @@ Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Set
   }
   if (!status)
     return status;
-  for (const auto& w : status.warnings)
-    outcome.notes.push_back(w); // the solve's (large strain, inversion)
+  for (const auto& w : status.warnings) // the solve's (large strain, inversion)
+    outcome.notes.push_back(w.find("small-strain range") != std::string::npos
+                                ? w + " (Model NeoHookean solves for large deformations)"
+                                : w);
 
   if (settings.verify) {
     const Status verified =

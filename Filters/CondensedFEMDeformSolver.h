@@ -6,6 +6,7 @@
 
 #include "CondensedFEM/BackgroundPrecompute.h"
 #include "CondensedFEM/CondensedFEM.h"
+#include "CondensedFEM/LargeDeformation.h"
 
 #include <functional>
 #include <string>
@@ -20,6 +21,8 @@ struct SolveOutcome {
   double precomputeMs = 0.0;      // the cached precompute's total
   double verifyError = -1.0;      // with Verify: largest relative difference to the reference
   std::vector<std::string> notes; // warnings for the user (precompute findings once, then solve's)
+  bool largeDeformation = false;  // Model NeoHookean: solved by SolveLargeDeformation
+  LargeDeformationReport largeDeformationReport;
 };
 
 class Solver {

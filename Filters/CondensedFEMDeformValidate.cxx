@@ -124,6 +124,13 @@ Status ValidateProperties(const Settings& s) {
     return Error(
         "ElementOrder must be 0 (Linear), 1 (Quadratic) or 2 (QuadraticNodalPressure), not ",
         s.elementOrder);
+  if (s.model < 0 || s.model > 1)
+    return Error("Model must be 0 (LinearElastic) or 1 (NeoHookean), not ", s.model);
+  if (s.largeDeformation() && s.elementOrder != 0)
+    return Error("Model NeoHookean supports ElementOrder Linear only");
+  if (s.largeDeformation() && s.verify)
+    return Error("Verify compares with the linear reference solve: it does not apply to Model "
+                 "NeoHookean");
   return Status::Ok();
 }
 

@@ -279,6 +279,7 @@ Settings vtkCondensedFEMDeform::CurrentSettings() const {
   s.backend = this->Backend;
   s.method = this->Method;
   s.elementOrder = this->ElementOrder;
+  s.model = this->Model;
   s.verify = this->Verify;
   return s;
 }
@@ -293,5 +294,6 @@ void vtkCondensedFEMDeform::PrintSelf(ostream& os, vtkIndent indent) {
      << indent << "OutputMode: " << this->OutputMode << "\n"
      << indent << "Backend: " << this->Backend << "\n"
      << indent << "Method: " << this->Method << "\n"
-     << indent << "ElementOrder: " << this->ElementOrder << "\n";
+     << indent << "ElementOrder: " << this->ElementOrder << "\n"
+     << indent << "Model: " << this->Model << "\n";
 }

@@ -21,7 +21,8 @@
  * boundary triangles only, and interior displacements are never computed) with point array
  * `Displacement` and field data `RelativeResidual`, `SolveTimeMs`, `PrecomputeTimeMs`, `Method`,
  * `Backend` (and `VerifyMaxRelativeError` with Verify on), `ConditionEstimate`, `ElementOrder`,
- * `LargestStrain` and `InvertedCells`. Precompute and solve warnings (slivers, strain above 10%,
+ * `LargestStrain`, `InvertedCells` and `Model` (with Model NeoHookean also `LoadSteps`,
+ * `NewtonIterations` and `SmallestVolumeRatio`). Precompute and solve warnings (slivers, strain above 10%,
  * cells inverted by the displacement, single-precision fallback) are reported with vtkWarningMacro.
  * Output port 1: a vtkTable of stage timings (columns `Stage`, `TimeMs`, `Reused`, `Backend`).
  *
@@ -68,6 +69,7 @@ public:
   };
   enum ContactModels { CONTACT_TIED = 0, CONTACT_SLIDING = 1, CONTACT_BY_ARRAY = 2 };
   enum ElementOrders { LINEAR_ELEMENTS = 0, QUADRATIC_ELEMENTS = 1, QUADRATIC_NODAL_PRESSURE = 2 };
+  enum Models { LINEAR_ELASTIC = 0, NEO_HOOKEAN = 1 };
 
   /// Connects the bone surface (port 1).
   void SetBoneConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
@@ -133,6 +135,15 @@ public:
   ///@}
 
   ///@{
+  /// Material model: LINEAR_ELASTIC (0, the default: small-strain linear elasticity, condensed and
+  /// precomputed, so an edit is a re-solve) or NEO_HOOKEAN (1: a compressible neo-Hookean material
+  /// with the same small-strain moduli, solved for large deformations by Newton's method on every
+  /// update, for moves whose strain the linear model warns about; linear elements only).
+  vtkSetMacro(Model, int);
+  vtkGetMacro(Model, int);
+  ///@}
+
+  ///@{
   /// Contact: CONTACT_TIED (0, every component follows the bone), CONTACT_SLIDING (1, only the
   /// component along the bone's normal follows it; the tissue slides tangentially) or
   /// CONTACT_BY_ARRAY (2, the bone point array `Sliding` picks per node).
@@ -187,6 +198,7 @@ protected:
   int Method = METHOD_AUTO;
   bool Verify = false;
   int ElementOrder = LINEAR_ELEMENTS;
+  int Model = LINEAR_ELASTIC;
 
 private:
   vtkCondensedFEMDeform(const vtkCondensedFEMDeform&) = delete;

@@ -1,7 +1,8 @@
 """Where an osteotomy scene's largest strains are, and why (pvpython).
 
     pvpython scripts/osteotomy_strain_diagnosis.py <FacePlan.so> <Data dir> lefort1|bsso|genioplasty
-        [--tied] [--sliding] [--segment-tied] [--release MM] [--detach MM] [--top N] [--save file.npz]
+        [--tied] [--sliding] [--segment-tied] [--release MM] [--detach MM] [--neo-hookean] [--top N]
+        [--save file.npz]
 
 Runs the scene's pipeline (scripts/osteotomy_scenes.py; by default with the demo's contact) and
 lists the cells of largest small strain: the strain, the cell's shape quality (vtkMeshQuality mean
@@ -42,6 +43,8 @@ parser.add_argument("--segment-tied", action="store_true",
                     help="ContactModel ByArray: tied on the moving segment, sliding elsewhere")
 parser.add_argument("--detach", type=float, default=0.0,
                     help="drop fixed bone triangles within this distance (mm) of the moving segment")
+parser.add_argument("--neo-hookean", action="store_true",
+                    help="Model NeoHookean (large deformation); strains are then principal Green-Lagrange")
 parser.add_argument("--save", help="write strain, quality, node states and centroids to this .npz")
 args = parser.parse_args()
 
@@ -54,6 +57,8 @@ if args.sliding:
     fem.ContactModel = "Sliding"
 if args.release is not None:
     fem.ReleaseDistance = args.release
+if args.neo_hookean:
+    fem.Model = "NeoHookean"
 if args.detach > 0:
     # The fixed bone's triangles within `detach` of the moving segment dropped: tissue there is
     # tied to nothing (an experiment: how far the tissue would have to be detached).
@@ -118,6 +123,8 @@ U = u[conn]
 dU = np.stack([U[:, k] - U[:, 0] for k in (1, 2, 3)], axis=2)
 grad = dU @ np.linalg.inv(dX)
 eps = 0.5 * (grad + np.transpose(grad, (0, 2, 1)))
+if args.neo_hookean:  # Green-Lagrange: (F^T F - I) / 2
+    eps = eps + 0.5 * np.transpose(grad, (0, 2, 1)) @ grad
 strain = np.abs(np.linalg.eigvalsh(eps)).max(axis=1)
 
 

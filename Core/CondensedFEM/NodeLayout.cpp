@@ -1,3 +1,4 @@
+#include <Eigen/Geometry>
 #include "CondensedFEM/NodeLayout.h"
 
 namespace faceplan {
@@ -40,6 +41,15 @@ NodeLayout MakeLayout(const std::vector<char>& used, const NodeSets& sets) {
     layout.slidingRoiDof[k] = firstDof[node];
   }
   return layout;
+}
+
+Eigen::Matrix3d NormalFrame(const Eigen::Vector3d& normal) {
+  Eigen::Index axis;
+  normal.cwiseAbs().minCoeff(&axis);
+  const Eigen::Vector3d t1 = normal.cross(Eigen::Vector3d::Unit(axis)).normalized();
+  Eigen::Matrix3d frame;
+  frame << normal, t1, normal.cross(t1);
+  return frame;
 }
 
 } // namespace faceplan

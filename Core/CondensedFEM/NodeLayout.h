@@ -26,4 +26,8 @@ struct NodeLayout {
 // `used` marks the nodes some cell references (corner and, for quadratic cells, mid-edge nodes).
 NodeLayout MakeLayout(const std::vector<char>& used, const NodeSets& sets);
 
+// A sliding node's frame: columns n, t1, t2 (any orthonormal tangents will do: the tangential
+// DOFs are both free).
+Eigen::Matrix3d NormalFrame(const Eigen::Vector3d& normal);
+
 } // namespace faceplan

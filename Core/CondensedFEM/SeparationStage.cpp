@@ -88,16 +88,6 @@ NodeSets QuadraticNodeSets(const QuadraticMesh& q, const NodeSets& sets,
   return out;
 }
 
-// Normal frames of the sliding nodes: columns n, t1, t2 (any orthonormal tangents will do: the
-// tangential DOFs are both free).
-Eigen::Matrix3d NormalFrame(const Eigen::Vector3d& normal) {
-  Eigen::Index axis;
-  normal.cwiseAbs().minCoeff(&axis);
-  const Eigen::Vector3d t1 = normal.cross(Eigen::Vector3d::Unit(axis)).normalized();
-  Eigen::Matrix3d frame;
-  frame << normal, t1, normal.cross(t1);
-  return frame;
-}
 
 void DescribeSlidingNodes(const NodeSets& sets, CondensedSystem& sys) {
   const NodeLayout& layout = sys.layout;

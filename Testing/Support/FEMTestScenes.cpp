@@ -1,5 +1,7 @@
 #include "Support/FEMTestScenes.h"
 
+#include "Support/BoxMeshGenerator.h"
+
 namespace faceplan::testing {
 
 PrecomputeRequest ShellRequest(int subdivisions, int layers, double E, double nu) {
@@ -21,6 +23,32 @@ RowVectors3d SmoothRoiField(const PrecomputeRequest& request, double amplitude) 
         -amplitude * (1.0 + std::sin(p(0) * p(1) / 900.0));
   }
   return u;
+}
+
+PrecomputeRequest PressedBlockRequest(double lx, double ly, double lz, double nu, double E) {
+  PrecomputeRequest r;
+  const int nx = 5, ny = 4, nz = 3;
+  r.mesh = MakeBoxTetMesh(nx, ny, nz, lx, ly, lz);
+  r.materials = Materials::Uniform(E, nu);
+  for (Eigen::Index i = 0; i < r.mesh.numPoints(); ++i) {
+    const Eigen::RowVector3d p = r.mesh.points.row(i);
+    const int node = static_cast<int>(i);
+    r.sets.kept.push_back(node);
+    if (p.norm() == 0.0) {
+      r.sets.constrained.push_back(node); // tied
+    } else if (p.z() == 0.0 || p.z() == lz) {
+      r.sets.constrained.push_back(node);
+      r.sets.sliding.push_back(node);
+      r.sets.slidingNormal.push_back(Eigen::Vector3d::UnitZ());
+      if (p.z() == lz)
+        r.sets.movable.push_back(node);
+    } else if (p.y() == 0.0 && p.x() == lx) {
+      r.sets.constrained.push_back(node);
+      r.sets.sliding.push_back(node);
+      r.sets.slidingNormal.push_back(Eigen::Vector3d::UnitY());
+    }
+  }
+  return r;
 }
 
 } // namespace faceplan::testing

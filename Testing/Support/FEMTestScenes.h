@@ -11,4 +11,11 @@ PrecomputeRequest ShellRequest(int subdivisions, int layers, double E = 3000.0, 
 // A smooth, non-trivial ROI displacement field (mm) for the request's movable nodes.
 RowVectors3d SmoothRoiField(const PrecomputeRequest& request, double amplitude = 2.0);
 
+// A block [0, lx] x [0, ly] x [0, lz] (5 x 4 x 3 hexahedra, Kuhn-split) on a frictionless floor
+// (z = 0) under a frictionless plate (z = lz): both faces' nodes slide with normal z, those at
+// z = lz are movable. Corner (0, 0, 0) is tied, and the nodes of the edge x = lx, y = 0 slide on
+// the plane y = 0, which removes the rigid motions the walls leave. Every node is kept. Pressing
+// the plate makes a homogeneous uniaxial state.
+PrecomputeRequest PressedBlockRequest(double lx, double ly, double lz, double nu, double E = 3000.0);
+
 } // namespace faceplan::testing

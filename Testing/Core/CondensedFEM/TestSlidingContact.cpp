@@ -18,34 +18,7 @@ namespace {
 
 constexpr double kLx = 20.0, kLy = 16.0, kLz = 12.0, kPress = 0.6, kNu = 0.3;
 
-// A block on a frictionless floor (z = 0), pressed down by a frictionless plate at z = kLz.
-// Corner (0, 0, 0) is tied, and the nodes of the edge x = kLx, y = 0 slide on the plane y = 0,
-// which removes the rigid motions the walls leave. Every node is kept.
-PrecomputeRequest PressedBlock() {
-  PrecomputeRequest r;
-  const int nx = 5, ny = 4, nz = 3;
-  r.mesh = MakeBoxTetMesh(nx, ny, nz, kLx, kLy, kLz);
-  r.materials = Materials::Uniform(3000.0, kNu);
-  for (Eigen::Index i = 0; i < r.mesh.numPoints(); ++i) {
-    const Eigen::RowVector3d p = r.mesh.points.row(i);
-    const int node = static_cast<int>(i);
-    r.sets.kept.push_back(node);
-    if (p.norm() == 0.0) {
-      r.sets.constrained.push_back(node); // tied
-    } else if (p.z() == 0.0 || p.z() == kLz) {
-      r.sets.constrained.push_back(node);
-      r.sets.sliding.push_back(node);
-      r.sets.slidingNormal.push_back(Eigen::Vector3d::UnitZ());
-      if (p.z() == kLz)
-        r.sets.movable.push_back(node);
-    } else if (p.y() == 0.0 && p.x() == kLx) {
-      r.sets.constrained.push_back(node);
-      r.sets.sliding.push_back(node);
-      r.sets.slidingNormal.push_back(Eigen::Vector3d::UnitY());
-    }
-  }
-  return r;
-}
+PrecomputeRequest PressedBlock() { return PressedBlockRequest(kLx, kLy, kLz, kNu); }
 
 // u = (nu e x, nu e y, -e z) with e = kPress / kLz: uniaxial compression, lateral expansion free.
 RowVectors3d Uniaxial(const RowVectors3d& points) {

@@ -1,0 +1,115 @@
+#include "Element/NeoHookeanTet.h"
+
+#include <Eigen/LU>
+#include <cmath>
+
+namespace faceplan {
+
+NeoHookeanParameters NeoHookeanFromLinear(double E, double nu) {
+  NeoHookeanParameters p;
+  p.mu = E / (2.0 * (1.0 + nu));
+  p.kappa = E / (3.0 * (1.0 - 2.0 * nu));
+  return p;
+}
+
+TetReference MakeTetReference(const TetCorners& corners) {
+  Eigen::Matrix3d edges; // columns X_j - X_0
+  for (int j = 0; j < 3; ++j)
+    edges.col(j) = (corners.row(j + 1) - corners.row(0)).transpose();
+  const Eigen::Matrix3d inverse = edges.inverse();
+  TetReference r;
+  r.gradients.bottomRows<3>() = inverse; // row a - 1 of edges^-1 is grad N_a
+  r.gradients.row(0) = -inverse.colwise().sum();
+  r.volume = edges.determinant() / 6.0;
+  return r;
+}
+
+Eigen::Matrix3d DeformationGradient(const TetReference& reference, const CornerDisplacements& u) {
+  return Eigen::Matrix3d::Identity() + u.transpose() * reference.gradients;
+}
+
+double NeoHookeanEnergyDensity(const Eigen::Matrix3d& F, const NeoHookeanParameters& p) {
+  const double J = F.determinant();
+  return 0.5 * p.mu * (std::pow(J, -2.0 / 3.0) * F.squaredNorm() - 3.0) +
+         0.5 * p.kappa * (J - 1.0) * (J - 1.0);
+}
+
+Eigen::Matrix3d NeoHookeanStress(const Eigen::Matrix3d& F, const NeoHookeanParameters& p) {
+  const double J = F.determinant();
+  const Eigen::Matrix3d inverseT = F.inverse().transpose();
+  const double a = std::pow(J, -2.0 / 3.0), i1 = F.squaredNorm();
+  return p.mu * a * (F - (i1 / 3.0) * inverseT) + p.kappa * (J - 1.0) * J * inverseT;
+}
+
+namespace {
+
+// dP for a change dF of F (the derivative of NeoHookeanStress), written out so that the 9 x 9
+// material tangent costs nine evaluations of a few 3 x 3 products.
+struct StressDerivative {
+  StressDerivative(const Eigen::Matrix3d& F, const NeoHookeanParameters& p) : F(F), p(p) {
+    J = F.determinant();
+    inverseT = F.inverse().transpose();
+    a = std::pow(J, -2.0 / 3.0);
+    i1 = F.squaredNorm();
+    deviator = F - (i1 / 3.0) * inverseT;
+  }
+  Eigen::Matrix3d operator()(const Eigen::Matrix3d& dF) const {
+    const double dJOverJ = (inverseT.array() * dF.array()).sum(); // tr(F^-1 dF)
+    const double dI1Half = (F.array() * dF.array()).sum();        // F : dF
+    const Eigen::Matrix3d dInverseT = -inverseT * dF.transpose() * inverseT;
+    const Eigen::Matrix3d isochoric = p.mu * a *
+                                      (-(2.0 / 3.0) * dJOverJ * deviator + dF -
+                                       (2.0 / 3.0) * dI1Half * inverseT - (i1 / 3.0) * dInverseT);
+    const Eigen::Matrix3d volumetric =
+        p.kappa * ((2.0 * J - 1.0) * J * dJOverJ * inverseT + (J * J - J) * dInverseT);
+    return isochoric + volumetric;
+  }
+  const Eigen::Matrix3d& F;
+  const NeoHookeanParameters& p;
+  double J, a, i1;
+  Eigen::Matrix3d inverseT, deviator;
+};
+
+} // namespace
+
+bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameters& p,
+                        const CornerDisplacements& u, double& energy, ElementVector& force,
+                        ElementMatrix* tangent) {
+  const Eigen::Matrix3d F = DeformationGradient(reference, u);
+  const double J = F.determinant();
+  if (!(J > 0.0))
+    return false;
+  const Eigen::Matrix<double, 4, 3>& G = reference.gradients;
+  const double V = reference.volume;
+  energy = V * NeoHookeanEnergyDensity(F, p);
+  const Eigen::Matrix3d P = NeoHookeanStress(F, p);
+  // f_a = V P grad N_a.
+  const Eigen::Matrix<double, 4, 3> f = V * G * P.transpose();
+  for (int a = 0; a < 4; ++a)
+    force.segment<3>(3 * a) = f.row(a).transpose();
+  if (!tangent)
+    return true;
+  // dF for a unit change of DOF (b, k) is e_k (x) grad N_b; the tangent's column (b, k) is
+  // V dP grad N_a for each row block a.
+  const StressDerivative dP(F, p);
+  for (int k = 0; k < 3; ++k) {
+    // dP is linear in dF, so the column for corner b is sum_l G(b, l) dP(e_k e_l^T).
+    Eigen::Matrix3d unit[3];
+    for (int l = 0; l < 3; ++l) {
+      Eigen::Matrix3d dF = Eigen::Matrix3d::Zero();
+      dF(k, l) = 1.0;
+      unit[l] = dP(dF);
+    }
+    for (int b = 0; b < 4; ++b) {
+      const Eigen::Matrix3d dPb = G(b, 0) * unit[0] + G(b, 1) * unit[1] + G(b, 2) * unit[2];
+      const Eigen::Matrix<double, 4, 3> column = V * G * dPb.transpose();
+      for (int a = 0; a < 4; ++a)
+        tangent->block<3, 1>(3 * a, 3 * b + k) = column.row(a).transpose();
+    }
+  }
+  // Symmetric in exact arithmetic; symmetrised so the assembled upper triangle is the matrix.
+  *tangent = 0.5 * (*tangent + tangent->transpose()).eval();
+  return true;
+}
+
+} // namespace faceplan

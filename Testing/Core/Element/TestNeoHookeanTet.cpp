@@ -1,0 +1,117 @@
+// The neo-Hookean cell: its force is the energy's gradient, its tangent the force's derivative,
+// its small-strain limit the linear element, and a rigid rotation costs nothing.
+#include "Element/ElementStiffness.h"
+#include "Element/NeoHookeanTet.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+using namespace faceplan;
+
+namespace {
+
+TetCorners SkewedTet() {
+  TetCorners c;
+  c << 0.1, 0.2, -0.3, 2.3, 0.4, 0.1, 0.6, 1.9, 0.2, 0.5, 0.7, 2.1;
+  return c;
+}
+
+// A deformation of tens of percent, with shear and volume change.
+CornerDisplacements LargeMove(const TetCorners& corners) {
+  Eigen::Matrix3d grad;
+  grad << 0.35, -0.2, 0.1, 0.15, -0.25, 0.3, -0.1, 0.2, 0.4;
+  CornerDisplacements u = (corners * grad.transpose()).eval();
+  u.row(2) += Eigen::RowVector3d(0.05, -0.03, 0.02);
+  return u;
+}
+
+const NeoHookeanParameters kTissue = NeoHookeanFromLinear(3000.0, 0.45);
+
+TEST(NeoHookeanTet, ForceIsTheEnergyGradient) {
+  const TetReference ref = MakeTetReference(SkewedTet());
+  const CornerDisplacements u = LargeMove(SkewedTet());
+  double energy;
+  ElementVector force;
+  ASSERT_TRUE(NeoHookeanTetState(ref, kTissue, u, energy, force, nullptr));
+  const double h = 1e-6;
+  for (int dof = 0; dof < 12; ++dof) {
+    CornerDisplacements plus = u, minus = u;
+    plus(dof / 3, dof % 3) += h;
+    minus(dof / 3, dof % 3) -= h;
+    double ep, em;
+    ElementVector unused;
+    ASSERT_TRUE(NeoHookeanTetState(ref, kTissue, plus, ep, unused, nullptr));
+    ASSERT_TRUE(NeoHookeanTetState(ref, kTissue, minus, em, unused, nullptr));
+    EXPECT_NEAR((ep - em) / (2 * h), force[dof], 1e-6 * force.cwiseAbs().maxCoeff()) << dof;
+  }
+}
+
+TEST(NeoHookeanTet, TangentIsTheForceDerivative) {
+  const TetReference ref = MakeTetReference(SkewedTet());
+  const CornerDisplacements u = LargeMove(SkewedTet());
+  double energy;
+  ElementVector force;
+  ElementMatrix tangent;
+  ASSERT_TRUE(NeoHookeanTetState(ref, kTissue, u, energy, force, &tangent));
+  const double h = 1e-6;
+  ElementMatrix difference;
+  for (int dof = 0; dof < 12; ++dof) {
+    CornerDisplacements plus = u, minus = u;
+    plus(dof / 3, dof % 3) += h;
+    minus(dof / 3, dof % 3) -= h;
+    double e;
+    ElementVector fp, fm;
+    ASSERT_TRUE(NeoHookeanTetState(ref, kTissue, plus, e, fp, nullptr));
+    ASSERT_TRUE(NeoHookeanTetState(ref, kTissue, minus, e, fm, nullptr));
+    difference.col(dof) = (fp - fm) / (2 * h);
+  }
+  EXPECT_LT((difference - tangent).cwiseAbs().maxCoeff(), 1e-6 * tangent.cwiseAbs().maxCoeff());
+  EXPECT_LT((tangent - tangent.transpose()).cwiseAbs().maxCoeff(),
+            1e-12 * tangent.cwiseAbs().maxCoeff());
+}
+
+TEST(NeoHookeanTet, SmallStrainLimitIsTheLinearElement) {
+  const TetCorners corners = SkewedTet();
+  const TetReference ref = MakeTetReference(corners);
+  double energy;
+  ElementVector force;
+  ElementMatrix tangent;
+  ASSERT_TRUE(
+      NeoHookeanTetState(ref, kTissue, CornerDisplacements::Zero(), energy, force, &tangent));
+  const ElementMatrix linear = TetStiffness(corners, 3000.0, 0.45);
+  EXPECT_LT((tangent - linear).cwiseAbs().maxCoeff(), 1e-12 * linear.cwiseAbs().maxCoeff());
+  EXPECT_EQ(force.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_NEAR(energy, 0.0, 1e-12);
+}
+
+TEST(NeoHookeanTet, RigidRotationCostsNothing) {
+  const TetCorners corners = SkewedTet();
+  const TetReference ref = MakeTetReference(corners);
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(1.2, Eigen::Vector3d(1.0, -2.0, 0.5).normalized()).toRotationMatrix();
+  const CornerDisplacements u = (corners * (R - Eigen::Matrix3d::Identity()).transpose()).eval();
+  double energy;
+  ElementVector force;
+  ASSERT_TRUE(NeoHookeanTetState(ref, kTissue, u, energy, force, nullptr));
+  // Against the force of a 1 % stretch: a linear element would see a 60 % "strain" here.
+  double e1;
+  ElementVector stretchForce;
+  CornerDisplacements stretch = CornerDisplacements::Zero();
+  stretch.col(0) = 0.01 * corners.col(0);
+  ASSERT_TRUE(NeoHookeanTetState(ref, kTissue, stretch, e1, stretchForce, nullptr));
+  EXPECT_LT(force.cwiseAbs().maxCoeff(), 1e-10 * stretchForce.cwiseAbs().maxCoeff());
+  EXPECT_LT(std::abs(energy), 1e-10 * e1);
+}
+
+TEST(NeoHookeanTet, InvertedCellIsRejected) {
+  const TetCorners corners = SkewedTet();
+  const TetReference ref = MakeTetReference(corners);
+  CornerDisplacements u = CornerDisplacements::Zero();
+  u.row(3) = 2.0 * (corners.row(0) - corners.row(3)); // corner 3 pushed through the opposite face
+  double energy = -1.0;
+  ElementVector force;
+  EXPECT_FALSE(NeoHookeanTetState(ref, kTissue, u, energy, force, nullptr));
+  EXPECT_EQ(energy, -1.0);
+}
+
+} // namespace
