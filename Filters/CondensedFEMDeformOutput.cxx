@@ -94,6 +94,8 @@ void AddFieldData(const SolveOutcome& outcome, const Settings& settings,
     AddScalar(fd, "LoadSteps", report.loadSteps);
     AddScalar(fd, "NewtonIterations", report.newtonIterations);
     AddScalar(fd, "SmallestVolumeRatio", report.smallestVolumeRatio);
+    if (settings.liftOff)
+      AddScalar(fd, "LiftedNodes", report.liftedNodes);
   }
   AddString(fd, "Backend", result.backend);
   if (settings.verify)

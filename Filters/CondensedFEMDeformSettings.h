@@ -26,6 +26,7 @@ struct Settings {
   int outputMode = 0, backend = 0, method = 0, elementOrder = 0; // as set, validated before use
   bool verify = false;
   int model = 0; // ModelChoice
+  bool liftOff = false;
 
   OutputMode output() const { return static_cast<OutputMode>(outputMode); }
   MethodChoice methodChoice() const { return static_cast<MethodChoice>(method); }

@@ -69,12 +69,17 @@ Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Set
     request.options.elementOrder = ElementOrder::Linear;
   }
   chooseBackend(settings, request, outcome.notes);
+  if (settings.liftOff && !settings.largeDeformation())
+    outcome.notes.push_back("LiftOff applies to Model NeoHookean only: the linear model keeps "
+                            "sliding tissue on the bone");
 
   Status status;
   if (settings.largeDeformation()) {
     // Newton iterations on the whole mesh: no precompute to cache, nothing to hand to a worker.
     outcome.largeDeformation = true;
-    status = SolveLargeDeformation(request, input, LargeDeformationOptions(), outcome.result,
+    LargeDeformationOptions options;
+    options.slidingLiftOff = settings.liftOff;
+    status = SolveLargeDeformation(request, input, options, outcome.result,
                                    outcome.largeDeformationReport);
   } else if (settings.fullReference()) {
     status = SolveFullReference(request, input, outcome.result);

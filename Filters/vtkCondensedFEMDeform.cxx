@@ -280,6 +280,7 @@ Settings vtkCondensedFEMDeform::CurrentSettings() const {
   s.method = this->Method;
   s.elementOrder = this->ElementOrder;
   s.model = this->Model;
+  s.liftOff = this->LiftOff;
   s.verify = this->Verify;
   return s;
 }
@@ -295,5 +296,6 @@ void vtkCondensedFEMDeform::PrintSelf(ostream& os, vtkIndent indent) {
      << indent << "Backend: " << this->Backend << "\n"
      << indent << "Method: " << this->Method << "\n"
      << indent << "ElementOrder: " << this->ElementOrder << "\n"
-     << indent << "Model: " << this->Model << "\n";
+     << indent << "Model: " << this->Model << "\n"
+     << indent << "LiftOff: " << this->LiftOff << "\n";
 }

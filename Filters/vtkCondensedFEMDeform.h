@@ -22,7 +22,7 @@
  * `Displacement` and field data `RelativeResidual`, `SolveTimeMs`, `PrecomputeTimeMs`, `Method`,
  * `Backend` (and `VerifyMaxRelativeError` with Verify on), `ConditionEstimate`, `ElementOrder`,
  * `LargestStrain`, `InvertedCells` and `Model` (with Model NeoHookean also `LoadSteps`,
- * `NewtonIterations` and `SmallestVolumeRatio`). Precompute and solve warnings (slivers, strain above 10%,
+ * `NewtonIterations`, `SmallestVolumeRatio` and, with LiftOff, `LiftedNodes`). Precompute and solve warnings (slivers, strain above 10%,
  * cells inverted by the displacement, single-precision fallback) are reported with vtkWarningMacro.
  * Output port 1: a vtkTable of stage timings (columns `Stage`, `TimeMs`, `Reused`, `Backend`).
  *
@@ -152,6 +152,14 @@ public:
   ///@}
 
   ///@{
+  /// With Model NEO_HOOKEAN: sliding tissue may lift off the bone (unilateral contact: the normal
+  /// displacement only keeps the tissue out of the bone) instead of following the bone's normal
+  /// motion both ways. Off by default. The linear model keeps sliding nodes on the bone.
+  vtkSetMacro(LiftOff, bool);
+  vtkGetMacro(LiftOff, bool);
+  ///@}
+
+  ///@{
   /// Tied tissue nodes within this distance (mesh units) of a cut line or cut face (bone points of
   /// another SegmentId) or of the ROI's boundary (the other side of ROIMask) are released: they
   /// become free nodes, as when the surgeon detaches the tissue there. 0 (default) releases none.
@@ -199,6 +207,7 @@ protected:
   bool Verify = false;
   int ElementOrder = LINEAR_ELEMENTS;
   int Model = LINEAR_ELASTIC;
+  bool LiftOff = false;
 
 private:
   vtkCondensedFEMDeform(const vtkCondensedFEMDeform&) = delete;

@@ -1,7 +1,7 @@
 """Where an osteotomy scene's largest strains are, and why (pvpython).
 
     pvpython scripts/osteotomy_strain_diagnosis.py <FacePlan.so> <Data dir> lefort1|bsso|genioplasty
-        [--tied] [--sliding] [--segment-tied] [--release MM] [--detach MM] [--neo-hookean] [--top N]
+        [--tied] [--sliding] [--segment-tied] [--release MM] [--detach MM] [--neo-hookean] [--lift-off] [--top N]
         [--save file.npz]
 
 Runs the scene's pipeline (scripts/osteotomy_scenes.py; by default with the demo's contact) and
@@ -45,6 +45,7 @@ parser.add_argument("--detach", type=float, default=0.0,
                     help="drop fixed bone triangles within this distance (mm) of the moving segment")
 parser.add_argument("--neo-hookean", action="store_true",
                     help="Model NeoHookean (large deformation); strains are then principal Green-Lagrange")
+parser.add_argument("--lift-off", action="store_true", help="LiftOff (with --neo-hookean)")
 parser.add_argument("--save", help="write strain, quality, node states and centroids to this .npz")
 args = parser.parse_args()
 
@@ -59,6 +60,7 @@ if args.release is not None:
     fem.ReleaseDistance = args.release
 if args.neo_hookean:
     fem.Model = "NeoHookean"
+fem.LiftOff = int(args.lift_off)
 if args.detach > 0:
     # The fixed bone's triangles within `detach` of the moving segment dropped: tissue there is
     # tied to nothing (an experiment: how far the tissue would have to be detached).
@@ -205,6 +207,9 @@ print("filter's largest strain %.1f %% (numpy over all cells %.1f %%), Method %s
     fd.GetAbstractArray("Method").GetValue(0)))
 print("cells above 10 %%: %d; of them mean ratio < 0.1: %d" % (
     (strain > 0.1).sum(), ((strain > 0.1) & (mean_ratio < 0.1)).sum()))
+print("strain percentiles 50/90/99/99.9: %s %%; cells above 25 %%: %d, above 50 %%: %d, above 100 %%: %d" % (
+    " / ".join("%.1f" % (100 * np.percentile(strain, q)) for q in (50, 90, 99, 99.9)),
+    (strain > 0.25).sum(), (strain > 0.5).sum(), (strain > 1.0).sum()))
 good = mean_ratio >= 0.1
 print("largest strain over cells of mean ratio >= 0.1: %.1f %% (cell %d)" % (
     100 * strain[good].max(), np.where(good)[0][strain[good].argmax()]))

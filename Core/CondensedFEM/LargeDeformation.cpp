@@ -34,6 +34,9 @@ struct Problem {
   AssemblyPattern pattern;
   std::vector<int> prescribedEntries; // nonzeros of the upper triangle in a prescribed row/column
   std::vector<int> prescribedDiagonal;
+  // Sliding nodes' normal DOFs when the tissue may lift off the bone (unilateral contact), and
+  // whether each is in contact (prescribed) now.
+  std::vector<int> liftOffDofs;
   // The force the linear model needs for the whole prescribed move (|K_0 u_prescribed|): the
   // residual's yardstick where the internal forces vanish, as in a rigid motion.
   double linearForce = 0.0;
@@ -124,16 +127,54 @@ void PinPrescribed(Problem& pb) {
     values[k] = 1.0;
 }
 
-Status Setup(const PrecomputeRequest& request, const SolveInput& input, Problem& pb) {
+// The tangent's nonzeros that PinPrescribed overwrites, for the current prescribed DOFs.
+void FindPinnedEntries(Problem& pb) {
+  pb.prescribedEntries.clear();
+  pb.prescribedDiagonal.clear();
+  const SparseMatrix& upper = pb.pattern.upper;
+  for (int col = 0; col < upper.outerSize(); ++col)
+    for (int k = upper.outerIndexPtr()[col]; k < upper.outerIndexPtr()[col + 1]; ++k) {
+      const int row = upper.innerIndexPtr()[k];
+      if (row == col && pb.prescribed[col])
+        pb.prescribedDiagonal.push_back(k);
+      else if (pb.prescribed[row] || pb.prescribed[col])
+        pb.prescribedEntries.push_back(k);
+    }
+}
+
+// For lift-off the normal must point from the bone into the tissue: the side where the node's
+// cells lie (the sum of their centroids' offsets from the node).
+Eigen::Vector3d IntoTissue(const TetMesh& mesh, const std::vector<std::vector<int>>& cellsOfNode,
+                           int node, const Eigen::Vector3d& normal) {
+  Eigen::Vector3d towardCells = Eigen::Vector3d::Zero();
+  for (int e : cellsOfNode[node]) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int a = 0; a < 4; ++a)
+      centroid += mesh.points.row(mesh.tets(e, a)).transpose();
+    towardCells += 0.25 * centroid - mesh.points.row(node).transpose();
+  }
+  return normal.dot(towardCells) < 0.0 ? Eigen::Vector3d(-normal) : normal;
+}
+
+Status Setup(const PrecomputeRequest& request, const SolveInput& input, bool liftOff,
+             Problem& pb) {
   const TetMesh& mesh = request.mesh;
   const NodeSets& sets = request.sets;
   pb.mesh = &mesh;
   pb.n = mesh.numPoints();
   const Eigen::Index n = pb.n;
   pb.frameOf.assign(n, -1);
+  std::vector<std::vector<int>> cellsOfNode(liftOff ? n : 0);
+  for (Eigen::Index e = 0; liftOff && e < mesh.numTets(); ++e)
+    for (int a = 0; a < 4; ++a)
+      cellsOfNode[mesh.tets(e, a)].push_back(static_cast<int>(e));
   for (size_t s = 0; s < sets.sliding.size(); ++s) {
-    pb.frameOf[sets.sliding[s]] = static_cast<int>(pb.frames.size());
-    pb.frames.push_back(NormalFrame(sets.slidingNormal[s]));
+    const int node = sets.sliding[s];
+    pb.frameOf[node] = static_cast<int>(pb.frames.size());
+    pb.frames.push_back(NormalFrame(liftOff ? IntoTissue(mesh, cellsOfNode, node, sets.slidingNormal[s])
+                                            : sets.slidingNormal[s]));
+    if (liftOff)
+      pb.liftOffDofs.push_back(3 * node);
   }
   // Prescribed DOFs: every DOF of a constrained node (only the normal one when sliding) and of a
   // node no cell uses.
@@ -189,15 +230,7 @@ Status Setup(const PrecomputeRequest& request, const SolveInput& input, Problem&
   const Status built = BuildAssemblyPattern(mesh, identity, static_cast<int>(n), pb.pattern);
   if (!built)
     return built;
-  const SparseMatrix& upper = pb.pattern.upper;
-  for (int col = 0; col < upper.outerSize(); ++col)
-    for (int k = upper.outerIndexPtr()[col]; k < upper.outerIndexPtr()[col + 1]; ++k) {
-      const int row = upper.innerIndexPtr()[k];
-      if (row == col && pb.prescribed[col])
-        pb.prescribedDiagonal.push_back(k);
-      else if (pb.prescribed[row] || pb.prescribed[col])
-        pb.prescribedEntries.push_back(k);
-    }
+  FindPinnedEntries(pb);
   return Status::Ok();
 }
 
@@ -357,6 +390,33 @@ void ReportDeformation(const Problem& pb, const Eigen::VectorXd& u, LargeDeforma
   }
 }
 
+// Unilateral contact at a converged state u for the load fraction s: a node in contact whose
+// contact force pulls it onto the bone (a negative normal residual) lifts off, a lifted node that
+// has gone into the bone comes back into contact. True when a node changed.
+bool UpdateContact(Problem& pb, const Eigen::VectorXd& u, double s) {
+  if (pb.liftOffDofs.empty())
+    return false;
+  Evaluation ev;
+  if (!Evaluate(pb, u, ev, nullptr))
+    return false;
+  const Eigen::VectorXd reaction = ev.force - s * pb.externalLoad;
+  const double forceTolerance = 1e-12 * std::max(ev.force.norm(), pb.linearForce);
+  const double gapTolerance = 1e-12 * std::max(1.0, pb.target.cwiseAbs().maxCoeff());
+  bool changed = false;
+  for (int dof : pb.liftOffDofs) {
+    if (pb.prescribed[dof] && reaction[dof] < -forceTolerance) {
+      pb.prescribed[dof] = 0;
+      changed = true;
+    } else if (!pb.prescribed[dof] && u[dof] < s * pb.target[dof] - gapTolerance) {
+      pb.prescribed[dof] = 1;
+      changed = true;
+    }
+  }
+  if (changed)
+    FindPinnedEntries(pb);
+  return changed;
+}
+
 Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& input,
                             const LargeDeformationOptions& options, SolveResult& result,
                             LargeDeformationReport& report) {
@@ -379,7 +439,7 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     return Status::Error("prescribed displacements or loads contain NaN or infinite values");
 
   Problem pb;
-  status = Setup(request, input, pb);
+  status = Setup(request, input, options.slidingLiftOff, pb);
   if (!status)
     return status;
   result.timings[Stage::Separation].ms = clock.lapMs();
@@ -409,12 +469,30 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     StepState reached;
     Status failure;
     if (newton.step(state, to, reached, failure)) {
-      state = reached;
-      ++report.loadSteps;
-      halvings = 0;
-      if (newton.lastIterations() <= 6)
-        step = std::min(1.0, 2.0 * step);
-      continue;
+      // The contact settles at this load before the next step: lifted nodes are free, and the
+      // same load is solved again from the reached state while the contact changes.
+      int updates = 0;
+      bool settled = true;
+      while (UpdateContact(pb, reached.u, to)) {
+        ++report.contactUpdates;
+        const StepState start = reached;
+        if (++updates > options.maxContactUpdatesPerStep ||
+            !newton.step(start, to, reached, failure)) {
+          settled = false;
+          break;
+        }
+      }
+      if (!failure.ok)
+        return failure;
+      if (settled) {
+        state = reached;
+        ++report.loadSteps;
+        halvings = 0;
+        if (newton.lastIterations() <= 6)
+          step = std::min(1.0, 2.0 * step);
+        continue;
+      }
+      // The contact kept changing: a smaller step, starting from the contact reached so far.
     }
     if (!failure.ok)
       return failure;
@@ -422,14 +500,16 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     if (++halvings > options.maxStepHalvings) {
       std::ostringstream why;
       why << "the large-deformation solve did not converge: it reached " << 100.0 * state.fraction
-          << " % of the prescribed move, and smaller load steps could not go further without "
-             "inverting a cell";
+          << " % of the prescribed move, and smaller load steps could not go further (a cell "
+             "would invert, or the lift-off contact did not settle)";
       return Status::Error(why.str());
     }
     step *= 0.5;
   }
 
   ReportDeformation(pb, state.u, report);
+  for (int dof : pb.liftOffDofs)
+    report.liftedNodes += pb.prescribed[dof] ? 0 : 1;
   result.relativeResidual = newton.lastResidual();
   result.largestStrain = report.largestGreenStrain;
   result.invertedCells = 0;

@@ -7,7 +7,9 @@
 // for the result of a plan, not for dragging.
 //
 // Sliding nodes keep the linear model's constraint: the displacement along the node's undeformed
-// normal is prescribed and the tangential components are free. Loads (gravity, nodal loads) are
+// normal is prescribed and the tangential components are free; with slidingLiftOff the normal
+// one only bounds the tissue from the bone's side (unilateral contact, an active set that is
+// settled at every load step). Loads (gravity, nodal loads) are
 // dead loads that grow with the prescribed values.
 #include "CondensedFEM/CondensedFEM.h"
 
@@ -25,6 +27,11 @@ struct LargeDeformationOptions {
   double initialStep = 1.0;
   int maxStepHalvings = 12;
   int maxLoadSteps = 200;
+  // Unilateral contact: a sliding node may lift off its bone (move away along the normal) where
+  // the contact would otherwise pull the tissue onto it, and comes back where it would go into
+  // the bone. Off: the normal displacement is prescribed both ways, as in the linear model.
+  bool slidingLiftOff = false;
+  int maxContactUpdatesPerStep = 30;
 };
 
 struct LargeDeformationReport {
@@ -34,6 +41,8 @@ struct LargeDeformationReport {
   double smallestVolumeRatio = 1.0; // min over cells of det F
   double largestGreenStrain = 0.0;  // max over cells of |principal Green-Lagrange strain|
   long long largestStrainCell = -1;
+  int contactUpdates = 0; // lift-off: solves repeated because the contact changed
+  int liftedNodes = 0;    // lift-off: sliding nodes off their bone in the result
 };
 
 // Linear cells only (request.options.elementOrder must be Linear). Fills result like Solve (kept

@@ -7,6 +7,7 @@
 #include "Support/FEMTestScenes.h"
 
 #include <Eigen/Geometry>
+#include <functional>
 #include <gtest/gtest.h>
 
 using namespace faceplan;
@@ -158,6 +159,111 @@ TEST(LargeDeformation, AMoveThatMustInvertCellsIsAClearError) {
   ASSERT_FALSE(s.ok);
   EXPECT_NE(s.message.find("did not converge"), std::string::npos) << s.message;
   EXPECT_GT(report.rejectedSteps, 0);
+}
+
+} // namespace
+
+namespace {
+
+// A block on a frictionless floor (z = 0, sliding with the given normal) whose top face
+// (z = kLz) is held and moved by `top(x)`; the sides are free.
+struct FloorBlock {
+  PrecomputeRequest request;
+  SolveInput input;
+  std::vector<int> floor; // node ids on the floor
+};
+FloorBlock BlockOnFloor(const Eigen::Vector3d& floorNormal,
+                        const std::function<Eigen::RowVector3d(const Eigen::RowVector3d&)>& top) {
+  FloorBlock b;
+  b.request.mesh = MakeBoxTetMesh(4, 4, 3, kLx, kLx, kLz);
+  b.request.materials = Materials::Uniform(kE, kNu);
+  std::vector<Eigen::RowVector3d> moves;
+  for (Eigen::Index i = 0; i < b.request.mesh.numPoints(); ++i) {
+    const Eigen::RowVector3d p = b.request.mesh.points.row(i);
+    const int node = static_cast<int>(i);
+    b.request.sets.kept.push_back(node);
+    if (p.z() == 0.0) {
+      b.request.sets.constrained.push_back(node);
+      b.request.sets.sliding.push_back(node);
+      b.request.sets.slidingNormal.push_back(floorNormal);
+      b.floor.push_back(node);
+    } else if (p.z() == kLz) {
+      b.request.sets.constrained.push_back(node);
+      b.request.sets.movable.push_back(node);
+      moves.push_back(top(p));
+    }
+  }
+  b.input.movableDisplacement.resize(static_cast<Eigen::Index>(moves.size()), 3);
+  for (size_t k = 0; k < moves.size(); ++k)
+    b.input.movableDisplacement.row(static_cast<Eigen::Index>(k)) = moves[k];
+  b.input.recoverInterior = true;
+  return b;
+}
+
+LargeDeformationOptions LiftOff() {
+  LargeDeformationOptions o;
+  o.slidingLiftOff = true;
+  return o;
+}
+
+TEST(LargeDeformation, LiftOffLetsABlockPulledUpLeaveTheFloor) {
+  // Whichever way the floor's normal is given, the tissue side decides: pulled up, the block
+  // leaves the floor as one rigid body; held both ways (no lift-off) it stretches.
+  for (double sign : {1.0, -1.0}) {
+    FloorBlock b = BlockOnFloor(sign * Eigen::Vector3d::UnitZ(),
+                                [](const Eigen::RowVector3d&) { return Eigen::RowVector3d(0, 0, 3.0); });
+    SolveResult lifted, held;
+    LargeDeformationReport liftedReport, heldReport;
+    Status s = SolveLargeDeformation(b.request, b.input, LiftOff(), lifted, liftedReport);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_EQ(liftedReport.liftedNodes, static_cast<int>(b.floor.size()));
+    RowVectors3d rigid = RowVectors3d::Zero(b.request.mesh.numPoints(), 3);
+    rigid.col(2).setConstant(3.0);
+    EXPECT_LT(RelativeMaxNodeDifference(lifted.allDisplacement, rigid), 1e-8) << sign;
+    s = SolveLargeDeformation(b.request, b.input, {}, held, heldReport);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_EQ(heldReport.liftedNodes, 0);
+    EXPECT_GT(heldReport.largestGreenStrain, 0.1);
+    for (int node : b.floor)
+      EXPECT_NEAR(held.allDisplacement(node, 2), 0.0, 1e-12);
+  }
+}
+
+TEST(LargeDeformation, LiftOffKeepsAPressedBlockOnTheFloor) {
+  FloorBlock b = BlockOnFloor(Eigen::Vector3d::UnitZ(),
+                              [](const Eigen::RowVector3d&) { return Eigen::RowVector3d(0, 0, -3.0); });
+  SolveResult lifted, held;
+  LargeDeformationReport liftedReport, heldReport;
+  ASSERT_TRUE(SolveLargeDeformation(b.request, b.input, LiftOff(), lifted, liftedReport).ok);
+  ASSERT_TRUE(SolveLargeDeformation(b.request, b.input, {}, held, heldReport).ok);
+  EXPECT_EQ(liftedReport.liftedNodes, 0);
+  EXPECT_LT(RelativeMaxNodeDifference(lifted.allDisplacement, held.allDisplacement), 1e-10);
+}
+
+TEST(LargeDeformation, LiftOffSettlesAMixedContact) {
+  // The top face tilted about its centre line: one half of the floor is pressed, the other half
+  // pulled. The result is the unilateral solution: floor nodes either on the floor or above it,
+  // some of each, and the pressed side's floor nodes stay down.
+  const double angle = 0.25;
+  FloorBlock b = BlockOnFloor(Eigen::Vector3d::UnitZ(), [angle](const Eigen::RowVector3d& p) {
+    const double x = p.x() - 0.5 * kLx;
+    return Eigen::RowVector3d(x * (std::cos(angle) - 1.0), 0.0, x * std::sin(angle));
+  });
+  SolveResult result;
+  LargeDeformationReport report;
+  const Status s = SolveLargeDeformation(b.request, b.input, LiftOff(), result, report);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_GT(report.liftedNodes, 0);
+  EXPECT_LT(report.liftedNodes, static_cast<int>(b.floor.size()));
+  int above = 0;
+  for (int node : b.floor) {
+    const double z = result.allDisplacement(node, 2);
+    EXPECT_GT(z, -1e-10) << "floor node " << node << " went into the floor";
+    above += z > 1e-8 ? 1 : 0;
+    if (b.request.mesh.points(node, 0) == 0.0)
+      EXPECT_NEAR(z, 0.0, 1e-10) << "the pressed edge stays down";
+  }
+  EXPECT_EQ(above, report.liftedNodes);
 }
 
 } // namespace
