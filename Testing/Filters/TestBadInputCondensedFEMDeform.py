@@ -66,7 +66,8 @@ for prop, value, words in (("YoungsModulus", 0.0, ("YoungsModulus",)), ("YoungsM
                            ("ContactDistance", NAN, ("ContactDistance",)),
                            ("OutputMode", 7, ("OutputMode", "7")), ("Backend", 5, ("Backend", "5")),
                            ("Method", 9, ("Method", "9")), ("Method", -1, ("Method", "-1")),
-                           ("ElementOrder", 99, ("ElementOrder", "99"))):
+                           ("ElementOrder", 99, ("ElementOrder", "99")), ("Model", 7, ("Model", "7")),
+                           ("Model", -1, ("Model", "-1"))):
     f, c = fem_on(**{prop: value})
     cases.error("%s = %s" % (prop, value), f, c, *words, ports=PORTS)
 f, c = fem_on(UseGravity=1, Density=-1100.0)

@@ -1,0 +1,92 @@
+"""Contract tests of CondensedFEMDeform's Model and LiftOff (pvpython, headless), on the Le Fort I
+scene of scripts/osteotomy_scenes.py: the default is the linear model; NeoHookean agrees with it for
+a small move and differs for a large one, reports its solve in the field data and leaves the linear
+precompute alone; LiftOff frees sliding nodes with NeoHookean and is ignored, with a warning, by the
+linear model; bad combinations are errors with an empty output. argv[1] is the plugin, argv[2] the
+Data folder.
+"""
+import os
+import sys
+
+import numpy as np
+from paraview.simple import LoadPlugin
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+import osteotomy_scenes  # noqa: E402
+from faceplan_test_util import ErrorCatcher, WarningCatcher, check, fetch, finish, point_array  # noqa: E402
+
+LoadPlugin(sys.argv[1])
+tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], "lefort1")
+osteotomy_scenes.configure_contact(fem)
+fem.OutputMode = "Surface"
+
+
+def run(**properties):
+    for key, value in properties.items():
+        setattr(fem, key, value)
+    errors, warnings = ErrorCatcher(fem), WarningCatcher(fem)
+    fem.UpdatePipeline()
+    out = fetch(fem)
+    fd = out.GetFieldData()
+    fields = {fd.GetAbstractArray(k).GetName(): fd.GetAbstractArray(k).GetVariantValue(0).ToString()
+              for k in range(fd.GetNumberOfArrays())}
+    return point_array(out, "Displacement"), fields, errors, warnings
+
+
+def rel(a, b):
+    return np.linalg.norm(a - b, axis=1).max() / np.linalg.norm(b, axis=1).max()
+
+
+# 1. The default is the linear model.
+check(fem.Model == "LinearElastic" and int(fem.LiftOff) == 0, "defaults: LinearElastic, no lift-off")
+osteotomy.Translation = [-0.05, 0.0, 0.0]
+u_linear, f, errors, _ = run()
+check(not errors.messages and f.get("Model") == "LinearElastic", "linear model by default (%s)" % f.get("Model"))
+precomputes = fem.GetPropertyValue("PrecomputeCount")
+
+# 2. A 0.05 mm move: the large-deformation result is the linear one to first order.
+u_small, f, errors, _ = run(Model="NeoHookean")
+check(not errors.messages, "NeoHookean runs: %s" % errors.messages)
+check(f.get("Model") == "NeoHookean" and f.get("Method") == "LargeDeformation",
+      "field data Model/Method say NeoHookean/LargeDeformation (%s, %s)" % (f.get("Model"), f.get("Method")))
+for name in ("LoadSteps", "NewtonIterations", "SmallestVolumeRatio", "RelativeResidual"):
+    check(name in f, "field data %s present" % name)
+check(float(f["RelativeResidual"]) <= 1e-9, "converged (%s)" % f["RelativeResidual"])
+d_small = rel(u_small, u_linear)
+check(0.0 < d_small < 1e-2, "small move agrees with the linear model (%.2e)" % d_small)
+check(fem.GetPropertyValue("PrecomputeCount") == precomputes, "NeoHookean starts no precompute")
+
+# 3. A 5 mm move: the two models differ by much more, relative to the move.
+osteotomy.Translation = [-5.0, 0.0, 0.0]
+u_large, f, errors, warnings = run()
+check(not errors.messages and not warnings.contains("small-strain"), "NeoHookean 5 mm: no error, no small-strain warning")
+u_linear_large, f_lin, _, lin_warnings = run(Model="LinearElastic")
+check(lin_warnings.contains("Model NeoHookean solves for large deformations"),
+      "the linear model's strain warning points to NeoHookean")
+d_large = rel(u_large, u_linear_large)
+check(d_large > 10 * d_small, "5 mm: models differ (%.2e) far more than at 0.05 mm (%.2e)" % (d_large, d_small))
+check(fem.GetPropertyValue("PrecomputeCount") == precomputes,
+      "back to LinearElastic: the cached precompute is reused")
+
+# 4. LiftOff: nodes leave the teeth with NeoHookean; the linear model warns and ignores it.
+u_lift, f, errors, _ = run(Model="NeoHookean", LiftOff=1)
+check(not errors.messages and float(f.get("LiftedNodes", 0)) > 0,
+      "LiftOff lifts sliding nodes (%s)" % f.get("LiftedNodes"))
+check(rel(u_lift, u_large) > 1e-3, "lift-off changes the result")
+u_lin_lift, _, _, warnings = run(Model="LinearElastic")
+check(warnings.contains("LiftOff applies to Model NeoHookean only"), "LinearElastic warns that LiftOff is ignored")
+check(rel(u_lin_lift, u_linear_large) == 0.0, "and its result is unchanged")
+fem.LiftOff = 0
+
+# 5. Bad values and combinations: an error naming the property, and an empty output.
+for properties, words in (({"Model": 7}, "Model must be"),
+                          ({"Model": "NeoHookean", "ElementOrder": "Quadratic"}, "ElementOrder Linear only"),
+                          ({"Model": "NeoHookean", "ElementOrder": "Linear", "Verify": 1}, "Verify")):
+    u, _, errors, _ = run(**properties)
+    check(any(words in m for m in errors.messages), "%s: error mentions %r (%s)" % (properties, words, errors.messages))
+    check(u is None or len(u) == 0, "%s: empty output" % properties)
+    fem.Verify = 0
+    fem.ElementOrder = "Linear"
+    fem.Model = "LinearElastic"
+
+finish("TestCondensedFEMDeformLargeDeformation")
