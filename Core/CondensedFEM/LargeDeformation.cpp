@@ -156,8 +156,7 @@ Eigen::Vector3d IntoTissue(const TetMesh& mesh, const std::vector<std::vector<in
   return normal.dot(towardCells) < 0.0 ? Eigen::Vector3d(-normal) : normal;
 }
 
-Status Setup(const PrecomputeRequest& request, const SolveInput& input, bool liftOff,
-             Problem& pb) {
+Status Setup(const PrecomputeRequest& request, const SolveInput& input, bool liftOff, Problem& pb) {
   const TetMesh& mesh = request.mesh;
   const NodeSets& sets = request.sets;
   pb.mesh = &mesh;
@@ -171,8 +170,9 @@ Status Setup(const PrecomputeRequest& request, const SolveInput& input, bool lif
   for (size_t s = 0; s < sets.sliding.size(); ++s) {
     const int node = sets.sliding[s];
     pb.frameOf[node] = static_cast<int>(pb.frames.size());
-    pb.frames.push_back(NormalFrame(liftOff ? IntoTissue(mesh, cellsOfNode, node, sets.slidingNormal[s])
-                                            : sets.slidingNormal[s]));
+    pb.frames.push_back(NormalFrame(liftOff
+                                        ? IntoTissue(mesh, cellsOfNode, node, sets.slidingNormal[s])
+                                        : sets.slidingNormal[s]));
     if (liftOff)
       pb.liftOffDofs.push_back(3 * node);
   }
@@ -261,7 +261,7 @@ public:
       : pb_(pb), options_(options), factor_(factor), report_(report), timings_(timings) {}
 
   // From a converged state at `from` to the load fraction `to`. True when converged there.
-  bool step(const StepState& from, double to, StepState& reached, Status& error) {
+  bool step(const StepState& from, double to, double tolerance, StepState& reached, Status& error) {
     Evaluation ev;
     Eigen::VectorXd u = from.u;
     if (!evaluate(u, ev, true))
@@ -288,7 +288,7 @@ public:
         return false; // the predictor inverted a cell: a smaller step
       const Balance b = BalanceOf(pb_, ev, u, to);
       lastResidual_ = b.scale > 0.0 ? b.residual.norm() / b.scale : 0.0;
-      if (b.residual.norm() <= options_.tolerance * b.scale) {
+      if (b.residual.norm() <= tolerance * b.scale) {
         reached.u = u;
         reached.fraction = to;
         lastIterations_ = it;
@@ -417,6 +417,9 @@ bool UpdateContact(Problem& pb, const Eigen::VectorXd& u, double s) {
   return changed;
 }
 
+// The relative residual at which lift-off's contact is updated before the final solve.
+constexpr double kSettleTolerance = 1e-6;
+
 Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& input,
                             const LargeDeformationOptions& options, SolveResult& result,
                             LargeDeformationReport& report) {
@@ -468,16 +471,24 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     const double to = std::min(1.0, state.fraction + step);
     StepState reached;
     Status failure;
-    if (newton.step(state, to, reached, failure)) {
-      // The contact settles at this load before the next step: lifted nodes are free, and the
-      // same load is solved again from the reached state while the contact changes.
+    // With lift-off the contact is settled on loosely converged states (it changes a few times)
+    // and the last solve converges fully; a contact change after it starts the loop again.
+    const double settleTolerance =
+        pb.liftOffDofs.empty() ? options.tolerance : std::max(options.tolerance, kSettleTolerance);
+    if (newton.step(state, to, settleTolerance, reached, failure)) {
       int updates = 0;
-      bool settled = true;
-      while (UpdateContact(pb, reached.u, to)) {
-        ++report.contactUpdates;
+      bool settled = true, tight = settleTolerance == options.tolerance;
+      while (true) {
+        const bool changed = UpdateContact(pb, reached.u, to);
+        if (!changed && tight)
+          break;
+        if (changed)
+          ++report.contactUpdates;
         const StepState start = reached;
+        tight = !changed;
         if (++updates > options.maxContactUpdatesPerStep ||
-            !newton.step(start, to, reached, failure)) {
+            !newton.step(start, to, tight ? options.tolerance : settleTolerance, reached,
+                         failure)) {
           settled = false;
           break;
         }
