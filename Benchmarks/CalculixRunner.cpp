@@ -1,7 +1,6 @@
 #include "CalculixRunner.h"
 
 #include "Common/StageTimings.h"
-#include "Element/NeoHookeanTet.h"
 
 #include <algorithm>
 #include <cmath>
@@ -65,9 +64,12 @@ void WriteMaterials(const PrecomputeRequest& r, const CalculixOptions& options, 
     }
     out << "*MATERIAL, NAME=TISSUE" << g + 1 << "\n";
     if (options.model == CalculixModel::NeoHookean) {
-      // W = C10 (J^-2/3 I1 - 3) + (J - 1)^2 / D1.
-      const NeoHookeanParameters p = NeoHookeanFromLinear(group.E, group.nu);
-      out << "*HYPERELASTIC, NEO HOOKE\n" << Num(0.5 * p.mu) << ", " << Num(2.0 / p.kappa) << "\n";
+      // W = C10 (J^-2/3 I1 - 3) + (J - 1)^2 / D1 with the small-strain limit (E, nu): C10 = mu / 2,
+      // D1 = 2 / kappa. Written out here, not taken from NeoHookeanFromLinear, so that the peer
+      // checks that conversion too.
+      const double c10 = group.E / (4.0 * (1.0 + group.nu));
+      const double d1 = 6.0 * (1.0 - 2.0 * group.nu) / group.E;
+      out << "*HYPERELASTIC, NEO HOOKE\n" << Num(c10) << ", " << Num(d1) << "\n";
     } else {
       out << "*ELASTIC\n" << Num(group.E) << ", " << Num(group.nu) << "\n";
     }

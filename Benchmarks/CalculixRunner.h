@@ -12,8 +12,8 @@ namespace faceplan::bench {
 
 enum class CalculixModel {
   LinearElastic, // *ELASTIC, linear geometry: the peer of Solve
-  // *HYPERELASTIC, NEO HOOKE (C10 = mu / 2, D1 = 2 / kappa from NeoHookeanFromLinear) with NLGEOM:
-  // the peer of SolveLargeDeformation. ccx ramps the prescribed values over the step.
+  // *HYPERELASTIC, NEO HOOKE (C10 = mu / 2, D1 = 2 / kappa for the small-strain limit E, nu) with
+  // NLGEOM: the peer of SolveLargeDeformation. ccx ramps the prescribed values over the step.
   NeoHookean,
 };
 
