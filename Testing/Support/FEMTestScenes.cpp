@@ -51,4 +51,33 @@ PrecomputeRequest PressedBlockRequest(double lx, double ly, double lz, double nu
   return r;
 }
 
+PrecomputeRequest SlidingShellRequest(double push, RowVectors3d& moves) {
+  const ShellMesh shell = MakeSphericalShell(4, 2, 40.0, 55.0);
+  PrecomputeRequest r;
+  r.mesh = shell.mesh;
+  r.materials = Materials::Uniform(3000.0, 0.45);
+  std::vector<Eigen::RowVector3d> pushes;
+  for (int node : shell.innerNodes) {
+    const Eigen::Vector3d x = r.mesh.points.row(node).transpose();
+    const Eigen::Vector3d n = x.normalized();
+    r.sets.constrained.push_back(node);
+    r.sets.kept.push_back(node);
+    if (n.z() < -0.6)
+      continue; // tied
+    r.sets.sliding.push_back(node);
+    r.sets.slidingNormal.push_back(n);
+    if (n.z() > 0.7) {
+      r.sets.movable.push_back(node);
+      const double q = (1.0 - n.z()) / 0.3;
+      pushes.push_back((push * (1.0 - q * q) * n + Eigen::Vector3d(0.4, -0.2, 0.0)).transpose());
+    }
+  }
+  for (int node : shell.outerNodes)
+    r.sets.kept.push_back(node);
+  moves.resize(static_cast<Eigen::Index>(pushes.size()), 3);
+  for (size_t k = 0; k < pushes.size(); ++k)
+    moves.row(static_cast<Eigen::Index>(k)) = pushes[k];
+  return r;
+}
+
 } // namespace faceplan::testing

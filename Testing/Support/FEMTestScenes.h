@@ -18,4 +18,10 @@ RowVectors3d SmoothRoiField(const PrecomputeRequest& request, double amplitude =
 // the plate makes a homogeneous uniaxial state.
 PrecomputeRequest PressedBlockRequest(double lx, double ly, double lz, double nu, double E = 3000.0);
 
+// A thick spherical shell (radii 40 and 55): the bottom of its inner surface is tied, the rest of
+// it slides on the sphere (sliding nodes with the radial normal), and a cap on top is pushed
+// outwards along the normal by up to `push` (mm); the outer surface is free and kept. `moves` gets
+// the cap's prescribed displacements (with a tangential part, which sliding nodes ignore).
+PrecomputeRequest SlidingShellRequest(double push, RowVectors3d& moves);
+
 } // namespace faceplan::testing

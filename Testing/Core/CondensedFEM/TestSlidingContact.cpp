@@ -5,7 +5,6 @@
 #include "CalculixRunner.h"
 #include "Support/BoxMeshGenerator.h"
 #include "Support/FEMTestScenes.h"
-#include "Support/ShellMeshGenerator.h"
 
 #include <cstdlib>
 #include <filesystem>
@@ -51,37 +50,6 @@ void ExpectUniaxial(SolveMethod method, bool recoverInterior) {
     EXPECT_LT(RelativeMaxDifference(result.allDisplacement, exact), 1e-10);
 }
 
-// A thick spherical shell: the bottom of its inner surface is tied, the rest of it slides on the
-// sphere, and a cap on top is pushed outwards along the normal; the outer surface is free.
-PrecomputeRequest SlidingShell(RowVectors3d& push) {
-  const ShellMesh shell = MakeSphericalShell(4, 2, 40.0, 55.0);
-  PrecomputeRequest r;
-  r.mesh = shell.mesh;
-  r.materials = Materials::Uniform(3000.0, 0.45);
-  std::vector<Eigen::RowVector3d> pushes;
-  for (int node : shell.innerNodes) {
-    const Eigen::Vector3d x = r.mesh.points.row(node).transpose();
-    const Eigen::Vector3d n = x.normalized();
-    r.sets.constrained.push_back(node);
-    r.sets.kept.push_back(node);
-    if (n.z() < -0.6)
-      continue; // tied
-    r.sets.sliding.push_back(node);
-    r.sets.slidingNormal.push_back(n);
-    if (n.z() > 0.7) {
-      r.sets.movable.push_back(node);
-      const double q = (1.0 - n.z()) / 0.3;
-      pushes.push_back((1.5 * (1.0 - q * q) * n + Eigen::Vector3d(0.4, -0.2, 0.0)).transpose());
-    }
-  }
-  for (int node : shell.outerNodes)
-    r.sets.kept.push_back(node);
-  push.resize(static_cast<Eigen::Index>(pushes.size()), 3);
-  for (size_t k = 0; k < pushes.size(); ++k)
-    push.row(static_cast<Eigen::Index>(k)) = pushes[k];
-  return r;
-}
-
 } // namespace
 
 TEST(SlidingContact, BlockBetweenFrictionlessWallsIsUniaxialDenseResponse) {
@@ -94,7 +62,7 @@ TEST(SlidingContact, BlockBetweenFrictionlessWallsIsUniaxialCachedFactor) {
 
 TEST(SlidingContact, SlidingNodesKeepTheirNormalValueAndMoveTangentially) {
   RowVectors3d push;
-  PrecomputeRequest request = SlidingShell(push);
+  PrecomputeRequest request = SlidingShellRequest(1.5, push);
   std::shared_ptr<const CondensedSystem> system;
   Status s = Precompute(request, system);
   ASSERT_TRUE(s.ok) << s.message;
@@ -126,7 +94,7 @@ TEST(SlidingContact, CurvedSurfaceAgreesWithCalculix) {
   if (std::system("command -v ccx > /dev/null 2>&1") != 0)
     GTEST_SKIP() << "ccx (CalculiX) is not installed";
   RowVectors3d push;
-  PrecomputeRequest request = SlidingShell(push);
+  PrecomputeRequest request = SlidingShellRequest(1.5, push);
   std::shared_ptr<const CondensedSystem> system;
   Status s = Precompute(request, system);
   ASSERT_TRUE(s.ok) << s.message;
