@@ -11,6 +11,7 @@
 #include "Element/StiffnessAssembly.h"
 #include "Mesh/InputValidation.h"
 #include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/FillReducingOrdering.h"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -447,7 +448,11 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     return status;
   result.timings[Stage::Separation].ms = clock.lapMs();
   CholmodFactor factor;
-  status = factor.analyze(pb.pattern.upper);
+  // METIS on the node graph, as the linear model's factor (SparseSolver/FillReducingOrdering.h).
+  FillReducingOrdering ordering;
+  status = OrderNodesWithTrailing(pb.pattern.upper, 3, {}, ordering);
+  if (status)
+    status = factor.analyze(pb.pattern.upper, &ordering);
   if (!status)
     return status;
   result.timings[Stage::Reordering].ms = clock.lapMs();
