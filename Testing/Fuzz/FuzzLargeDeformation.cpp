@@ -1,0 +1,117 @@
+// The large-deformation solve on small random meshes: a block of 1 or 2 cubes (six tetrahedra
+// each) whose nodes move at random, random node classes (sliding ones with random normals),
+// materials, moves from 1e-7 to 10 cube sizes, lift-off and solver options. Promises checked: no
+// crash or hang; an error has a message; a success is finite, converged to the requested
+// tolerance and has no inverted cell; for tiny moves without lift-off it agrees with the linear
+// model when that system is reasonably conditioned.
+#include "FuzzBytes.h"
+#include "FuzzPrecompute.h"
+
+#include "CondensedFEM/LargeDeformation.h"
+#include "Support/BoxMeshGenerator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+
+using namespace faceplan;
+using faceplan::fuzz::CheckedPrecompute;
+using faceplan::fuzz::FuzzBytes;
+using faceplan::fuzz::Violation;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  FuzzBytes in(data, size);
+  PrecomputeRequest request;
+  request.mesh = in.byte() % 4 == 0 ? MakeBoxTetMesh(2, 1, 1, 2.0, 1.0, 1.0)
+                                    : MakeBoxTetMesh(1, 1, 1, 1.0, 1.0, 1.0);
+  const int n = int(request.mesh.numPoints());
+  // Jitter small enough to keep every cell positive (the Kuhn split's cells have volume 1/6).
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c)
+      request.mesh.points(i, c) += in.scaled(0.1);
+  // Node classes: bit 0 constrained, bit 1 movable (when constrained), bit 2 kept, bit 3 sliding
+  // (when constrained) with a random, possibly degenerate, normal.
+  for (int i = 0; i < n; ++i) {
+    const std::uint8_t classes = in.byte();
+    if (classes & 1) {
+      request.sets.constrained.push_back(i);
+      if (classes & 8) {
+        request.sets.sliding.push_back(i);
+        Eigen::Vector3d normal(in.scaled(1.0), in.scaled(1.0), in.scaled(1.0));
+        if (in.byte() % 8 != 0 && normal.norm() > 0.0)
+          normal.normalize(); // one in eight left as it is: validation must refuse it
+        request.sets.slidingNormal.push_back(normal);
+      }
+    }
+    if ((classes & 3) == 3)
+      request.sets.movable.push_back(i);
+    if (classes & 4)
+      request.sets.kept.push_back(i);
+  }
+  request.materials = Materials::Uniform(
+      std::pow(10.0, in.range(-3, 9)),
+      in.flag() ? 0.49 * in.scaled(1.0) : 0.5 - std::pow(10.0, -in.range(1, 8)), 1.0);
+  if (in.byte() % 16 == 0)
+    request.options.elementOrder = ElementOrder::Quadratic; // an error, with a message
+
+  LargeDeformationOptions options;
+  options.slidingLiftOff = in.flag();
+  options.initialStep = std::max(1e-3, std::abs(in.scaled(1.0)));
+  options.maxIterationsPerStep = in.range(1, 25);
+  options.maxStepHalvings = in.range(0, 8);
+  options.maxLoadSteps = in.range(1, 60);
+  options.tolerance = std::pow(10.0, -in.range(4, 12));
+
+  SolveInput input;
+  const double moveScale = std::pow(10.0, -in.range(0, 7)) * (in.flag() ? 10.0 : 1.0);
+  const bool special = in.byte() % 16 == 0; // NaN, infinite, huge or denormal values
+  input.movableDisplacement.resize(Eigen::Index(request.sets.movable.size()), 3);
+  for (Eigen::Index i = 0; i < input.movableDisplacement.rows(); ++i)
+    for (int c = 0; c < 3; ++c)
+      input.movableDisplacement(i, c) = special ? in.number(moveScale) : in.scaled(moveScale);
+  if (in.flag())
+    input.gravity = Eigen::Vector3d(in.scaled(10.0), in.scaled(10.0), in.scaled(10.0));
+  input.recoverInterior = in.flag();
+
+  SolveResult result;
+  LargeDeformationReport report;
+  const Status solved = SolveLargeDeformation(request, input, options, result, report);
+  if (!solved) {
+    if (solved.message.empty())
+      Violation("a large-deformation error without a message");
+    return 0;
+  }
+  if (!result.keptDisplacement.allFinite() || !result.allDisplacement.allFinite())
+    Violation("the large-deformation solve succeeded with a non-finite displacement");
+  if (result.keptDisplacement.rows() != Eigen::Index(request.sets.kept.size()))
+    Violation("kept displacement has the wrong number of rows");
+  if (!(report.smallestVolumeRatio > 0.0))
+    Violation("the large-deformation solve succeeded with an inverted cell");
+  if (!(result.relativeResidual <= options.tolerance))
+    Violation("the large-deformation solve succeeded without converging");
+
+  // Tiny moves, no loads, two-way contact: the linear model's answer to first order.
+  if (special || options.slidingLiftOff || moveScale > 1e-5 || input.gravity.squaredNorm() > 0.0)
+    return 0;
+  std::shared_ptr<const CondensedSystem> system;
+  if (!CheckedPrecompute(request, system))
+    return 0;
+  SolveResult linear;
+  if (!Solve(*system, input, linear))
+    return 0;
+  const double scale =
+      linear.keptDisplacement.size() ? linear.keptDisplacement.cwiseAbs().maxCoeff() : 0.0;
+  const double difference =
+      result.keptDisplacement.size()
+          ? (result.keptDisplacement - linear.keptDisplacement).cwiseAbs().maxCoeff()
+          : 0.0;
+  const double condition = Describe(*system).conditionEstimate;
+  if (condition < 1e4 &&
+      difference > 1e-3 * scale + 1e-3 * options.tolerance * moveScale + 1e-300) {
+    std::fprintf(stderr, "condition %.3g, move %.3g, difference %.3g of %.3g\n", condition,
+                 moveScale, difference, scale);
+    Violation("a tiny large-deformation move disagrees with the linear model");
+  }
+  return 0;
+}
