@@ -68,7 +68,13 @@ Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Set
         "the FullReference method supports linear elements only: solved with linear elements");
     request.options.elementOrder = ElementOrder::Linear;
   }
-  chooseBackend(settings, request, outcome.notes);
+  if (settings.largeDeformation()) {
+    if (static_cast<BackendChoice>(settings.backend) == BackendChoice::CUDA)
+      outcome.notes.push_back("Model NeoHookean runs on the CPU: Backend CUDA applies to the "
+                              "linear model");
+  } else {
+    chooseBackend(settings, request, outcome.notes);
+  }
   if (settings.liftOff && !settings.largeDeformation())
     outcome.notes.push_back("LiftOff applies to Model NeoHookean only: the linear model keeps "
                             "sliding tissue on the bone");
@@ -79,6 +85,7 @@ Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Set
     outcome.largeDeformation = true;
     LargeDeformationOptions options;
     options.slidingLiftOff = settings.liftOff;
+    options.progress = progress;
     status = SolveLargeDeformation(request, input, options, outcome.result,
                                    outcome.largeDeformationReport);
   } else if (settings.fullReference()) {

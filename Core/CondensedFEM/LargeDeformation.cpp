@@ -503,6 +503,8 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
       if (settled) {
         state = reached;
         ++report.loadSteps;
+        if (options.progress)
+          options.progress(state.fraction);
         halvings = 0;
         if (newton.lastIterations() <= 6)
           step = std::min(1.0, 2.0 * step);

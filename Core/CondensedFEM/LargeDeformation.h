@@ -13,6 +13,8 @@
 // dead loads that grow with the prescribed values.
 #include "CondensedFEM/CondensedFEM.h"
 
+#include <functional>
+
 namespace faceplan {
 
 struct LargeDeformationOptions {
@@ -32,6 +34,9 @@ struct LargeDeformationOptions {
   // the bone. Off: the normal displacement is prescribed both ways, as in the linear model.
   bool slidingLiftOff = false;
   int maxContactUpdatesPerStep = 30;
+  // Called on the calling thread after each accepted load step with the fraction of the move
+  // reached (for a progress bar).
+  std::function<void(double fraction)> progress;
 };
 
 struct LargeDeformationReport {

@@ -77,6 +77,11 @@ u_lin_lift, _, _, warnings = run(Model="LinearElastic")
 check(warnings.contains("LiftOff applies to Model NeoHookean only"), "LinearElastic warns that LiftOff is ignored")
 check(rel(u_lin_lift, u_linear_large) == 0.0, "and its result is unchanged")
 fem.LiftOff = 0
+u_cuda, _, errors, warnings = run(Model="NeoHookean", Backend="CUDA")
+check(not errors.messages and warnings.contains("Model NeoHookean runs on the CPU"),
+      "Backend CUDA with NeoHookean: solved on the CPU, with a note")
+check(rel(u_cuda, u_large) <= 1e-12, "and the same result (%.1e)" % rel(u_cuda, u_large))
+fem.Backend = "Auto"
 
 # 5. Bad values and combinations: an error naming the property, and an empty output.
 for properties, words in (({"Model": 7}, "Model must be"),
