@@ -29,6 +29,8 @@ struct LargeDeformationOptions {
   double initialStep = 1.0;
   int maxStepHalvings = 12;
   int maxLoadSteps = 200;
+  // Newton iterations over the whole solve (accepted and rejected steps): bounds its time.
+  int maxTotalIterations = 400;
   // Unilateral contact: a sliding node may lift off its bone (move away along the normal) where
   // the contact would otherwise pull the tissue onto it, and comes back where it would go into
   // the bone. Off: the normal displacement is prescribed both ways, as in the linear model.
