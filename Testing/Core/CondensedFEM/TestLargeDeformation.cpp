@@ -149,6 +149,18 @@ TEST(LargeDeformation, BadInputIsAnError) {
   EXPECT_FALSE(SolveLargeDeformation(request, PlateMove(request, 1.0), options, result, report).ok);
 }
 
+TEST(LargeDeformation, TheIterationBoundIsAClearError) {
+  const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+  LargeDeformationOptions options;
+  options.maxTotalIterations = 1; // the 35 % press needs several
+  SolveResult result;
+  LargeDeformationReport report;
+  const Status s =
+      SolveLargeDeformation(request, PlateMove(request, 0.35 * kLz), options, result, report);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("within 1 Newton iterations"), std::string::npos) << s.message;
+}
+
 TEST(LargeDeformation, AMoveThatMustInvertCellsIsAClearError) {
   // The plate pushed 1.5 block heights down: no state without inverted cells reaches it.
   const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
