@@ -433,7 +433,8 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     return Status::Error("the large-deformation model supports linear (4-node) elements only");
   if (!(options.tolerance > 0.0) || !(options.initialStep > 0.0) || options.initialStep > 1.0 ||
       options.maxIterationsPerStep < 1 || options.maxStepHalvings < 0 || options.maxLoadSteps < 1 ||
-      options.maxTotalIterations < 1 || options.maxContactUpdatesPerStep < 0)
+      options.maxTotalIterations < 1 || options.maxContactUpdatesPerStep < 0 ||
+      options.maxContactUpdates < 0)
     return Status::Error("invalid large-deformation options");
   Status status = ValidateSolveInputs(request.mesh, request.materials, request.sets);
   if (!status)
@@ -474,6 +475,11 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     if (report.loadSteps + report.rejectedSteps >= options.maxLoadSteps)
       return Status::Error("the large-deformation solve needed more than " +
                            std::to_string(options.maxLoadSteps) + " load steps");
+    if (report.contactUpdates >= options.maxContactUpdates)
+      return Status::Error("the large-deformation solve did not converge: the lift-off contact "
+                           "changed " +
+                           std::to_string(report.contactUpdates) +
+                           " times without settling (check the sliding normals)");
     if (report.newtonIterations >= options.maxTotalIterations)
       return Status::Error("the large-deformation solve did not converge within " +
                            std::to_string(options.maxTotalIterations) + " Newton iterations");

@@ -36,6 +36,7 @@ struct LargeDeformationOptions {
   // the bone. Off: the normal displacement is prescribed both ways, as in the linear model.
   bool slidingLiftOff = false;
   int maxContactUpdatesPerStep = 30;
+  int maxContactUpdates = 100; // over the whole solve
   // Called on the calling thread after each accepted load step with the fraction of the move
   // reached (for a progress bar).
   std::function<void(double fraction)> progress;

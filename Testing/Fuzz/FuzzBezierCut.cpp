@@ -79,8 +79,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   BezierSurface surface;
   const bool created = BezierSurface::Create(curveU, curveV, options.flipNormal, surface).ok;
   if (created) {
-    const Eigen::Vector3d x =
-        start + Eigen::Vector3d(in.scaled(20.0), in.scaled(20.0), in.scaled(20.0));
+    Eigen::Vector3d offset;
+    offset << in.scaled(20.0), in.scaled(20.0), in.scaled(20.0); // sequenced reads
+    const Eigen::Vector3d x = start + offset;
     const SurfaceProjection p = surface.Project(x);
     if (!p.point.allFinite() || !std::isfinite(p.signedDistance) || p.u < 0 || p.u > 1 || p.v < 0 ||
         p.v > 1)

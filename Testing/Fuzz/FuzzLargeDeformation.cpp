@@ -38,7 +38,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       request.sets.constrained.push_back(i);
       if (classes & 8) {
         request.sets.sliding.push_back(i);
-        Eigen::Vector3d normal(in.scaled(1.0), in.scaled(1.0), in.scaled(1.0));
+        Eigen::Vector3d normal;
+        for (int c = 0; c < 3; ++c) // one read per statement: the same bytes under every compiler
+          normal[c] = in.scaled(1.0);
         if (in.byte() % 8 != 0 && normal.norm() > 0.0)
           normal.normalize(); // one in eight left as it is: validation must refuse it
         request.sets.slidingNormal.push_back(normal);
@@ -49,9 +51,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (classes & 4)
       request.sets.kept.push_back(i);
   }
-  request.materials = Materials::Uniform(
-      std::pow(10.0, in.range(-3, 9)),
-      in.flag() ? 0.49 * in.scaled(1.0) : 0.5 - std::pow(10.0, -in.range(1, 8)), 1.0);
+  const double youngs = std::pow(10.0, in.range(-3, 9));
+  const double poisson = in.flag() ? 0.49 * in.scaled(1.0) : 0.5 - std::pow(10.0, -in.range(1, 8));
+  request.materials = Materials::Uniform(youngs, poisson, 1.0);
   if (in.byte() % 16 == 0)
     request.options.elementOrder = ElementOrder::Quadratic; // an error, with a message
 
@@ -64,14 +66,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.tolerance = std::pow(10.0, -in.range(4, 12));
 
   SolveInput input;
-  const double moveScale = std::pow(10.0, -in.range(0, 7)) * (in.flag() ? 10.0 : 1.0);
+  const double moveExponent = -in.range(0, 7);
+  const double moveScale = std::pow(10.0, moveExponent) * (in.flag() ? 10.0 : 1.0);
   const bool special = in.byte() % 16 == 0; // NaN, infinite, huge or denormal values
   input.movableDisplacement.resize(Eigen::Index(request.sets.movable.size()), 3);
   for (Eigen::Index i = 0; i < input.movableDisplacement.rows(); ++i)
     for (int c = 0; c < 3; ++c)
       input.movableDisplacement(i, c) = special ? in.number(moveScale) : in.scaled(moveScale);
   if (in.flag())
-    input.gravity = Eigen::Vector3d(in.scaled(10.0), in.scaled(10.0), in.scaled(10.0));
+    for (int c = 0; c < 3; ++c)
+      input.gravity[c] = in.scaled(10.0);
   input.recoverInterior = in.flag();
 
   SolveResult result;

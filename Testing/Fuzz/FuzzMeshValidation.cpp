@@ -98,7 +98,7 @@ void CheckTetMesh(FuzzBytes& in) {
     for (int c = 0; c < 3; ++c)
       input.movableDisplacement(i, c) = in.number(0.5);
   if (in.flag())
-    input.gravity = Eigen::Vector3d(in.number(1.0), in.number(1.0), in.number(1.0));
+    input.gravity << in.number(1.0), in.number(1.0), in.number(1.0); // sequenced reads
   input.recoverInterior = in.flag();
   SolveResult result;
   const Status solved = Solve(*system, input, result);

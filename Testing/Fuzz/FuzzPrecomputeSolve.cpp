@@ -113,7 +113,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (int c = 0; c < 3; ++c)
       input.movableDisplacement(i, c) = in.scaled(0.2);
   if (in.flag())
-    input.gravity = Eigen::Vector3d(in.scaled(10.0), in.scaled(10.0), in.scaled(10.0));
+    input.gravity << in.scaled(10.0), in.scaled(10.0), in.scaled(10.0); // sequenced reads
   if (in.flag()) {
     input.nodalLoads = RowVectors3d::Zero(n, 3);
     for (int i = 0; i < n; ++i)
