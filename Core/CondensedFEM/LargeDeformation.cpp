@@ -41,6 +41,10 @@ struct Problem {
   // The force the linear model needs for the whole prescribed move (|K_0 u_prescribed|): the
   // residual's yardstick where the internal forces vanish, as in a rigid motion.
   double linearForce = 0.0;
+  // |K_0 X| for the node positions X: the force of a unit strain. A small fraction of it is the
+  // yardstick's floor, where the stress's cancellation (F against F^-T near the identity) leaves
+  // round-off in the residual that a relative tolerance cannot get below.
+  double unitStrainForce = 0.0;
 
   Eigen::Vector3d toGlobal(int node, const Eigen::Vector3d& local) const {
     return frameOf[node] < 0 ? local : Eigen::Vector3d(frames[frameOf[node]] * local);
@@ -235,6 +239,9 @@ Status Setup(const PrecomputeRequest& request, const SolveInput& input, bool lif
   return Status::Ok();
 }
 
+// Strains below this are measured against the unit-strain force instead (see unitStrainForce).
+constexpr double kRoundOffStrain = 1e-5;
+
 struct StepState {
   Eigen::VectorXd u;   // nodes' frames
   double fraction = 0; // of the prescribed values and loads
@@ -251,7 +258,8 @@ Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd
   b.potential = ev.energy - s * pb.externalLoad.dot(u);
   b.residual = ev.force - s * pb.externalLoad;
   ZeroPrescribed(pb, b.residual);
-  b.scale = std::max({ev.force.norm(), s * pb.externalLoad.norm(), pb.linearForce});
+  b.scale = std::max({ev.force.norm(), s * pb.externalLoad.norm(), pb.linearForce,
+                      kRoundOffStrain * pb.unitStrainForce});
   return b;
 }
 
@@ -468,6 +476,11 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     Evaluate(pb, state.u, rest, &packed);
     AssembleFromPacked(packed, pb.pattern);
     pb.linearForce = (pb.pattern.upper.selfadjointView<Eigen::Upper>() * pb.target).norm();
+    Eigen::VectorXd positions(3 * pb.n);
+    for (Eigen::Index i = 0; i < pb.n; ++i)
+      positions.segment<3>(3 * i) =
+          pb.toLocal(static_cast<int>(i), pb.mesh->points.row(i).transpose());
+    pb.unitStrainForce = (pb.pattern.upper.selfadjointView<Eigen::Upper>() * positions).norm();
   }
   double step = options.initialStep;
   int halvings = 0;

@@ -20,7 +20,8 @@ namespace faceplan {
 struct LargeDeformationOptions {
   // Converged when the free DOFs' residual force is at most this fraction of the largest of: the
   // internal force (over all DOFs), the loads, and the force the linear model needs for the whole
-  // prescribed move (the yardstick when the internal force vanishes, as in a rigid motion).
+  // prescribed move (the yardstick when the internal force vanishes, as in a rigid motion); for
+  // strains below 1e-5 the force of a 1e-5 strain stands in (round-off floor).
   double tolerance = 1e-9;
   int maxIterationsPerStep = 25;
   // The load steps start with this fraction of the prescribed values and loads; a step whose
