@@ -247,6 +247,13 @@ const std::vector<int>& CholmodFactor::eliminationPosition() const {
   return impl_->position;
 }
 
+const cholmod_factor* CholmodFactor::numericFactor() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->numeric ? impl_->factor : nullptr;
+}
+
+const Eigen::MatrixXd& CholmodFactor::trailingFactorBlock() const { return impl_->trailingBlock; }
+
 Eigen::MatrixXd
 CholmodFactor::fromEliminationOrder(const Eigen::Ref<const Eigen::MatrixXd>& permuted) const {
   const std::vector<int>& position = impl_->position;

@@ -69,6 +69,10 @@ public:
   };
   Status solveTrailing(const SparseMatrix& b, TrailingWorkspace& workspace) const;
   const std::vector<int>& eliminationPosition() const; // valid after analyze()
+  // Read-only views for solvers outside this class (PrunedBackSubstitution): the numeric factor
+  // (null unless factorized) and its trailing diagonal block as a dense lower triangle.
+  const cholmod_factor_struct* numericFactor() const;
+  const Eigen::MatrixXd& trailingFactorBlock() const;
   // Rows of a matrix in elimination order put back in the original DOF order.
   Eigen::MatrixXd fromEliminationOrder(const Eigen::Ref<const Eigen::MatrixXd>& permuted) const;
 

@@ -1,0 +1,11 @@
+#pragma once
+// The two reference-BLAS routines Core calls directly (the same library CHOLMOD links, OpenBLAS on
+// the project's machines). Fortran calling convention: every argument by pointer, column-major.
+extern "C" {
+void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
+            const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,
+            const double* beta, double* c, const int* ldc);
+void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
+            const int* n, const double* alpha, const double* a, const int* lda, double* b,
+            const int* ldb);
+}
