@@ -5,6 +5,7 @@
 //                      [--reference-repeats N] [--method Auto|DenseResponse|CachedFactor]
 //                      [--ccx WORKDIR] [--ccx-repeats N] [--json FILE]
 #include "CalculixRunner.h"
+#include "Common/BlasKernels.h"
 #include "Common/RelativeDifference.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "Support/ShellMeshGenerator.h"
@@ -162,6 +163,9 @@ int main(int argc, char** argv) {
               referenceMedian, referenceMedian / editMedian, peakCondensedMB, PeakRssMB());
   std::printf("max rel. difference to reference %.2e, worst residual %.2e\n", diffReference, worstResidual);
   std::printf("ordering: %s; response: %s\n", info.ordering.c_str(), info.responsePath.c_str());
+  const BlasKernels blas = DescribeBlasKernels();
+  std::printf("BLAS kernels: %s%s%s\n", blas.name.empty() ? "(not OpenBLAS)" : blas.name.c_str(),
+              blas.advice.empty() ? "" : " -- ", blas.advice.c_str());
   if (ccx.ok)
     std::printf("CalculiX %.1f ms (median of %d), max rel. difference %.2e\n", ccx.wallMs,
                 ccxRepeats, diffCcx);
@@ -189,7 +193,7 @@ int main(int argc, char** argv) {
         << ",\n  \"ccx_ms\": " << (ccx.ok ? ccx.wallMs : -1.0)
         << ", \"ccx_repeats\": " << ccxRepeats << ", \"max_rel_diff_ccx\": " << diffCcx
         << ",\n  \"ordering\": \"" << info.ordering << "\", \"response_path\": \""
-        << info.responsePath << "\"\n}\n";
+        << info.responsePath << "\", \"blas_kernels\": \"" << blas.name << "\"\n}\n";
   }
   return 0;
 }

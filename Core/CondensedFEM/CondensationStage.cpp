@@ -48,9 +48,9 @@ double ProbeResponseOperator(const CondensedSystem& sys, ResponseOperator& op, s
 
 // Columns of the response, solved in blocks: one single-threaded solve per core at a time, each
 // with its own CHOLMOD workspace, blocks sized so the transient memory stays near 1 GB.
-// First the cheap path (backward substitutions from the trailing block, residual estimated by
-// random probes; TrailingResponse.h); when it is unavailable or its estimate misses the tolerance,
-// full solves with a residual and iterative refinement per column.
+// First the cheap path (pruned substitutions on row-major blocks, residual estimated by random
+// probes; TrailingResponse.h); when its estimate misses the tolerance, full solves with a residual
+// and iterative refinement per column.
 // `coupling` holds the columns' right-hand sides (K_FR, or K_FR times the segment basis).
 Status BuildResponse(CondensedSystem& sys, const SparseMatrix& coupling,
                      const PrecomputeOptions& options, const std::atomic<bool>* cancel,
@@ -63,34 +63,33 @@ Status BuildResponse(CondensedSystem& sys, const SparseMatrix& coupling,
   const Eigen::Index largestBlock =
       std::clamp<Eigen::Index>(std::min<Eigen::Index>(memoryBlock, options.responseBlockColumns), 8,
                                std::max(8, options.responseBlockColumns));
-  if (sys.factor.trailingDofs() > 0) {
-    TrailingResponseResult fast;
-    Status fs = BuildTrailingResponse(
-        sys.factor, sys.kff, coupling, keptDofs, largestBlock, cancel,
-        [&progress](double f) {
-          if (progress)
-            progress(0.6 + 0.4 * f, "dense response");
-        },
-        fast);
-    if (!fs)
-      return fs;
-    std::ostringstream how;
-    how.precision(3);
-    if (fast.residualEstimate <= sys.residualTolerance) {
-      sys.response = std::move(fast.response);
-      sys.responseResidual = fast.residualEstimate;
-      how << "backward substitutions from the ROI-coupled trailing block; relative residual "
-          << fast.residualEstimate << " estimated with " << fast.probes << " random probes";
-      sys.info.responsePath = how.str();
-      return Status::Ok();
-    }
-    how << "full solves with per-column residuals and refinement (the probe estimate "
-        << fast.residualEstimate << " of the backward-substitution response missed "
-        << sys.residualTolerance << ")";
+  TrailingResponseResult fast;
+  Status fs = BuildTrailingResponse(
+      sys.factor, sys.kff, coupling, keptDofs, largestBlock, cancel,
+      [&progress](double f) {
+        if (progress)
+          progress(0.6 + 0.4 * f, "dense response");
+      },
+      fast);
+  if (!fs)
+    return fs;
+  std::ostringstream how;
+  how.precision(3);
+  const char* substitutions = sys.factor.trailingDofs() > 0
+                                  ? "substitutions from the ROI-coupled trailing block"
+                                  : "substitutions over the ROI-coupled DOFs' reach";
+  if (fast.residualEstimate <= sys.residualTolerance) {
+    sys.response = std::move(fast.response);
+    sys.responseResidual = fast.residualEstimate;
+    how << substitutions << ", backward only to the kept rows; relative residual "
+        << fast.residualEstimate << " estimated with " << fast.probes << " random probes";
     sys.info.responsePath = how.str();
-  } else {
-    sys.info.responsePath = "full solves with per-column residuals and refinement";
+    return Status::Ok();
   }
+  how << "full solves with per-column residuals and refinement (the probe estimate "
+      << fast.residualEstimate << " of the " << substitutions << " missed "
+      << sys.residualTolerance << ")";
+  sys.info.responsePath = how.str();
   sys.response.resize(keptDofs, roiDofs);
   const Eigen::Index evenShare = (roiDofs + threads - 1) / threads; // keep every core busy
   const Eigen::Index block = std::max<Eigen::Index>(1, std::min(largestBlock, evenShare));

@@ -51,7 +51,8 @@ Status PrunedBackSubstitution::prepare(const cholmod_factor& factor,
 }
 
 void PrunedBackSubstitution::solve(double* x, int columns, int firstNonZero,
-                                   std::vector<double>& scratch) const {
+                                   std::vector<double>& scratch,
+                                   const std::vector<char>* reached) const {
   const int* super = static_cast<const int*>(factor_->super);
   const int* pi = static_cast<const int*>(factor_->pi);
   const int* px = static_cast<const int*>(factor_->px);
@@ -66,7 +67,8 @@ void PrunedBackSubstitution::solve(double* x, int columns, int firstNonZero,
     double* block = x + size_t(first) * columns; // this supernode's rows, contiguous
     const double* diagonal = values + px[k];
     // Rows above firstNonZero start as zero: clear them, or let the product overwrite them.
-    const int zeroRows = std::clamp(firstNonZero - first, 0, width);
+    const int zeroRows =
+        reached && !(*reached)[k] ? width : std::clamp(firstNonZero - first, 0, width);
     double beta = 1.0;
     if (zeroRows == width && offDiagonal > 0)
       beta = 0.0;

@@ -20,11 +20,14 @@ public:
   Status prepare(const cholmod_factor_struct& factor, const std::vector<int>& wantedPositions);
 
   // x: n rows of `columns` values each (row-major). On entry rows [firstNonZero, n) hold L^-1 b and
-  // rows above firstNonZero are taken as zero without being read (the caller need not clear them).
+  // rows above firstNonZero are taken as zero without being read (the caller need not clear them),
+  // as are the rows of supernodes k with `reached` given and (*reached)[k] false (those outside a
+  // PrunedForwardSubstitution's reach).
   // On exit the rows of every supernode that a wanted row depends on hold L^-T L^-1 b; the other
   // rows are undefined. `scratch` is a per-thread workspace. Not thread-safe per `x`; the object
   // itself is only read, so threads may share it.
-  void solve(double* x, int columns, int firstNonZero, std::vector<double>& scratch) const;
+  void solve(double* x, int columns, int firstNonZero, std::vector<double>& scratch,
+             const std::vector<char>* reached = nullptr) const;
 
   // Flops per right-hand side of the pruned solve and of the whole backward substitution.
   double flopsPerColumn() const { return prunedFlops_; }

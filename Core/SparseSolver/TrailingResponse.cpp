@@ -4,6 +4,7 @@
 #include "Common/BlasThreads.h"
 #include "SparseSolver/Blas.h"
 #include "SparseSolver/PrunedBackSubstitution.h"
+#include "SparseSolver/PrunedForwardSubstitution.h"
 
 #include <algorithm>
 #include <cmath>
@@ -18,26 +19,42 @@ namespace faceplan {
 namespace {
 constexpr int kProbes = 4;
 
-// Rows [first, n) of the row-major block x (n x `columns`) := L_tt^-1 b for the right-hand sides
-// b = `rhs` columns [c0, c0 + columns), which must be zero above the trailing block.
-Status ForwardThroughTrailingBlock(const SparseMatrix& rhs, Eigen::Index c0, int columns,
-                                   const std::vector<int>& position, int first,
-                                   const Eigen::MatrixXd& trailingBlock, double* x) {
-  const int t = static_cast<int>(trailingBlock.rows());
-  double* tail = x + size_t(first) * columns;
-  std::fill(tail, tail + size_t(t) * columns, 0.0);
-  for (int c = 0; c < columns; ++c)
-    for (SparseMatrix::InnerIterator it(rhs, c0 + c); it; ++it) {
-      const int p = position[it.row()];
-      if (p < first)
-        return Status::Error("internal: right-hand side outside the trailing DOFs");
-      tail[size_t(p - first) * columns + c] = it.value();
+// The forward substitution y = L^-1 b into the row-major block x (n x `columns`) for the
+// right-hand sides b = `rhs` columns [c0, c0 + columns): with a trailing block (t > 0) b must be
+// zero above it and the substitution is a dense triangular solve there; otherwise it runs over
+// the reach of b's rows. Afterwards the rows the backward substitution reads as data hold y.
+struct ForwardSubstitution {
+  const std::vector<int>& position;
+  int first = 0; // first row of the trailing block (n when there is none)
+  const Eigen::MatrixXd& trailingBlock;
+  const PrunedForwardSubstitution* reach = nullptr; // without a trailing block
+
+  Status operator()(const SparseMatrix& rhs, Eigen::Index c0, int columns, double* x,
+                    std::vector<double>& scratch) const {
+    const int t = static_cast<int>(trailingBlock.rows());
+    if (reach)
+      reach->clearReach(x, columns);
+    else
+      std::fill(x + size_t(first) * columns, x + size_t(first + t) * columns, 0.0);
+    for (int c = 0; c < columns; ++c)
+      for (SparseMatrix::InnerIterator it(rhs, c0 + c); it; ++it) {
+        const int p = position[it.row()];
+        if (!reach && p < first)
+          return Status::Error("internal: right-hand side outside the trailing DOFs");
+        x[size_t(p) * columns + c] = it.value();
+      }
+    if (reach) {
+      reach->solve(x, columns, scratch);
+      return Status::Ok();
     }
-  // Row-major Y_t is the column-major Y_t^T: Y_t^T := B_t^T L_tt^-T, i.e. Y_t := L_tt^-1 B_t.
-  const double one = 1.0;
-  dtrsm_("R", "L", "T", "N", &columns, &t, &one, trailingBlock.data(), &t, tail, &columns);
-  return Status::Ok();
-}
+    // Row-major Y_t is the column-major Y_t^T: Y_t^T := B_t^T L_tt^-T, i.e. Y_t := L_tt^-1 B_t.
+    const double one = 1.0;
+    dtrsm_("R", "L", "T", "N", &columns, &t, &one, trailingBlock.data(), &t,
+           x + size_t(first) * columns, &columns);
+    return Status::Ok();
+  }
+};
+
 } // namespace
 
 Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kffUpper,
@@ -48,11 +65,25 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   const Eigen::Index freeDofs = kfr.rows(), roiDofs = kfr.cols();
   const cholmod_factor_struct* numeric = factor.numericFactor();
   const int t = factor.trailingDofs();
-  if (t == 0 || !numeric || factor.trailingFactorBlock().rows() != t)
-    return Status::Error("internal: the factor has no trailing block");
-  const int n = static_cast<int>(freeDofs), first = n - t;
+  if (!numeric || factor.trailingFactorBlock().rows() != t)
+    return Status::Error("internal: the response needs a numeric factor");
+  const int n = static_cast<int>(freeDofs);
   const std::vector<int>& position = factor.eliminationPosition();
-  const Eigen::MatrixXd& trailingBlock = factor.trailingFactorBlock();
+
+  // Without a trailing block the forward substitution runs over the reach of the coupled rows.
+  PrunedForwardSubstitution reach;
+  if (t == 0) {
+    std::vector<int> coupledPositions;
+    for (Eigen::Index c = 0; c < kfr.outerSize(); ++c)
+      for (SparseMatrix::InnerIterator it(kfr, c); it; ++it)
+        coupledPositions.push_back(position[it.row()]);
+    if (Status s = reach.prepare(*numeric, coupledPositions); !s)
+      return s;
+  }
+  const ForwardSubstitution forward{position, n - t, factor.trailingFactorBlock(),
+                                    t == 0 ? &reach : nullptr};
+  const std::vector<char>* reached = t == 0 ? &reach.reached() : nullptr;
+  const int firstNonZero = t > 0 ? n - t : 0; // below it the backward substitution reads data
 
   // The response needs the kept rows only; the probe check below needs every row.
   PrunedBackSubstitution keptRows, allRows;
@@ -62,6 +93,8 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   if (Status s = allRows.prepare(*numeric, {}); !s)
     return s;
   out.backwardFlopsFraction = keptRows.flopsPerColumn() / std::max(1.0, allRows.flopsPerColumn());
+  out.forwardFlopsFraction =
+      t == 0 ? reach.flopsPerColumn() / std::max(1.0, allRows.flopsPerColumn()) : 0.0;
   out.response.resize(keptDofs, roiDofs);
   out.probes = kProbes;
 
@@ -81,14 +114,12 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
         break;
       const Eigen::Index c0 = b * block;
       const int cols = static_cast<int>(std::min(block, roiDofs - c0));
-      Status s =
-          ForwardThroughTrailingBlock(kfr, c0, cols, position, first, trailingBlock, x.data());
-      if (!s) {
+      if (Status s = forward(kfr, c0, cols, x.data(), scratch); !s) {
         std::lock_guard<std::mutex> lock(resultMutex);
         failure = s;
         break;
       }
-      keptRows.solve(x.data(), cols, first, scratch);
+      keptRows.solve(x.data(), cols, firstNonZero, scratch, reached);
       for (Eigen::Index r = 0; r < keptDofs; ++r) { // disjoint columns per block
         const double* row = x.data() + size_t(position[r]) * cols;
         for (int c = 0; c < cols; ++c)
@@ -111,10 +142,10 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
     return failure;
 
   // Accuracy check without a residual per column: for a few random +-1 weight vectors w, solve
-  // K_FF z = K_FR w on every row with the same triangular solves, put the response's own
-  // prediction -response * w in z's kept rows, and take the relative residual of that vector. It
-  // estimates the residual an edit sees (the root mean square of the column residuals in
-  // expectation), and a kept row the pruned solve got wrong shows in it.
+  // K_FF z = K_FR w on every row with the same substitutions, put the response's own prediction
+  // -response * w in z's kept rows, and take the relative residual of that vector. It estimates
+  // the residual an edit sees (the root mean square of the column residuals in expectation), and
+  // a kept row the pruned solve got wrong shows in it.
   Eigen::MatrixXd weights(roiDofs, kProbes);
   std::mt19937 rng(20081201); // fixed seed: a precompute is reproducible
   for (Eigen::Index k = 0; k < weights.size(); ++k)
@@ -122,11 +153,9 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   const Eigen::MatrixXd loads = kfr * weights;
   const SparseMatrix sparseLoads = loads.sparseView();
   std::vector<double> probe(size_t(n) * kProbes), scratch;
-  if (Status s = ForwardThroughTrailingBlock(sparseLoads, 0, kProbes, position, first,
-                                             trailingBlock, probe.data());
-      !s)
+  if (Status s = forward(sparseLoads, 0, kProbes, probe.data(), scratch); !s)
     return s;
-  allRows.solve(probe.data(), kProbes, first, scratch);
+  allRows.solve(probe.data(), kProbes, firstNonZero, scratch, reached);
   const Eigen::MatrixXd keptPrediction = out.response * weights;
   Eigen::MatrixXd combined(n, kProbes);
   for (Eigen::Index dof = 0; dof < n; ++dof)

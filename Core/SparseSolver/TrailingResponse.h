@@ -26,6 +26,9 @@ struct TrailingResponseResult {
   // Flops of the backward substitution restricted to the kept rows' supernodes, over those of the
   // whole backward substitution.
   double backwardFlopsFraction = 1.0;
+  // Without a trailing block: flops of the forward substitution over the reach of the coupled
+  // rows, over those of a whole backward substitution (0 with a trailing block).
+  double forwardFlopsFraction = 0.0;
 };
 
 // `blockColumns`: largest column block per solve; `progress(fraction)` is called after each block

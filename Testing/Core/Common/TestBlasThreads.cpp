@@ -1,4 +1,5 @@
 // OpenBLAS's thread count after scopes that open and close on different threads.
+#include "Common/BlasKernels.h"
 #include "Common/BlasThreads.h"
 
 #include <gtest/gtest.h>
@@ -6,6 +7,8 @@
 #include <dlfcn.h>
 
 #include <condition_variable>
+#include <cstdlib>
+#include <string>
 #include <mutex>
 #include <thread>
 
@@ -79,4 +82,25 @@ TEST(BlasThreads, NestedScopesGiveBackTheEnclosingCount) {
     EXPECT_EQ(OpenBlasThreads(), original + 2);
   }
   EXPECT_EQ(OpenBlasThreads(), original);
+}
+
+// The kernel report names OpenBLAS's choice (the tests link OpenBLAS) and gives advice only while
+// AVX2 kernels run on an AVX-512 CPU and the user made no choice of their own.
+TEST(BlasKernels, AdviceOnlyForAvx2KernelsOnAnAvx512CpuWithoutAUserChoice) {
+  const char* previous = std::getenv("OPENBLAS_CORETYPE");
+  const std::string saved = previous ? previous : "";
+  unsetenv("OPENBLAS_CORETYPE");
+  const BlasKernels unset = DescribeBlasKernels();
+  if (unset.name.empty())
+    GTEST_SKIP() << "the BLAS in this process is not OpenBLAS";
+  const bool avx2 = unset.name == "Haswell" || unset.name == "Zen";
+  EXPECT_EQ(!unset.advice.empty(), avx2 && unset.cpuHasAvx512) << unset.name;
+  if (!unset.advice.empty())
+    EXPECT_NE(unset.advice.find("OPENBLAS_CORETYPE=SkylakeX"), std::string::npos);
+  setenv("OPENBLAS_CORETYPE", "Haswell", 1); // a user's own choice is theirs
+  EXPECT_TRUE(DescribeBlasKernels().advice.empty());
+  if (previous)
+    setenv("OPENBLAS_CORETYPE", saved.c_str(), 1);
+  else
+    unsetenv("OPENBLAS_CORETYPE");
 }
