@@ -103,27 +103,52 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
       1, std::min(blockColumns, (roiDofs + threads - 1) / threads)); // keep every core busy
   const Eigen::Index blocks = (roiDofs + block - 1) / block;
 
+  // The probe's right-hand sides (see below), solved on every row as one more task of the pool.
+  Eigen::MatrixXd weights(roiDofs, kProbes);
+  std::mt19937 rng(20081201); // fixed seed: a precompute is reproducible
+  for (Eigen::Index k = 0; k < weights.size(); ++k)
+    weights.data()[k] = (rng() & 1u) ? 1.0 : -1.0;
+  const Eigen::MatrixXd loads = kfr * weights;
+  const SparseMatrix sparseLoads = loads.sparseView();
+  std::vector<double> probe(size_t(n) * kProbes);
+
   ScopedBlasThreads singleThreadedBlas(1); // one single-threaded solve per core
-  std::atomic<Eigen::Index> nextBlock{0}, doneBlocks{0};
+  std::atomic<Eigen::Index> nextTask{0}, doneBlocks{0};
   std::mutex resultMutex;
   Status failure = Status::Ok();
+  auto fail = [&](const Status& s) {
+    std::lock_guard<std::mutex> lock(resultMutex);
+    failure = s;
+  };
+  constexpr Eigen::Index kRowTile = 32; // rows copied out per tile: column writes stay contiguous
   auto worker = [&] {
-    std::vector<double> x(size_t(n) * block), scratch;
-    for (Eigen::Index b = nextBlock++; b < blocks; b = nextBlock++) {
+    std::vector<double> x, scratch;
+    for (Eigen::Index task = nextTask++; task <= blocks; task = nextTask++) {
       if (cancel && cancel->load())
         break;
-      const Eigen::Index c0 = b * block;
+      if (task == blocks) { // the probe
+        if (Status s = forward(sparseLoads, 0, kProbes, probe.data(), scratch); !s) {
+          fail(s);
+          break;
+        }
+        allRows.solve(probe.data(), kProbes, firstNonZero, scratch, reached);
+        continue;
+      }
+      x.resize(size_t(n) * block);
+      const Eigen::Index c0 = task * block;
       const int cols = static_cast<int>(std::min(block, roiDofs - c0));
       if (Status s = forward(kfr, c0, cols, x.data(), scratch); !s) {
-        std::lock_guard<std::mutex> lock(resultMutex);
-        failure = s;
+        fail(s);
         break;
       }
       keptRows.solve(x.data(), cols, firstNonZero, scratch, reached);
-      for (Eigen::Index r = 0; r < keptDofs; ++r) { // disjoint columns per block
-        const double* row = x.data() + size_t(position[r]) * cols;
-        for (int c = 0; c < cols; ++c)
-          out.response(r, c0 + c) = -row[c];
+      for (Eigen::Index r0 = 0; r0 < keptDofs; r0 += kRowTile) { // disjoint columns per block
+        const Eigen::Index r1 = std::min(keptDofs, r0 + kRowTile);
+        for (int c = 0; c < cols; ++c) {
+          double* column = out.response.col(c0 + c).data();
+          for (Eigen::Index r = r0; r < r1; ++r)
+            column[r] = -x[size_t(position[r]) * cols + c];
+        }
       }
       const Eigen::Index done = ++doneBlocks;
       if (progress)
@@ -131,7 +156,7 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
     }
   };
   std::vector<std::thread> pool;
-  for (int th = 1; th < std::min<Eigen::Index>(threads, blocks); ++th)
+  for (int th = 1; th < std::min<Eigen::Index>(threads, blocks + 1); ++th)
     pool.emplace_back(worker);
   worker(); // the calling thread works too
   for (auto& th : pool)
@@ -141,21 +166,11 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   if (!failure)
     return failure;
 
-  // Accuracy check without a residual per column: for a few random +-1 weight vectors w, solve
-  // K_FF z = K_FR w on every row with the same substitutions, put the response's own prediction
-  // -response * w in z's kept rows, and take the relative residual of that vector. It estimates
+  // Accuracy check without a residual per column: for a few random +-1 weight vectors w, K_FF z =
+  // K_FR w was solved on every row with the same substitutions; put the response's own prediction
+  // -response * w in z's kept rows and take the relative residual of that vector. It estimates
   // the residual an edit sees (the root mean square of the column residuals in expectation), and
   // a kept row the pruned solve got wrong shows in it.
-  Eigen::MatrixXd weights(roiDofs, kProbes);
-  std::mt19937 rng(20081201); // fixed seed: a precompute is reproducible
-  for (Eigen::Index k = 0; k < weights.size(); ++k)
-    weights.data()[k] = (rng() & 1u) ? 1.0 : -1.0;
-  const Eigen::MatrixXd loads = kfr * weights;
-  const SparseMatrix sparseLoads = loads.sparseView();
-  std::vector<double> probe(size_t(n) * kProbes), scratch;
-  if (Status s = forward(sparseLoads, 0, kProbes, probe.data(), scratch); !s)
-    return s;
-  allRows.solve(probe.data(), kProbes, firstNonZero, scratch, reached);
   const Eigen::MatrixXd keptPrediction = out.response * weights;
   Eigen::MatrixXd combined(n, kProbes);
   for (Eigen::Index dof = 0; dof < n; ++dof)
