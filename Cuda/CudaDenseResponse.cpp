@@ -384,6 +384,25 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   }
   detail.supernodes = L.nsuper;
 
+  // The forward sweep visits only the supernodes that L^-1 K_FR can be non-zero on: those of the
+  // rows K_FR touches and their ancestors (a parent is the supernode of the first off-diagonal
+  // row, always later). With the ROI-coupled DOFs ordered last that is the trailing block alone.
+  std::vector<int> supernodeOf(n);
+  for (int s = 0; s < L.nsuper; ++s)
+    std::fill(supernodeOf.begin() + L.super[s], supernodeOf.begin() + L.super[s + 1], s);
+  std::vector<char> reached(L.nsuper, 0);
+  for (int p = 0; p < kfr.outerIndexPtr()[roi]; ++p)
+    reached[supernodeOf[pinv[kfr.innerIndexPtr()[p]]]] = 1;
+  for (int s = 0; s < L.nsuper; ++s) {
+    const int nscol = L.super[s + 1] - L.super[s];
+    if (reached[s] && L.pi[s + 1] - L.pi[s] > nscol) reached[supernodeOf[L.s[L.pi[s] + nscol]]] = 1;
+  }
+  flopsPerColumn = 0.0; // the backward sweep everywhere, the forward one where it runs
+  for (int s = 0; s < L.nsuper; ++s) {
+    const double nscol = L.super[s + 1] - L.super[s], nsrow = L.pi[s + 1] - L.pi[s];
+    flopsPerColumn += (reached[s] ? 2.0 : 1.0) * (nscol * nscol + 2.0 * (nsrow - nscol) * nscol);
+  }
+
   Resources r;
   FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.stream, cudaStreamNonBlocking));
   for (cudaEvent_t& e : r.ev) FP_CUDA_TRY(cudaEventCreate(&e));
@@ -462,6 +481,7 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
     FP_CUDA_TRY(cudaEventRecord(r.ev[2], r.stream));
     // Forward: L Z = Y. Rows of a supernode are columns of the cuBLAS view (nb x n, ld nb).
     for (int s = 0; s < L.nsuper; ++s) {
+      if (!reached[s]) continue; // Y stays zero there
       const int k1 = L.super[s], nscol = L.super[s + 1] - k1, nsrow = L.pi[s + 1] - L.pi[s];
       const int off = nsrow - nscol;
       const double* block = Lx + L.px[s];
