@@ -32,20 +32,37 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
     return Status::Error("mesh too large for 32-bit packed indices");
   auto node = [&](Eigen::Index e, int k) { return cells[e * nodesPerCell + k]; };
 
-  std::vector<std::vector<int>> rowsOf(numDofNodes);
+  // Each DOF node's neighbours of lower or equal index, from its cells: a node-to-cell index first
+  // (a counting sort), then the nodes in parallel, each writing only its own list.
+  std::vector<int> cellStart(static_cast<size_t>(numDofNodes) + 1, 0);
   for (Eigen::Index e = 0; e < numCells; ++e)
-    for (int a = 0; a < nodesPerCell; ++a) {
-      const int na = dofNode[node(e, a)];
-      if (na < 0) continue;
-      for (int b = 0; b < nodesPerCell; ++b) {
-        const int nb = dofNode[node(e, b)];
-        if (nb >= 0 && nb <= na) rowsOf[na].push_back(nb);
-      }
-    }
-  for (auto& rows : rowsOf) {
-    std::sort(rows.begin(), rows.end());
-    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    for (int a = 0; a < nodesPerCell; ++a)
+      if (const int na = dofNode[node(e, a)]; na >= 0)
+        ++cellStart[na + 1];
+  for (int c = 0; c < numDofNodes; ++c)
+    cellStart[c + 1] += cellStart[c];
+  std::vector<int> cellsOf(cellStart[numDofNodes]);
+  {
+    std::vector<int> fill(cellStart.begin(), cellStart.end() - 1);
+    for (Eigen::Index e = 0; e < numCells; ++e)
+      for (int a = 0; a < nodesPerCell; ++a)
+        if (const int na = dofNode[node(e, a)]; na >= 0)
+          cellsOf[fill[na]++] = static_cast<int>(e);
   }
+  std::vector<std::vector<int>> rowsOf(numDofNodes);
+  ParallelFor(numDofNodes, 20000, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t na = begin; na < end; ++na) {
+      std::vector<int>& rows = rowsOf[na];
+      for (int k = cellStart[na]; k < cellStart[na + 1]; ++k)
+        for (int b = 0; b < nodesPerCell; ++b) {
+          const int nb = dofNode[node(cellsOf[k], b)];
+          if (nb >= 0 && nb <= na)
+            rows.push_back(nb);
+        }
+      std::sort(rows.begin(), rows.end());
+      rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    }
+  });
 
   const int n = 3 * numDofNodes;
   std::vector<long long> colStart(n + 1, 0);
@@ -61,14 +78,17 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
   for (int k = 0; k <= n; ++k)
     pattern.upper.outerIndexPtr()[k] = static_cast<int>(colStart[k]);
   int* rowIndex = pattern.upper.innerIndexPtr();
-  for (int c = 0; c < numDofNodes; ++c)
-    for (int j = 0; j < 3; ++j) {
-      long long k = colStart[3 * c + j];
-      for (int r : rowsOf[c]) {
-        const int components = (r == c) ? j + 1 : 3;
-        for (int i = 0; i < components; ++i) rowIndex[k++] = 3 * r + i;
+  ParallelFor(numDofNodes, 20000, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t c = begin; c < end; ++c)
+      for (int j = 0; j < 3; ++j) {
+        long long k = colStart[3 * c + j];
+        for (int r : rowsOf[c]) {
+          const int components = (r == c) ? j + 1 : 3;
+          for (int i = 0; i < components; ++i)
+            rowIndex[k++] = 3 * r + i;
+        }
       }
-    }
+  });
   std::fill(pattern.upper.valuePtr(), pattern.upper.valuePtr() + nnz, 0.0);
 
   std::vector<int> rowStart(dofs); // packed position of (p, p)
@@ -77,24 +97,26 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
     pos += dofs - p;
   }
   std::vector<int> targetOf(static_cast<size_t>(numCells) * packedSize);
-  for (Eigen::Index e = 0; e < numCells; ++e)
-    for (int p = 0; p < dofs; ++p)
-      for (int q = p; q < dofs; ++q) {
-        int nr = dofNode[node(e, p / 3)], nc = dofNode[node(e, q / 3)];
-        int t = -1;
-        if (nr >= 0 && nc >= 0) {
-          int ir = p % 3, ic = q % 3;
-          if (nr > nc || (nr == nc && ir > ic)) {
-            std::swap(nr, nc);
-            std::swap(ir, ic);
+  ParallelFor(numCells, 20000, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t e = begin; e < end; ++e)
+      for (int p = 0; p < dofs; ++p)
+        for (int q = p; q < dofs; ++q) {
+          int nr = dofNode[node(e, p / 3)], nc = dofNode[node(e, q / 3)];
+          int t = -1;
+          if (nr >= 0 && nc >= 0) {
+            int ir = p % 3, ic = q % 3;
+            if (nr > nc || (nr == nc && ir > ic)) {
+              std::swap(nr, nc);
+              std::swap(ir, ic);
+            }
+            const auto& rows = rowsOf[nc];
+            const int idx =
+                static_cast<int>(std::lower_bound(rows.begin(), rows.end(), nr) - rows.begin());
+            t = static_cast<int>(colStart[3 * nc + ic]) + 3 * idx + ir;
           }
-          const auto& rows = rowsOf[nc];
-          const int idx =
-              static_cast<int>(std::lower_bound(rows.begin(), rows.end(), nr) - rows.begin());
-          t = static_cast<int>(colStart[3 * nc + ic]) + 3 * idx + ir;
+          targetOf[e * packedSize + rowStart[p] + (q - p)] = t;
         }
-        targetOf[e * packedSize + rowStart[p] + (q - p)] = t;
-      }
+  });
   FinishGatherMap(targetOf, pattern);
   return Status::Ok();
 }
