@@ -1,5 +1,7 @@
 #include "Mesh/MeshValidation.h"
 
+#include "Common/ParallelFor.h"
+
 #include "Mesh/TetGeometry.h"
 
 #include <Eigen/Eigenvalues>
@@ -273,22 +275,47 @@ DeformationReport CheckDeformation(
 }
 
 std::vector<SharedFace> SharedFaces(const TetMesh& mesh) {
+  using Face = std::pair<std::array<int, 3>, int>;
   const Eigen::Index m = mesh.numTets();
-  std::vector<std::pair<std::array<int, 3>, int>> faces(static_cast<size_t>(m) * 4);
-  for (Eigen::Index e = 0; e < m; ++e)
-    for (int k = 0; k < 4; ++k) {
-      std::array<int, 3> f;
-      for (int j = 0, t = 0; j < 4; ++j)
-        if (j != k)
-          f[t++] = mesh.tets(e, j);
-      std::sort(f.begin(), f.end());
-      faces[e * 4 + k] = {f, static_cast<int>(e)};
-    }
-  std::sort(faces.begin(), faces.end());
+  std::vector<Face> faces(static_cast<size_t>(m) * 4);
+  ParallelFor(m, 50000, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t e = begin; e < end; ++e)
+      for (int k = 0; k < 4; ++k) {
+        std::array<int, 3> f;
+        for (int j = 0, t = 0; j < 4; ++j)
+          if (j != k)
+            f[t++] = mesh.tets(e, j);
+        std::sort(f.begin(), f.end());
+        faces[e * 4 + k] = {f, static_cast<int>(e)};
+      }
+  });
+  // Sorted in buckets of the smallest vertex, one per thread: equal faces share a bucket, and the
+  // buckets in order are the whole sort (the same order as one sort, on every core).
+  const std::int64_t buckets = faces.size() < 200000 ? 1 : WorkerThreads(16);
+  const std::int64_t points = std::max<std::int64_t>(1, mesh.numPoints());
+  auto bucketOf = [&](const Face& f) {
+    return std::clamp<std::int64_t>(f.first[0] * buckets / points, 0, buckets - 1);
+  };
+  std::vector<size_t> start(static_cast<size_t>(buckets) + 1, 0);
+  for (const Face& f : faces)
+    ++start[bucketOf(f) + 1];
+  for (std::int64_t b = 0; b < buckets; ++b)
+    start[b + 1] += start[b];
+  std::vector<Face> sorted(faces.size());
+  {
+    std::vector<size_t> fill(start.begin(), start.end() - 1);
+    for (const Face& f : faces)
+      sorted[fill[bucketOf(f)]++] = f;
+  }
+  faces = std::vector<Face>();
+  ParallelFor(buckets, 2, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t b = begin; b < end; ++b)
+      std::sort(sorted.begin() + start[b], sorted.begin() + start[b + 1]);
+  });
   std::vector<SharedFace> shared;
-  for (size_t k = 1; k < faces.size(); ++k)
-    if (faces[k].first == faces[k - 1].first)
-      shared.push_back({faces[k].first, faces[k - 1].second, faces[k].second});
+  for (size_t k = 1; k < sorted.size(); ++k)
+    if (sorted[k].first == sorted[k - 1].first)
+      shared.push_back({sorted[k].first, sorted[k - 1].second, sorted[k].second});
   return shared;
 }
 
