@@ -2,8 +2,12 @@
 
 #include "SparseSolver/CholmodViews.h"
 
+#include "Common/WorkerThreads.h"
+
+#include <algorithm>
 #include <cholmod.h>
 #include <string>
+#include <thread>
 
 namespace faceplan {
 
@@ -31,6 +35,98 @@ void NodeGraphUpper(const SparseMatrix& upper, int dofsPerNode, const std::vecto
       }
     columnStart.push_back(static_cast<int>(rows.size()));
   }
+}
+
+
+// A CSC upper pattern (strictly above the diagonal) as a CHOLMOD symmetric pattern matrix.
+cholmod_sparse PatternView(int n, std::vector<int>& columnStart, std::vector<int>& rows,
+                           std::vector<int>& dummyRow) {
+  cholmod_sparse graph{};
+  graph.nrow = graph.ncol = static_cast<size_t>(n);
+  graph.nzmax = rows.size();
+  graph.p = columnStart.data();
+  graph.i = rows.empty() ? dummyRow.data() : rows.data(); // CHOLMOD wants a non-null array
+  graph.stype = 1;
+  graph.itype = CHOLMOD_INT;
+  graph.xtype = CHOLMOD_PATTERN;
+  graph.dtype = CHOLMOD_DOUBLE;
+  graph.sorted = 0;
+  graph.packed = 1;
+  return graph;
+}
+
+// METIS nested dissection of a graph (CSC upper pattern), AMD when METIS fails. With `depth` > 0
+// and a graph large enough, the top levels are split here instead: a METIS node separator
+// (cholmod_bisect), the two halves ordered at once on two threads (recursively), the separator
+// last, which is the order METIS's own dissection gives its top levels. Each thread has its own
+// cholmod_common. `method` names what ordered the leaves.
+constexpr int kParallelDissectionNodes = 10000;
+
+Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, int depth,
+                  std::vector<int>& order, const char*& method) {
+  order.resize(n);
+  std::vector<int> dummyRow(1, 0);
+  cholmod_sparse graph = PatternView(n, columnStart, rows, dummyRow);
+  QuietCholmodCommon quiet;
+  cholmod_common& common = quiet.common;
+  std::vector<int> part;
+  if (depth > 0 && n >= kParallelDissectionNodes) {
+    part.resize(n);
+    const SuiteSparse_long separator = cholmod_bisect(&graph, nullptr, 0, 1, part.data(), &common);
+    const long long left = std::count(part.begin(), part.end(), 0);
+    if (separator < 0 || left == 0 || left + separator >= n)
+      part.clear(); // no useful split: order the whole graph below
+  }
+  if (part.empty()) {
+    method = "METIS";
+    if (cholmod_metis(&graph, nullptr, 0, 0, order.data(), &common))
+      return Status::Ok();
+    method = "AMD";
+    common.status = CHOLMOD_OK;
+    if (cholmod_amd(&graph, nullptr, 0, order.data(), &common))
+      return Status::Ok();
+    return Status::Error("fill-reducing ordering failed (CHOLMOD status " +
+                         std::to_string(common.status) + ")");
+  }
+  // The two halves' induced subgraphs, nodes numbered in increasing order within each half.
+  std::vector<int> local(n), halfNodes[2];
+  for (int node = 0; node < n; ++node)
+    if (part[node] < 2) {
+      local[node] = static_cast<int>(halfNodes[part[node]].size());
+      halfNodes[part[node]].push_back(node);
+    }
+  std::vector<int> halfStart[2], halfRows[2], halfOrder[2];
+  for (int h = 0; h < 2; ++h) {
+    halfStart[h].assign(1, 0);
+    for (int node : halfNodes[h]) {
+      for (int k = columnStart[node]; k < columnStart[node + 1]; ++k)
+        if (part[rows[k]] == h)
+          halfRows[h].push_back(local[rows[k]]);
+      halfStart[h].push_back(static_cast<int>(halfRows[h].size()));
+    }
+  }
+  Status halfStatus[2] = {Status::Ok(), Status::Ok()};
+  const char* halfMethod[2] = {"METIS", "METIS"};
+  auto orderHalf = [&](int h) {
+    halfStatus[h] = OrderGraph(static_cast<int>(halfNodes[h].size()), halfStart[h], halfRows[h],
+                               depth - 1, halfOrder[h], halfMethod[h]);
+  };
+  std::thread other(orderHalf, 1);
+  orderHalf(0);
+  other.join();
+  for (int h = 0; h < 2; ++h)
+    if (!halfStatus[h])
+      return halfStatus[h];
+  method = std::string(halfMethod[0]) == "AMD" || std::string(halfMethod[1]) == "AMD" ? "AMD"
+                                                                                       : "METIS";
+  size_t next = 0;
+  for (int h = 0; h < 2; ++h)
+    for (int k : halfOrder[h])
+      order[next++] = halfNodes[h][k];
+  for (int node = 0; node < n; ++node)
+    if (part[node] == 2)
+      order[next++] = node;
+  return Status::Ok();
 }
 
 } // namespace
@@ -64,33 +160,15 @@ Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
   if (leadingNodes > 0) {
     std::vector<int> columnStart, rows;
     NodeGraphUpper(upper, dofsPerNode, compact, leadingNodes, columnStart, rows);
-    QuietCholmodCommon quiet;
-    cholmod_common& common = quiet.common;
-    cholmod_sparse graph{};
-    graph.nrow = graph.ncol = static_cast<size_t>(leadingNodes);
-    graph.nzmax = rows.size();
-    graph.p = columnStart.data();
-    graph.i = rows.empty() ? nullptr : rows.data();
-    graph.stype = 1;
-    graph.itype = CHOLMOD_INT;
-    graph.xtype = CHOLMOD_PATTERN;
-    graph.dtype = CHOLMOD_DOUBLE;
-    graph.sorted = 0;
-    graph.packed = 1;
-    std::vector<int> dummyRow(1, 0);
-    if (rows.empty())
-      graph.i = dummyRow.data(); // CHOLMOD wants a non-null array
-    ordering.method = "METIS";
+    // Top levels of the dissection in parallel: up to 8 leaves, as many as there are cores.
+    int depth = 0;
+    for (int leaves = 2; leaves <= std::min(WorkerThreads(16), 8); leaves *= 2)
+      ++depth;
+    const char* method = "METIS";
     // No postorder here: CHOLMOD postorders the final DOF ordering in analyze.
-    int ok = cholmod_metis(&graph, nullptr, 0, 0, nodeOrder.data(), &common);
-    if (!ok) {
-      ordering.method = "AMD";
-      common.status = CHOLMOD_OK;
-      ok = cholmod_amd(&graph, nullptr, 0, nodeOrder.data(), &common);
-    }
-    if (!ok)
-      return Status::Error("fill-reducing ordering failed (CHOLMOD status " +
-                           std::to_string(common.status) + ")");
+    if (Status s = OrderGraph(leadingNodes, columnStart, rows, depth, nodeOrder, method); !s)
+      return s;
+    ordering.method = method;
   }
 
   ordering.permutation.clear();
