@@ -185,18 +185,41 @@ double TetMeanRatio(const Eigen::Matrix<double, 4, 3>& c) {
 
 std::string CheckElementQuality(const TetMesh& mesh, double threshold, QualityReport* out) {
   QualityReport report;
-  std::vector<std::pair<double, long long>> low;
-  TetCorners corners;
-  for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-    for (int k = 0; k < 4; ++k)
-      corners.row(k) = mesh.points.row(mesh.tets(e, k));
-    const double q = TetMeanRatio(corners);
-    if (q < report.worstQuality) {
-      report.worstQuality = q;
-      report.worstCell = e;
+  // One chunk of cells per core; merged in chunk order, so the worst cell (the first of the lowest
+  // quality) and the low list are those of one pass in cell order.
+  struct Chunk {
+    double worst = 1.0;
+    long long worstCell = -1;
+    std::vector<std::pair<double, long long>> low;
+  };
+  const std::int64_t chunks = mesh.numTets() < 20000 ? 1 : WorkerThreads(16);
+  std::vector<Chunk> found(chunks);
+  const std::int64_t perChunk = (mesh.numTets() + chunks - 1) / chunks;
+  ParallelFor(chunks, 2, [&](std::int64_t c0, std::int64_t c1) {
+    for (std::int64_t c = c0; c < c1; ++c) {
+      TetCorners corners;
+      Chunk& chunk = found[c];
+      const Eigen::Index end = std::min<Eigen::Index>(mesh.numTets(), (c + 1) * perChunk);
+      for (Eigen::Index e = c * perChunk; e < end; ++e) {
+        for (int k = 0; k < 4; ++k)
+          corners.row(k) = mesh.points.row(mesh.tets(e, k));
+        const double q = TetMeanRatio(corners);
+        if (q < chunk.worst) {
+          chunk.worst = q;
+          chunk.worstCell = e;
+        }
+        if (q < threshold)
+          chunk.low.push_back({q, e});
+      }
     }
-    if (q < threshold)
-      low.push_back({q, e});
+  });
+  std::vector<std::pair<double, long long>> low;
+  for (const Chunk& chunk : found) {
+    if (chunk.worstCell >= 0 && chunk.worst < report.worstQuality) {
+      report.worstQuality = chunk.worst;
+      report.worstCell = chunk.worstCell;
+    }
+    low.insert(low.end(), chunk.low.begin(), chunk.low.end());
   }
   report.belowThreshold = static_cast<long long>(low.size());
   const size_t shown = std::min<size_t>(low.size(), 10);
@@ -387,13 +410,30 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
   }
   if (pieces == 0)
     return Status::Ok();
-  std::vector<std::vector<int>> nodesOf(pieces);
+  // Each piece's nodes, ascending: cells grouped by piece (a counting sort), nodes deduplicated with
+  // a stamp per node, then the (much shorter) lists sorted.
+  std::vector<int> cellStart(static_cast<size_t>(pieces) + 1, 0), cellsByPiece(m);
   for (Eigen::Index e = 0; e < m; ++e)
-    for (int k = 0; k < 4; ++k)
-      nodesOf[pieceOf[e]].push_back(mesh.tets(e, k));
-  for (auto& v : nodesOf) {
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end()), v.end());
+    ++cellStart[pieceOf[e] + 1];
+  for (int p = 0; p < pieces; ++p)
+    cellStart[p + 1] += cellStart[p];
+  {
+    std::vector<int> fill(cellStart.begin(), cellStart.end() - 1);
+    for (Eigen::Index e = 0; e < m; ++e)
+      cellsByPiece[fill[pieceOf[e]]++] = static_cast<int>(e);
+  }
+  std::vector<std::vector<int>> nodesOf(pieces);
+  std::vector<int> stamp(n, -1);
+  for (int p = 0; p < pieces; ++p) {
+    for (int k = cellStart[p]; k < cellStart[p + 1]; ++k)
+      for (int j = 0; j < 4; ++j) {
+        const int v = mesh.tets(cellsByPiece[k], j);
+        if (v >= 0 && v < n && stamp[v] != p) {
+          stamp[v] = p;
+          nodesOf[p].push_back(v);
+        }
+      }
+    std::sort(nodesOf[p].begin(), nodesOf[p].end());
   }
   const double scale = (mesh.points.colwise().maxCoeff() - mesh.points.colwise().minCoeff()).norm();
   // True when the held nodes among `nodes` include three non-collinear points.
