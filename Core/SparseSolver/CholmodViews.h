@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cholmod.h>
+#include <vector>
 
 namespace faceplan {
 
@@ -23,6 +24,24 @@ inline cholmod_sparse ViewUpper(const SparseMatrix& upper) {
   view.xtype = CHOLMOD_REAL;
   view.dtype = CHOLMOD_DOUBLE;
   view.sorted = 1;
+  view.packed = 1;
+  return view;
+}
+
+// A CSC pattern (upper triangle, unsorted rows) as a symmetric pattern cholmod_sparse; `dummyRow`
+// stands in for an empty row array (CHOLMOD wants a non-null one).
+inline cholmod_sparse ViewPattern(int n, std::vector<int>& columnStart, std::vector<int>& rows,
+                                  std::vector<int>& dummyRow) {
+  cholmod_sparse view{};
+  view.nrow = view.ncol = static_cast<size_t>(n);
+  view.nzmax = rows.size();
+  view.p = columnStart.data();
+  view.i = rows.empty() ? dummyRow.data() : rows.data();
+  view.stype = 1;
+  view.itype = CHOLMOD_INT;
+  view.xtype = CHOLMOD_PATTERN;
+  view.dtype = CHOLMOD_DOUBLE;
+  view.sorted = 0;
   view.packed = 1;
   return view;
 }

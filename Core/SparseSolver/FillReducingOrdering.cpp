@@ -38,23 +38,6 @@ void NodeGraphUpper(const SparseMatrix& upper, int dofsPerNode, const std::vecto
 }
 
 
-// A CSC upper pattern (strictly above the diagonal) as a CHOLMOD symmetric pattern matrix.
-cholmod_sparse PatternView(int n, std::vector<int>& columnStart, std::vector<int>& rows,
-                           std::vector<int>& dummyRow) {
-  cholmod_sparse graph{};
-  graph.nrow = graph.ncol = static_cast<size_t>(n);
-  graph.nzmax = rows.size();
-  graph.p = columnStart.data();
-  graph.i = rows.empty() ? dummyRow.data() : rows.data(); // CHOLMOD wants a non-null array
-  graph.stype = 1;
-  graph.itype = CHOLMOD_INT;
-  graph.xtype = CHOLMOD_PATTERN;
-  graph.dtype = CHOLMOD_DOUBLE;
-  graph.sorted = 0;
-  graph.packed = 1;
-  return graph;
-}
-
 // METIS nested dissection of a graph (CSC upper pattern), AMD when METIS fails. With `depth` > 0
 // and a graph large enough, the top levels are split here instead: a METIS node separator
 // (cholmod_bisect), the two halves ordered at once on two threads (recursively), the separator
@@ -66,7 +49,7 @@ Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, 
                   std::vector<int>& order, const char*& method) {
   order.resize(n);
   std::vector<int> dummyRow(1, 0);
-  cholmod_sparse graph = PatternView(n, columnStart, rows, dummyRow);
+  cholmod_sparse graph = ViewPattern(n, columnStart, rows, dummyRow);
   QuietCholmodCommon quiet;
   cholmod_common& common = quiet.common;
   std::vector<int> part;

@@ -1,5 +1,6 @@
 #include "SparseSolver/PrunedBackSubstitution.h"
 #include "SparseSolver/Blas.h"
+#include "SparseSolver/SupernodalTree.h"
 
 #include <algorithm>
 #include <cholmod.h>
@@ -9,44 +10,23 @@ namespace faceplan {
 
 Status PrunedBackSubstitution::prepare(const cholmod_factor& factor,
                                        const std::vector<int>& wantedPositions) {
-  if (!factor.is_super || !factor.is_ll || factor.xtype != CHOLMOD_REAL || !factor.x ||
-      factor.itype != CHOLMOD_INT)
-    return Status::Error("internal: backward substitution needs a numeric supernodal LL^T factor");
+  std::vector<char> needed; // the wanted rows' supernodes and everything above them
+  if (Status s = MarkSupernodesAbove(factor, wantedPositions, needed); !s)
+    return s;
   factor_ = &factor;
   n_ = static_cast<int>(factor.n);
-  const int nsuper = static_cast<int>(factor.nsuper);
-  const int* super = static_cast<const int*>(factor.super);
-  const int* pi = static_cast<const int*>(factor.pi);
-  const int* s = static_cast<const int*>(factor.s);
-
-  std::vector<int> supernodeOf(n_);
-  for (int k = 0; k < nsuper; ++k)
-    std::fill(supernodeOf.begin() + super[k], supernodeOf.begin() + super[k + 1], k);
-  std::vector<char> needed(nsuper, wantedPositions.empty() ? 1 : 0);
-  for (int p : wantedPositions) {
-    if (p < 0 || p >= n_)
-      return Status::Error("internal: wanted row outside the factor");
-    needed[supernodeOf[p]] = 1;
-  }
-  // A supernode's parent is the supernode of its first off-diagonal row, always later in the
-  // order: one ascending pass carries "needed" from every wanted row up to the root.
   supernodes_.clear();
   largestOffDiagonal_ = 0;
   prunedFlops_ = fullFlops_ = 0.0;
-  for (int k = 0; k < nsuper; ++k) {
-    const int columns = super[k + 1] - super[k], offDiagonal = pi[k + 1] - pi[k] - columns;
-    const double flops = 2.0 * columns * offDiagonal + double(columns) * columns;
-    fullFlops_ += flops;
-    if (offDiagonal > 0 && needed[k])
-      needed[supernodeOf[s[pi[k] + columns]]] = 1;
-    if (needed[k]) {
-      prunedFlops_ += flops;
-      largestOffDiagonal_ = std::max(largestOffDiagonal_, offDiagonal);
-    }
+  for (int k = static_cast<int>(factor.nsuper) - 1; k >= 0; --k) {
+    const SupernodeShape shape = ShapeOf(factor, k);
+    fullFlops_ += shape.flops();
+    if (!needed[k])
+      continue;
+    supernodes_.push_back(k);
+    prunedFlops_ += shape.flops();
+    largestOffDiagonal_ = std::max(largestOffDiagonal_, shape.offDiagonal);
   }
-  for (int k = nsuper - 1; k >= 0; --k)
-    if (needed[k])
-      supernodes_.push_back(k);
   return Status::Ok();
 }
 

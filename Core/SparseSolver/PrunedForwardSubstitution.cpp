@@ -1,5 +1,6 @@
 #include "SparseSolver/PrunedForwardSubstitution.h"
 #include "SparseSolver/Blas.h"
+#include "SparseSolver/SupernodalTree.h"
 
 #include <algorithm>
 #include <cholmod.h>
@@ -8,35 +9,19 @@ namespace faceplan {
 
 Status PrunedForwardSubstitution::prepare(const cholmod_factor& factor,
                                           const std::vector<int>& nonZeroPositions) {
-  if (!factor.is_super || !factor.is_ll || factor.xtype != CHOLMOD_REAL || !factor.x ||
-      factor.itype != CHOLMOD_INT)
-    return Status::Error("internal: forward substitution needs a numeric supernodal LL^T factor");
+  if (Status s = MarkSupernodesAbove(factor, nonZeroPositions, reached_); !s)
+    return s;
   factor_ = &factor;
-  const int n = static_cast<int>(factor.n), nsuper = static_cast<int>(factor.nsuper);
-  const int* super = static_cast<const int*>(factor.super);
-  const int* pi = static_cast<const int*>(factor.pi);
-  const int* s = static_cast<const int*>(factor.s);
-  std::vector<int> supernodeOf(n);
-  for (int k = 0; k < nsuper; ++k)
-    std::fill(supernodeOf.begin() + super[k], supernodeOf.begin() + super[k + 1], k);
-  reached_.assign(nsuper, 0);
-  for (int p : nonZeroPositions) {
-    if (p < 0 || p >= n)
-      return Status::Error("internal: right-hand side row outside the factor");
-    reached_[supernodeOf[p]] = 1;
-  }
   supernodes_.clear();
   largestOffDiagonal_ = 0;
   flops_ = 0.0;
-  for (int k = 0; k < nsuper; ++k) { // parents come later: one pass spreads the reach upwards
+  for (int k = 0; k < static_cast<int>(factor.nsuper); ++k) {
     if (!reached_[k])
       continue;
-    const int columns = super[k + 1] - super[k], offDiagonal = pi[k + 1] - pi[k] - columns;
-    if (offDiagonal > 0)
-      reached_[supernodeOf[s[pi[k] + columns]]] = 1;
+    const SupernodeShape shape = ShapeOf(factor, k);
     supernodes_.push_back(k);
-    largestOffDiagonal_ = std::max(largestOffDiagonal_, offDiagonal);
-    flops_ += 2.0 * columns * offDiagonal + double(columns) * columns;
+    largestOffDiagonal_ = std::max(largestOffDiagonal_, shape.offDiagonal);
+    flops_ += shape.flops();
   }
   return Status::Ok();
 }
