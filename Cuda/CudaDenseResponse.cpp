@@ -1,6 +1,7 @@
 #include "CudaDenseResponse.h"
 
 #include "SparseSolver/CholmodViews.h"
+#include "SparseSolver/SupernodalTree.h"
 #include "CudaCheck.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
@@ -375,32 +376,25 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   // Host-side structure: inverse permutation, largest off-diagonal block, flops.
   std::vector<int> pinv(n);
   for (int k = 0; k < n; ++k) pinv[L.perm[k]] = k;
-  int maxOff = 0;
-  double flopsPerColumn = 0.0;
-  for (int s = 0; s < L.nsuper; ++s) {
-    const double nscol = L.super[s + 1] - L.super[s], nsrow = L.pi[s + 1] - L.pi[s];
-    maxOff = std::max(maxOff, static_cast<int>(nsrow - nscol));
-    flopsPerColumn += 2.0 * (nscol * nscol + 2.0 * (nsrow - nscol) * nscol); // both sweeps
-  }
   detail.supernodes = L.nsuper;
 
   // The forward sweep visits only the supernodes that L^-1 K_FR can be non-zero on: those of the
-  // rows K_FR touches and their ancestors (a parent is the supernode of the first off-diagonal
-  // row, always later). With the ROI-coupled DOFs ordered last that is the trailing block alone.
-  std::vector<int> supernodeOf(n);
-  for (int s = 0; s < L.nsuper; ++s)
-    std::fill(supernodeOf.begin() + L.super[s], supernodeOf.begin() + L.super[s + 1], s);
-  std::vector<char> reached(L.nsuper, 0);
-  for (int p = 0; p < kfr.outerIndexPtr()[roi]; ++p)
-    reached[supernodeOf[pinv[kfr.innerIndexPtr()[p]]]] = 1;
-  for (int s = 0; s < L.nsuper; ++s) {
-    const int nscol = L.super[s + 1] - L.super[s];
-    if (reached[s] && L.pi[s + 1] - L.pi[s] > nscol) reached[supernodeOf[L.s[L.pi[s] + nscol]]] = 1;
+  // rows K_FR touches and the ones above them. With the ROI-coupled DOFs ordered last that is the
+  // trailing block alone.
+  const SupernodalStructure tree{n, L.nsuper, L.super, L.pi, L.s};
+  std::vector<int> coupledRows(kfr.innerIndexPtr(), kfr.innerIndexPtr() + kfr.nonZeros());
+  for (int& row : coupledRows) row = pinv[row];
+  std::vector<char> reached;
+  if (const Status marked = MarkSupernodesAbove(tree, coupledRows, reached); !marked) {
+    error = marked.message;
+    return false;
   }
-  flopsPerColumn = 0.0; // the backward sweep everywhere, the forward one where it runs
+  int maxOff = 0;
+  double flopsPerColumn = 0.0; // the backward sweep everywhere, the forward one where it runs
   for (int s = 0; s < L.nsuper; ++s) {
-    const double nscol = L.super[s + 1] - L.super[s], nsrow = L.pi[s + 1] - L.pi[s];
-    flopsPerColumn += (reached[s] ? 2.0 : 1.0) * (nscol * nscol + 2.0 * (nsrow - nscol) * nscol);
+    const SupernodeShape shape = tree.shape(s);
+    maxOff = std::max(maxOff, shape.offDiagonal);
+    flopsPerColumn += (reached[s] ? 2.0 : 1.0) * shape.flops();
   }
 
   Resources r;

@@ -1,6 +1,7 @@
 #include "Element/StiffnessAssembly.h"
 
 #include "Element/ElementStiffness.h"
+#include "Common/GroupByKey.h"
 #include "Common/ParallelFor.h"
 
 #include <algorithm>
@@ -9,17 +10,11 @@
 namespace faceplan {
 
 void FinishGatherMap(const std::vector<int>& targetOf, AssemblyPattern& pattern) {
-  const int nnz = static_cast<int>(pattern.upper.nonZeros());
-  pattern.gatherStart.assign(nnz + 1, 0);
-  for (const int t : targetOf)
-    if (t >= 0) ++pattern.gatherStart[t + 1];
-  for (int k = 0; k < nnz; ++k) pattern.gatherStart[k + 1] += pattern.gatherStart[k];
-  pattern.packedIndex.resize(pattern.gatherStart[nnz]);
-  std::vector<int> fill(pattern.gatherStart.begin(), pattern.gatherStart.end() - 1);
-  for (size_t idx = 0; idx < targetOf.size(); ++idx) {
-    const int t = targetOf[idx];
-    if (t >= 0) pattern.packedIndex[fill[t]++] = static_cast<int>(idx);
-  }
+  Groups gather =
+      GroupByKey(static_cast<std::int64_t>(targetOf.size()),
+                 static_cast<int>(pattern.upper.nonZeros()), [&](std::int64_t idx) { return targetOf[idx]; });
+  pattern.gatherStart = std::move(gather.start);
+  pattern.packedIndex = std::move(gather.items);
 }
 
 Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
@@ -33,29 +28,17 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
   auto node = [&](Eigen::Index e, int k) { return cells[e * nodesPerCell + k]; };
 
   // Each DOF node's neighbours of lower or equal index, from its cells: a node-to-cell index first
-  // (a counting sort), then the nodes in parallel, each writing only its own list.
-  std::vector<int> cellStart(static_cast<size_t>(numDofNodes) + 1, 0);
-  for (Eigen::Index e = 0; e < numCells; ++e)
-    for (int a = 0; a < nodesPerCell; ++a)
-      if (const int na = dofNode[node(e, a)]; na >= 0)
-        ++cellStart[na + 1];
-  for (int c = 0; c < numDofNodes; ++c)
-    cellStart[c + 1] += cellStart[c];
-  std::vector<int> cellsOf(cellStart[numDofNodes]);
-  {
-    std::vector<int> fill(cellStart.begin(), cellStart.end() - 1);
-    for (Eigen::Index e = 0; e < numCells; ++e)
-      for (int a = 0; a < nodesPerCell; ++a)
-        if (const int na = dofNode[node(e, a)]; na >= 0)
-          cellsOf[fill[na]++] = static_cast<int>(e);
-  }
+  // (cell corners grouped by node), then the nodes in parallel, each writing only its own list.
+  const Groups cornersOf = GroupByKey(numCells * nodesPerCell, numDofNodes, [&](std::int64_t corner) {
+    return dofNode[cells[corner]];
+  });
   std::vector<std::vector<int>> rowsOf(numDofNodes);
   ParallelFor(numDofNodes, 20000, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t na = begin; na < end; ++na) {
       std::vector<int>& rows = rowsOf[na];
-      for (int k = cellStart[na]; k < cellStart[na + 1]; ++k)
+      for (int k = cornersOf.start[na]; k < cornersOf.start[na + 1]; ++k)
         for (int b = 0; b < nodesPerCell; ++b) {
-          const int nb = dofNode[node(cellsOf[k], b)];
+          const int nb = dofNode[node(cornersOf.items[k] / nodesPerCell, b)];
           if (nb >= 0 && nb <= na)
             rows.push_back(nb);
         }

@@ -1,5 +1,6 @@
 #include "Mesh/MeshValidation.h"
 
+#include "Common/GroupByKey.h"
 #include "Common/ParallelFor.h"
 
 #include "Mesh/TetGeometry.h"
@@ -410,24 +411,15 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
   }
   if (pieces == 0)
     return Status::Ok();
-  // Each piece's nodes, ascending: cells grouped by piece (a counting sort), nodes deduplicated with
-  // a stamp per node, then the (much shorter) lists sorted.
-  std::vector<int> cellStart(static_cast<size_t>(pieces) + 1, 0), cellsByPiece(m);
-  for (Eigen::Index e = 0; e < m; ++e)
-    ++cellStart[pieceOf[e] + 1];
-  for (int p = 0; p < pieces; ++p)
-    cellStart[p + 1] += cellStart[p];
-  {
-    std::vector<int> fill(cellStart.begin(), cellStart.end() - 1);
-    for (Eigen::Index e = 0; e < m; ++e)
-      cellsByPiece[fill[pieceOf[e]]++] = static_cast<int>(e);
-  }
+  // Each piece's nodes, ascending: cells grouped by piece, nodes deduplicated with a stamp per node,
+  // then the (much shorter) lists sorted.
+  const Groups cellsOf = GroupByKey(m, pieces, [&](std::int64_t e) { return pieceOf[e]; });
   std::vector<std::vector<int>> nodesOf(pieces);
   std::vector<int> stamp(n, -1);
   for (int p = 0; p < pieces; ++p) {
-    for (int k = cellStart[p]; k < cellStart[p + 1]; ++k)
+    for (int k = cellsOf.start[p]; k < cellsOf.start[p + 1]; ++k)
       for (int j = 0; j < 4; ++j) {
-        const int v = mesh.tets(cellsByPiece[k], j);
+        const int v = mesh.tets(cellsOf.items[k], j);
         if (v >= 0 && v < n && stamp[v] != p) {
           stamp[v] = p;
           nodesOf[p].push_back(v);

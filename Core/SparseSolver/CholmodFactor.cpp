@@ -219,30 +219,6 @@ Status CholmodFactor::solveConcurrently(const Eigen::MatrixXd& b, Eigen::MatrixX
   return status;
 }
 
-struct CholmodFactor::TrailingWorkspace::Impl {
-  QuietCholmodCommon quiet;
-  cholmod_common& common = quiet.common;
-  cholmod_dense *x = nullptr, *y = nullptr, *e = nullptr;
-  Eigen::MatrixXd rhs; // zero above the trailing block, which each solve overwrites
-  Eigen::Index columns = 0;
-  ~Impl() {
-    cholmod_free_dense(&x, &common);
-    cholmod_free_dense(&y, &common);
-    cholmod_free_dense(&e, &common);
-  }
-};
-
-CholmodFactor::TrailingWorkspace::TrailingWorkspace() : impl_(std::make_unique<Impl>()) {}
-CholmodFactor::TrailingWorkspace::~TrailingWorkspace() = default;
-
-Eigen::Map<const Eigen::MatrixXd> CholmodFactor::TrailingWorkspace::permutedSolution() const {
-  const cholmod_dense* x = impl_->x;
-  if (!x)
-    return Eigen::Map<const Eigen::MatrixXd>(nullptr, 0, 0);
-  return Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(x->x), x->nrow,
-                                           impl_->columns);
-}
-
 const std::vector<int>& CholmodFactor::eliminationPosition() const {
   return impl_->position;
 }
@@ -263,7 +239,7 @@ CholmodFactor::fromEliminationOrder(const Eigen::Ref<const Eigen::MatrixXd>& per
   return original;
 }
 
-Status CholmodFactor::solveTrailing(const SparseMatrix& b, TrailingWorkspace& workspace) const {
+Status CholmodFactor::solveTrailing(const SparseMatrix& b, Eigen::MatrixXd& x) const {
   const cholmod_factor* L = impl_->factor;
   if (!L || !impl_->numeric)
     return Status::Error("internal: solve before factorize");
@@ -272,13 +248,10 @@ Status CholmodFactor::solveTrailing(const SparseMatrix& b, TrailingWorkspace& wo
     return Status::Error("internal: no trailing block");
   if (b.rows() != n)
     return Status::Error("internal: right-hand side has the wrong size");
-  TrailingWorkspace::Impl& ws = *workspace.impl_;
   const Eigen::Index m = b.cols();
-  if (ws.rhs.rows() != n || ws.rhs.cols() < m)
-    ws.rhs = Eigen::MatrixXd::Zero(n, m);
   // Forward: L^-1 P b is zero above the trailing block, which is a dense triangular solve.
-  auto tail = ws.rhs.bottomRows(t).leftCols(m);
-  tail.setZero();
+  Eigen::MatrixXd forward = Eigen::MatrixXd::Zero(n, m);
+  auto tail = forward.bottomRows(t);
   for (Eigen::Index c = 0; c < m; ++c)
     for (SparseMatrix::InnerIterator it(b, c); it; ++it) {
       const int p = impl_->position[it.row()];
@@ -287,25 +260,22 @@ Status CholmodFactor::solveTrailing(const SparseMatrix& b, TrailingWorkspace& wo
       tail(p - first, c) = it.value();
     }
   impl_->trailingBlock.triangularView<Eigen::Lower>().solveInPlace(tail);
-  // Backward over the whole factor.
-  cholmod_dense rhs = ViewDense(ws.rhs);
-  rhs.ncol = static_cast<size_t>(m);
-  rhs.nzmax = static_cast<size_t>(n) * m;
-  const int ok = cholmod_solve2(CHOLMOD_Lt, const_cast<cholmod_factor*>(L), &rhs, nullptr, &ws.x,
-                                nullptr, &ws.y, &ws.e, &ws.common);
-  ws.columns = m;
-  if (!ok || !ws.x)
-    return Status::Error("CHOLMOD solve failed (out of memory?)");
-  return Status::Ok();
-}
-
-Status CholmodFactor::solveTrailing(const SparseMatrix& b, Eigen::MatrixXd& x) const {
-  TrailingWorkspace workspace;
-  Status status = solveTrailing(b, workspace);
-  if (!status)
-    return status;
-  x = fromEliminationOrder(workspace.permutedSolution());
-  return Status::Ok();
+  // Backward over the whole factor, with a private CHOLMOD workspace (callers may be concurrent).
+  QuietCholmodCommon local;
+  cholmod_dense rhs = ViewDense(forward);
+  cholmod_dense *solution = nullptr, *y = nullptr, *e = nullptr;
+  const int ok = cholmod_solve2(CHOLMOD_Lt, const_cast<cholmod_factor*>(L), &rhs, nullptr,
+                                &solution, nullptr, &y, &e, &local.common);
+  Status status = Status::Ok();
+  if (!ok || !solution)
+    status = Status::Error("CHOLMOD solve failed (out of memory?)");
+  else
+    x = fromEliminationOrder(Eigen::Map<const Eigen::MatrixXd>(
+        static_cast<const double*>(solution->x), n, m));
+  cholmod_free_dense(&solution, &local.common);
+  cholmod_free_dense(&y, &local.common);
+  cholmod_free_dense(&e, &local.common);
+  return status;
 }
 
 int CholmodFactor::trailingDofs() const {

@@ -50,24 +50,7 @@ public:
   // did not keep them last).
   int trailingDofs() const;
 
-  // The same for many blocks of columns on one thread: the workspace keeps CHOLMOD's buffers
-  // between calls (no allocation per block) and the solution stays in elimination order, where
-  // row eliminationPosition()[dof] holds `dof` (so a caller copies out only the rows it needs).
-  class TrailingWorkspace {
-  public:
-    TrailingWorkspace();
-    ~TrailingWorkspace();
-    TrailingWorkspace(const TrailingWorkspace&) = delete;
-    TrailingWorkspace& operator=(const TrailingWorkspace&) = delete;
-    // The last solution, n x (columns of its b), in elimination order.
-    Eigen::Map<const Eigen::MatrixXd> permutedSolution() const;
-
-  private:
-    friend class CholmodFactor;
-    struct Impl;
-    std::unique_ptr<Impl> impl_;
-  };
-  Status solveTrailing(const SparseMatrix& b, TrailingWorkspace& workspace) const;
+  // Row p of a solution in elimination order holds DOF d where eliminationPosition()[d] == p.
   const std::vector<int>& eliminationPosition() const; // valid after analyze()
   // Read-only views for solvers outside this class (PrunedBackSubstitution): the numeric factor
   // (null unless factorized) and its trailing diagonal block as a dense lower triangle.

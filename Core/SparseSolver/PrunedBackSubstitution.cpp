@@ -10,16 +10,19 @@ namespace faceplan {
 
 Status PrunedBackSubstitution::prepare(const cholmod_factor& factor,
                                        const std::vector<int>& wantedPositions) {
+  SupernodalStructure tree;
   std::vector<char> needed; // the wanted rows' supernodes and everything above them
-  if (Status s = MarkSupernodesAbove(factor, wantedPositions, needed); !s)
+  if (Status s = NumericSupernodalStructure(factor, tree); !s)
+    return s;
+  if (Status s = MarkSupernodesAbove(tree, wantedPositions, needed); !s)
     return s;
   factor_ = &factor;
   n_ = static_cast<int>(factor.n);
   supernodes_.clear();
   largestOffDiagonal_ = 0;
   prunedFlops_ = fullFlops_ = 0.0;
-  for (int k = static_cast<int>(factor.nsuper) - 1; k >= 0; --k) {
-    const SupernodeShape shape = ShapeOf(factor, k);
+  for (int k = tree.nsuper - 1; k >= 0; --k) {
+    const SupernodeShape shape = tree.shape(k);
     fullFlops_ += shape.flops();
     if (!needed[k])
       continue;

@@ -9,16 +9,19 @@ namespace faceplan {
 
 Status PrunedForwardSubstitution::prepare(const cholmod_factor& factor,
                                           const std::vector<int>& nonZeroPositions) {
-  if (Status s = MarkSupernodesAbove(factor, nonZeroPositions, reached_); !s)
+  SupernodalStructure tree;
+  if (Status s = NumericSupernodalStructure(factor, tree); !s)
+    return s;
+  if (Status s = MarkSupernodesAbove(tree, nonZeroPositions, reached_); !s)
     return s;
   factor_ = &factor;
   supernodes_.clear();
   largestOffDiagonal_ = 0;
   flops_ = 0.0;
-  for (int k = 0; k < static_cast<int>(factor.nsuper); ++k) {
+  for (int k = 0; k < tree.nsuper; ++k) {
     if (!reached_[k])
       continue;
-    const SupernodeShape shape = ShapeOf(factor, k);
+    const SupernodeShape shape = tree.shape(k);
     supernodes_.push_back(k);
     largestOffDiagonal_ = std::max(largestOffDiagonal_, shape.offDiagonal);
     flops_ += shape.flops();
