@@ -95,7 +95,7 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   out.backwardFlopsFraction = keptRows.flopsPerColumn() / std::max(1.0, allRows.flopsPerColumn());
   out.forwardFlopsFraction =
       t == 0 ? reach.flopsPerColumn() / std::max(1.0, allRows.flopsPerColumn()) : 0.0;
-  out.response.setZero(keptDofs, roiDofs); // first touch in column order: the per-edit product reads it so
+  out.response.resize(keptDofs, roiDofs);
   out.probes = kProbes;
 
   const int threads = WorkerThreads(16);
