@@ -503,6 +503,15 @@ int main(int argc, char** argv) {
           if (ms > 0) std::printf("%s %.0f ms; ", StageName(static_cast<Stage>(st)), ms);
         }
         std::printf("factor nnz %.3g\n", info.factorNonzeros);
+        std::printf("  beside the stages: ordering thread %.0f ms (%s), mesh-check thread %.0f ms; inside them: "
+                    "response probe %.0f ms (%.0f %% of rows), condition estimate %.0f ms\n",
+                    info.orderingThreadMs, info.orderedBesideAssembly ? "beside the assembly" : "in line",
+                    info.meshChecksThreadMs, info.responseProbeMs, 100.0 * info.responseProbeRowFraction,
+                    info.conditionEstimateMs);
+        pj.num("ordering_thread_ms", info.orderingThreadMs);
+        pj.num("mesh_checks_thread_ms", info.meshChecksThreadMs);
+        pj.num("response_probe_ms", info.responseProbeMs);
+        pj.num("condition_estimate_ms", info.conditionEstimateMs);
         std::fflush(stdout);
         j.raw(label, pj.text());
         return seconds;
@@ -524,8 +533,11 @@ int main(int argc, char** argv) {
           pj.num("wall_ms", fd.wallMs);
           pj.num("factorize_ms_gpu", fd.factorizeMs);
           pj.num("factor_copy_to_cholmod_ms", fd.factorDownloadMs);
+          pj.num("factor_copy_left_after_response_ms", fd.factorDownloadWaitMs);
+          pj.num("factor_mark_factorized_ms", fd.markFactorizedMs);
           pj.num("response_wall_ms", rd.wallMs);
           pj.num("response_upload_ms", rd.uploadMs);
+          pj.num("response_host_touch_wait_ms", rd.hostTouchWaitMs);
           pj.num("response_forward_ms", rd.forwardMs);
           pj.num("response_backward_ms", rd.backwardMs);
           pj.num("response_residual_ms", rd.residualMs);
@@ -539,12 +551,15 @@ int main(int argc, char** argv) {
           pj.num("factor_nonzeros", fd.factorNonzeros);
           pj.num("worst_relative_residual", rd.worstRelativeResidual);
           j.raw("core_precompute_cuda_backend_gpu_factor_and_response", pj.text());
-          std::printf("  GPU factor + response inside Precompute: %.0f ms = factorize %.0f (+ copy to CHOLMOD %.0f) + "
-                      "response %.0f ms (upload %.0f, forward %.0f, backward %.0f, residual %.0f, extract %.0f, "
-                      "download %.0f; %d supernodes, %.0f GFLOP at %.2f TFLOP/s, residual %.2e)\n",
-                      fd.wallMs, fd.factorizeMs, fd.factorDownloadMs, rd.wallMs, rd.uploadMs, rd.forwardMs,
-                      rd.backwardMs, rd.residualMs, rd.extractMs, rd.downloadMs, rd.supernodes, rd.flops / 1e9,
-                      sweepTflops, rd.worstRelativeResidual);
+          std::printf("  GPU factor + response inside Precompute: %.0f ms = factorize %.0f + response %.0f ms "
+                      "(upload %.0f, forward %.0f, backward %.0f, residual %.0f, extract %.0f, download %.0f; "
+                      "%d supernodes, %.0f GFLOP at %.2f TFLOP/s, residual %.2e; host pages %.0f ms after the "
+                      "sweeps); beside the response the copy to CHOLMOD %.0f ms and its trailing block %.0f ms, %.0f ms of "
+                      "them left after\n",
+                      fd.wallMs, fd.factorizeMs, rd.wallMs, rd.uploadMs, rd.forwardMs, rd.backwardMs,
+                      rd.residualMs, rd.extractMs, rd.downloadMs, rd.supernodes, rd.flops / 1e9, sweepTflops,
+                      rd.worstRelativeResidual, rd.hostTouchWaitMs, fd.factorDownloadMs, fd.markFactorizedMs,
+                      fd.factorDownloadWaitMs);
           std::fflush(stdout);
         } else if (coreGpuSystem) {
           std::printf("  the CUDA backend's factor/response hook did not run (CPU fallback: see warnings)\n");

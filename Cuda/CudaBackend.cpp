@@ -116,12 +116,15 @@ public:
     FactorAndResponseDetail detail;
     const Status status =
         FactorAndBuildResponse(kffUpper, kfr, keptDofs, factor, response, op, detail);
-    report.factorizationMs = detail.factorizeMs + detail.factorDownloadMs;
+    // The copy into CHOLMOD runs beside the response: only what was left of it after the response
+    // counts as factorization time.
+    report.factorizationMs = detail.factorizeMs + detail.factorDownloadWaitMs;
     report.worstRelativeResidual = detail.response.worstRelativeResidual;
     std::ostringstream line;
     line.precision(3);
     line << "GPU numeric factorization " << detail.factorizeMs << " ms (+ " << detail.factorDownloadMs
-         << " ms copy into CHOLMOD), GPU response " << detail.response.wallMs << " ms ("
+         << " ms copy into CHOLMOD beside the response, " << detail.factorDownloadWaitMs
+         << " ms of it after), GPU response " << detail.response.wallMs << " ms ("
          << detail.response.supernodes << " supernodes, " << detail.response.blocks << " pass(es), residual "
          << detail.response.worstRelativeResidual << ")";
     report.detail = line.str();

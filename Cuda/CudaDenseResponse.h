@@ -81,6 +81,7 @@ struct DenseResponseDetail {
   double residualMs = 0.0;   // device time of the residual check
   double extractMs = 0.0;    // device time of the kept-row extraction
   double downloadMs = 0.0;   // response to the host (when asked for)
+  double hostTouchWaitMs = 0.0; // waiting for the host response's pages, touched beside the sweeps
   double wallMs = 0.0;       // the whole call on the host clock
   double worstRelativeResidual = 0.0; // max over columns of ||K_FF x - b|| / ||b||
 };
@@ -103,7 +104,9 @@ Status BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix
 // as `op`. The device copy of the factor is freed before returning.
 struct FactorAndResponseDetail {
   double factorizeMs = 0.0;      // GPU numeric factorization (uploads of the structure and K_FF included)
-  double factorDownloadMs = 0.0; // the factor copied into the CHOLMOD factor
+  double factorDownloadMs = 0.0; // the factor copied into the CHOLMOD factor (beside the response)
+  double factorDownloadWaitMs = 0.0; // of the copy and marking, left after the response was built
+  double markFactorizedMs = 0.0; // CholmodFactor::markFactorized after the copy (beside the response)
   DenseResponseDetail response;
   double wallMs = 0.0;           // the whole call
   double factorNonzeros = 0.0;

@@ -219,4 +219,11 @@ bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor_struct* L, ch
                          DeviceArray& deviceX, bool hostCopy, double& factorizeMs, double& downloadMs,
                          std::string& error);
 
+// The host copy of FactorAnalysedOnGpu's factor, in two steps so that the copy can run beside
+// other GPU work: AllocateHostFactor makes L numeric (cholmod_change_factor; not to be run
+// concurrently with other uses of L), DownloadFactor then copies deviceX into L->x on `stream`
+// (it touches only L->x's memory and sets L->minor, so L's structure may be read meanwhile).
+bool AllocateHostFactor(cholmod_factor_struct* L, cholmod_common_struct* common, std::string& error);
+bool DownloadFactor(cholmod_factor_struct* L, const DeviceArray& deviceX, cudaStream_t stream, std::string& error);
+
 } // namespace faceplan::cuda::detail

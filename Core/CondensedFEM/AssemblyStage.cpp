@@ -20,12 +20,17 @@ Status AssembleStiffness(PrecomputeState& state) {
   const Materials& stiffnessMaterials = state.nodalPressure ? cellMaterials : request.materials;
 
   AssemblyPattern& pattern = state.pattern;
+  const int* cells = state.quadratic ? qmesh.cells.data() : mesh.tets.data();
+  const Eigen::Index numCells = state.quadratic ? qmesh.cells.rows() : mesh.numTets();
+  const int nodesPerCell = state.quadratic ? 10 : 4;
+  // The node graph first: K_FF's ordering starts from it on its own thread (when its structure
+  // follows from the cells alone) while the gather map, the element matrices and the separation
+  // are made here.
+  auto lower = std::make_shared<const NodeNeighbours>(LowerNodeNeighbours(
+      cells, numCells, nodesPerCell, layout.dofNode, static_cast<int>(layout.meshNode.size())));
+  StartEarlyOrdering(state, lower);
   const Status patternBuilt =
-      state.quadratic
-          ? BuildCellAssemblyPattern(qmesh.cells.data(), qmesh.cells.rows(), 10, layout.dofNode,
-                                     static_cast<int>(layout.meshNode.size()), pattern)
-          : BuildAssemblyPattern(mesh, layout.dofNode, static_cast<int>(layout.meshNode.size()),
-                                 pattern);
+      BuildCellAssemblyPattern(cells, numCells, nodesPerCell, layout.dofNode, *lower, pattern);
   if (!patternBuilt)
     return patternBuilt;
   const double patternMs = clock.lapMs();

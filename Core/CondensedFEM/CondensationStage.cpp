@@ -3,12 +3,14 @@
 #include "Common/ParallelFor.h"
 #include "Common/WorkerThreads.h"
 #include "CondensedFEM/PrecomputeStages.h"
+#include "CondensedFEM/ResponseProbe.h"
 
 #include "Common/BlasThreads.h"
 #include "CondensedFEM/RefinedSolve.h"
 #include "SparseSolver/TrailingResponse.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <mutex>
 #include <random>
@@ -18,39 +20,6 @@
 namespace faceplan {
 
 namespace {
-
-// Relative deviation of a backend's response operator from the double response, on random ROI
-// vectors (a float operator shows ~1e-7; a double one ~1e-16).
-double ProbeResponseOperator(const CondensedSystem& sys, ResponseOperator& op, std::string& error) {
-  std::mt19937 rng(12345);
-  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-  double worst = 0.0;
-  for (int probe = 0; probe < 2; ++probe) {
-    Eigen::VectorXd roi(sys.response.cols());
-    for (Eigen::Index k = 0; k < roi.size(); ++k)
-      roi[k] = uniform(rng);
-    Eigen::VectorXd approx;
-    const Status applied = op.apply(roi, approx);
-    if (!applied) {
-      error = applied.message;
-      return std::numeric_limits<double>::infinity();
-    }
-    // The host product over row blocks on every core: at 1M the response is 4.6 GB, which one
-    // core streams in about half a second per product.
-    Eigen::VectorXd exact(sys.response.rows());
-    ParallelFor(sys.response.rows(), 4096, [&](std::int64_t r0, std::int64_t r1) {
-      exact.segment(r0, r1 - r0).noalias() = sys.response.middleRows(r0, r1 - r0) * roi;
-    });
-    if (approx.size() != exact.size()) {
-      error = "operator returned the wrong size";
-      return std::numeric_limits<double>::infinity();
-    }
-    const double norm = exact.norm();
-    const double dev = (approx - exact).norm();
-    worst = std::max(worst, norm > 0.0 ? dev / norm : dev);
-  }
-  return worst;
-}
 
 // Columns of the response, solved in blocks: one single-threaded solve per core at a time, each
 // with its own CHOLMOD workspace, blocks sized so the transient memory stays near 1 GB.
@@ -182,7 +151,11 @@ Status Condense(PrecomputeState& state) {
   } else if (options.backend) {
     // A backend may hold the response in lower precision: probe it against the double response.
     std::string probeError;
-    info.responseProbeError = ProbeResponseOperator(sys, *sys.responseOperator, probeError);
+    StageClock probeClock;
+    info.responseProbeError = ProbeResponseOperator(sys.response, *sys.responseOperator,
+                                                    kProbeFullBytes, info.responseProbeRowFraction,
+                                                    probeError);
+    info.responseProbeMs = probeClock.elapsedMs();
     std::ostringstream note;
     note.precision(3);
     if (!(info.responseProbeError <= options.responseTolerance)) {

@@ -48,11 +48,17 @@ Status PrecomputeImpl(const PrecomputeRequest& request, std::shared_ptr<const Co
                       const std::atomic<bool>* cancel, const ProgressCallback& progress) {
   StageClock total;
   PrecomputeState state(request, cancel, progress);
-  for (Status (*stage)(PrecomputeState&) : {ValidatePrecomputeRequest, SeparateNodes,
-                                            AssembleStiffness, SeparateBlocks, ReorderFreeDofs}) {
+  for (Status (*stage)(PrecomputeState&) :
+       {ValidatePrecomputeRequest, SeparateNodes, AssembleStiffness, SeparateBlocks,
+        ReorderFreeDofs, FinishMeshChecks}) {
     Status s = stage(state);
-    if (!s)
+    if (!s) {
+      // The mesh checks ran beside these stages: a piece not held is the cause to report.
+      if (state.meshChecks.valid())
+        if (MeshChecks checks = state.meshChecks.get(); !checks.status)
+          return checks.status;
       return s;
+    }
   }
   if (Status s = ChooseSolveMethod(state); !s)
     return s;

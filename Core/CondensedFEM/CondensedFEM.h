@@ -166,6 +166,11 @@ struct SystemInfo {
   double memoryBudgetBytes = 0.0; // the budget the precompute was checked against
   std::string choiceReason;
   std::string ordering;     // fill-reducing ordering of the free block ("METIS", "AMD", ...)
+  bool orderedBesideAssembly = false; // made from the node graph while the assembly ran
+  // Threads beside the assembly: their own run times. The stage rows hold only the waits for
+  // them, so that the rows add up to the precompute's time.
+  double orderingThreadMs = 0.0;   // Reordering (0 when it ran in line: its row is its time)
+  double meshChecksThreadMs = 0.0; // shared-face checks: held rigid modes, quality, folds
   std::string responsePath; // how the dense response was computed and checked (DenseResponse)
   StageTimings precomputeTimings;
 
@@ -177,6 +182,9 @@ struct SystemInfo {
   long long foldedFaces = 0;       // shared faces whose two cells overlap (CheckFoldedFaces)
   double worstQuality = 1.0;       // smallest mean-ratio quality
   double responseProbeError = 0.0; // relative deviation of the backend's response operator
+  double responseProbeRowFraction = 1.0; // share of the response's rows that probe compared
+  double responseProbeMs = 0.0;          // the probe's time (inside the Condensation row)
+  double conditionEstimateMs = 0.0;      // cholmod_rcond on the factor (inside the Factorization row)
   bool responseRedoneInDouble = false;
   std::vector<std::string> warnings; // the precompute's warnings
 };

@@ -96,7 +96,9 @@ Status Factorize(PrecomputeState& state) {
       return fs;
     state.time(Stage::Factorization).ms += clock.lapMs();
   }
+  StageClock rcondClock;
   const double rcond = sys.factor.reciprocalConditionEstimate();
+  info.conditionEstimateMs = rcondClock.elapsedMs();
   info.conditionEstimate = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
   if (!state.backendResponse)
     state.report(0.6, "factorization");

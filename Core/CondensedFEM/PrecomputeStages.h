@@ -8,9 +8,32 @@
 #include "Element/StiffnessAssembly.h"
 
 #include <atomic>
+#include <future>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace faceplan {
+
+// The ordering and symbolic analysis made beside the assembly (StartEarlyOrdering), with the
+// inputs it used, which ReorderFreeDofs checks against the separated blocks.
+struct EarlyOrdering {
+  Status status = Status::Ok();
+  std::string ordering; // SystemInfo::ordering
+  double ms = 0.0;
+  SparseMatrix kffPattern;   // the K_FF structure it analysed
+  std::vector<char> coupled; // the free nodes it took as K_FR's rows
+};
+
+// The mesh checks of the validation that need the shared faces (held rigid modes, element
+// quality, folded faces), made beside the separation and assembly.
+struct MeshChecks {
+  Status status = Status::Ok(); // an error when a piece is not held; its warnings otherwise
+  long long sliverCells = 0;
+  double worstQuality = 1.0;
+  long long foldedFaces = 0;
+  double ms = 0.0;
+};
 
 // What the stages hand on to each other.
 struct PrecomputeState {
@@ -33,6 +56,11 @@ struct PrecomputeState {
   // the segment parameters, the right-hand sides of the response's columns.
   SparseMatrix segmentCoupling;
 
+  size_t meshCheckWarningsAt = 0; // where the mesh checks' warnings go among the warnings
+  // Work running on its own thread; declared last, so destroyed (waited for) first.
+  std::future<MeshChecks> meshChecks;
+  std::future<EarlyOrdering> earlyOrdering;
+
   bool cancelled() const { return cancel && cancel->load(); }
   void report(double fraction, const char* what) const {
     if (progress)
@@ -41,8 +69,12 @@ struct PrecomputeState {
   StageTime& time(Stage s) { return sys->info.precomputeTimings[s]; }
 };
 
-// Checks the mesh, materials, node sets and options; records element quality warnings.
+// Checks the mesh, materials, node sets and options, and starts the mesh checks (MeshChecks) on
+// their own thread.
 Status ValidatePrecomputeRequest(PrecomputeState& state);
+
+// Waits for the mesh checks: their error (a piece not held), or their warnings and figures.
+Status FinishMeshChecks(PrecomputeState& state);
 
 // Separation, first part: node classes (and, for quadratic cells, the TET10 mesh with its
 // extended node sets) and the DOF layout the assembly scatters into.
@@ -56,7 +88,13 @@ Status AssembleStiffness(PrecomputeState& state);
 // into their normal frames and the normal DOF moved to the ROI side), the free nodes' masses.
 Status SeparateBlocks(PrecomputeState& state);
 
-// Reordering: the fill-reducing ordering of K_FF and its symbolic analysis.
+// Starts the ordering and symbolic analysis of K_FF on its own thread from the cells' node graph,
+// where K_FF's structure follows from it alone (no sliding nodes, no nodal pressure). False when
+// it did not start.
+bool StartEarlyOrdering(PrecomputeState& state, std::shared_ptr<const NodeNeighbours> lower);
+
+// Reordering: the fill-reducing ordering of K_FF and its symbolic analysis (waits for the early
+// one when it was started, and checks it was made for these blocks).
 Status ReorderFreeDofs(PrecomputeState& state);
 
 // Picks the solve method from the sizes (needs only the analysis), within the memory budget: an

@@ -1,23 +1,36 @@
-// The Reordering stage: fill-reducing ordering of K_FF and its symbolic analysis.
+// The Reordering stage: fill-reducing ordering of K_FF and its symbolic analysis, either on its own
+// thread from the node graph while the assembly and separation go on (StartEarlyOrdering), or
+// after them from the separated blocks.
 #include "CondensedFEM/PrecomputeStages.h"
 
+#include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/MethodChoice.h"
 #include "SparseSolver/FillReducingOrdering.h"
 
+#include <functional>
+
 namespace faceplan {
 
-Status ReorderFreeDofs(PrecomputeState& state) {
-  CondensedSystem& sys = *state.sys;
-  if (sys.kff.rows() == 0)
-    return Status::Ok();
-  // METIS on the node graph with the ROI-coupled nodes last (FillReducingOrdering.h). That
-  // halves a response solve but makes those nodes a dense block of the factor, which does not
-  // pay when the ROI is large; then the ordering without it is analysed too and the one with
-  // the lower estimated precompute is kept: factorization flops plus one solve per ROI DOF
-  // (forward + backward, or backward + the trailing block). CHOLMOD's own choice if neither
-  // ordering can be made.
-  const double roiColumns =
-      double(state.segmentCoupling.cols() > 0 ? state.segmentCoupling.cols() : sys.kfr.cols());
+namespace {
+
+// What ordering K_FF needs, from either source: its upper structure, the marks of the free nodes
+// coupled to the ROI (K_FR's rows), and a way to order with given trailing marks.
+struct OrderingInputs {
+  const SparseMatrix& kffPattern;
+  std::vector<char> coupled;
+  std::function<Status(const std::vector<char>& trailing, FillReducingOrdering&)> order;
+  double roiColumns = 0.0; // the response's columns: ROI DOFs, or segment parameters
+  bool fewColumns = false; // rigid segments
+  bool hasRoi = false;
+};
+
+// METIS on the node graph with the ROI-coupled nodes last (FillReducingOrdering.h). That halves a
+// response solve but makes those nodes a dense block of the factor, which does not pay when the
+// ROI is large; then the ordering without it is analysed too and the one with the lower estimated
+// precompute is kept: factorization flops plus one solve per ROI DOF (forward + backward, or
+// backward + the trailing block). CHOLMOD's own choice if neither ordering can be made.
+Status OrderAndAnalyse(const OrderingInputs& in, CholmodFactor& factor, std::string& ordering) {
+  const double roiColumns = in.roiColumns;
   auto estimatedCost = [roiColumns](double nonzeros, double flops, int trailing) {
     return flops + roiColumns * FactorSolveFlops(nonzeros, trailing);
   };
@@ -26,39 +39,139 @@ Status ReorderFreeDofs(PrecomputeState& state) {
   FillReducingOrdering trailingLast;
   // Rigid segments need a dozen response columns per segment: too few for the trailing block's
   // cheaper substitutions to pay for its fill, so only the plain ordering is made.
-  const bool fewColumns = state.segmentCoupling.cols() > 0;
-  if (sys.kfr.cols() > 0 && !fewColumns &&
-      OrderNodesWithTrailing(sys.kff, 3, NodesCoupledTo(sys.kfr, sys.layout.freeNodes(), 3),
-                             trailingLast)
-          .ok) {
+  if (in.hasRoi && !in.fewColumns && in.order(in.coupled, trailingLast).ok) {
     candidates.push_back(std::move(trailingLast));
-    Status as = sys.factor.analyze(sys.kff, candidates, estimatedCost);
+    Status as = factor.analyze(in.kffPattern, candidates, estimatedCost);
     if (!as)
       return as;
     // Settled without the other ordering when even losing the whole trailing block (t^3/3
     // flops, t^2/2 entries) could not make full solves cheaper: t^3/3 + 3 r t^2 <= 2 r nnz(L).
-    const double block = sys.factor.trailingDofs(), r = roiColumns;
+    const double block = factor.trailingDofs(), r = roiColumns;
     settled = block > 0 && block * block * block / 3.0 + 3.0 * r * block * block <=
-                               2.0 * r * sys.factor.factorNonzeros();
+                               2.0 * r * factor.factorNonzeros();
   }
   if (!settled) {
     // Both candidates analysed together (the trailing one a second time: CholmodFactor keeps
     // one analysis; this only happens for ROIs large enough to doubt the trailing block).
     FillReducingOrdering plain;
-    if (OrderNodesWithTrailing(sys.kff, 3, {}, plain).ok)
+    if (in.order({}, plain).ok)
       candidates.push_back(std::move(plain));
-    Status as = sys.factor.analyze(sys.kff, candidates, estimatedCost);
+    Status as = factor.analyze(in.kffPattern, candidates, estimatedCost);
     if (!as)
-      return as; // (not into the state's status: that would drop its warnings)
+      return as;
   }
-  SystemInfo& info = sys.info;
-  info.ordering = candidates.empty()
-                      ? "CHOLMOD default"
-                      : std::string(candidates.front().method) +
-                            (sys.factor.trailingDofs() > 0 ? ", ROI-coupled DOFs last" : "");
-  state.time(Stage::Reordering).ms = state.clock.lapMs();
-  info.factorNonzeros = sys.factor.factorNonzeros();
+  ordering = candidates.empty() ? "CHOLMOD default"
+                                : std::string(candidates.front().method) +
+                                      (factor.trailingDofs() > 0 ? ", ROI-coupled DOFs last" : "");
+  return Status::Ok();
+}
+
+// The response's column count as SeparateBlocks will make it (segmentCoupling or K_FR).
+double ResponseColumns(const PrecomputeState& state, bool& segmentColumns) {
+  const CondensedSystem& sys = *state.sys;
+  const SolveMethod requested = state.request.options.method;
+  segmentColumns = sys.segments > 0 &&
+                   (requested == SolveMethod::Auto || requested == SolveMethod::RigidSegments) &&
+                   sys.segmentToRoi.cols() > 0;
+  return double(segmentColumns ? sys.segmentToRoi.cols() : sys.layout.roiDofs());
+}
+
+void Finish(PrecomputeState& state, const std::string& ordering, double ms) {
+  SystemInfo& info = state.sys->info;
+  info.ordering = ordering;
+  info.factorNonzeros = state.sys->factor.factorNonzeros();
+  state.time(Stage::Reordering).ms = ms;
   state.report(0.25, "reordering");
+}
+
+} // namespace
+
+bool StartEarlyOrdering(PrecomputeState& state, std::shared_ptr<const NodeNeighbours> lower) {
+  const CondensedSystem& sys = *state.sys;
+  // Sliding nodes turn and pin DOFs, and nodal pressure widens the pattern, after the cells'
+  // pattern: their K_FF is only known after the separation.
+  if (state.nodalPressure || !sys.slidingFrame.empty() || sys.layout.freeNodes() == 0)
+    return false;
+  bool segmentColumns = false;
+  const double roiColumns = ResponseColumns(state, segmentColumns);
+  const int freeNodes = sys.layout.freeNodes();
+  const bool hasRoi = sys.layout.roiDofs() > 0;
+  std::shared_ptr<CondensedSystem> system = state.sys;
+  const std::atomic<bool>* cancel = state.cancel;
+  state.earlyOrdering = std::async(std::launch::async, [=]() {
+    EarlyOrdering out;
+    StageClock clock;
+    out.status = ReturnStatusOnException("the reordering", [&]() -> Status {
+      if (Status built = UpperPatternOfNodes(*lower, freeNodes, false, out.kffPattern); !built)
+        return built;
+      OrderingInputs in{out.kffPattern,
+                        hasRoi ? NodesCoupledToLaterNodes(*lower, freeNodes) : std::vector<char>{},
+                        [&](const std::vector<char>& trailing, FillReducingOrdering& o) {
+                          return OrderNodeGraphWithTrailing(*lower, freeNodes, 3, trailing, o);
+                        },
+                        roiColumns,
+                        segmentColumns,
+                        hasRoi};
+      out.coupled = in.coupled;
+      if (cancel && cancel->load())
+        return Status::Error("cancelled");
+      return OrderAndAnalyse(in, system->factor, out.ordering);
+    });
+    out.ms = clock.elapsedMs();
+    return out;
+  });
+  return true;
+}
+
+Status ReorderFreeDofs(PrecomputeState& state) {
+  CondensedSystem& sys = *state.sys;
+  if (state.earlyOrdering.valid()) {
+    EarlyOrdering early = state.earlyOrdering.get();
+    // The row holds the wait for it, so that the rows still add up to the precompute's time; its
+    // own time is in SystemInfo::orderingThreadMs.
+    const double waitMs = state.clock.lapMs();
+    sys.info.orderingThreadMs = early.ms;
+    if (!early.status)
+      return early.status;
+    // Its inputs came from the node graph: they must be K_FF's structure and K_FR's rows exactly
+    // (else the trailing block would not hold every right-hand side); otherwise order again.
+    const bool samePattern =
+        early.kffPattern.rows() == sys.kff.rows() &&
+        early.kffPattern.nonZeros() == sys.kff.nonZeros() &&
+        std::equal(sys.kff.outerIndexPtr(), sys.kff.outerIndexPtr() + sys.kff.cols() + 1,
+                   early.kffPattern.outerIndexPtr()) &&
+        std::equal(sys.kff.innerIndexPtr(), sys.kff.innerIndexPtr() + sys.kff.nonZeros(),
+                   early.kffPattern.innerIndexPtr());
+    bool segmentColumns = false;
+    const double roiColumns = ResponseColumns(state, segmentColumns);
+    const bool sameColumns =
+        roiColumns == double(segmentColumns ? state.segmentCoupling.cols() : sys.kfr.cols());
+    if (samePattern && sameColumns &&
+        (sys.kfr.cols() == 0 ||
+         early.coupled == NodesCoupledTo(sys.kfr, sys.layout.freeNodes(), 3))) {
+      sys.info.orderedBesideAssembly = true;
+      Finish(state, early.ordering, waitMs);
+      return state.cancelled() ? Status::Error("cancelled") : Status::Ok();
+    }
+  }
+  if (sys.kff.rows() == 0)
+    return Status::Ok();
+  const bool segments = state.segmentCoupling.cols() > 0;
+  OrderingInputs in{sys.kff,
+                    sys.kfr.cols() > 0 ? NodesCoupledTo(sys.kfr, sys.layout.freeNodes(), 3)
+                                       : std::vector<char>{},
+                    [&](const std::vector<char>& trailing, FillReducingOrdering& o) {
+                      return OrderNodesWithTrailing(sys.kff, 3, trailing, o);
+                    },
+                    double(segments ? state.segmentCoupling.cols() : sys.kfr.cols()),
+                    segments,
+                    sys.kfr.cols() > 0};
+  std::string ordering;
+  if (Status s = OrderAndAnalyse(in, sys.factor, ordering); !s)
+    return s; // (not into the state's status: that would drop its warnings)
+  const double ms = state.clock.lapMs();
+  sys.info.orderingThreadMs = 0.0;
+  Finish(state, ordering, ms);
   return state.cancelled() ? Status::Error("cancelled") : Status::Ok();
 }
 

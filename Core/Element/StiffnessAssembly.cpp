@@ -17,8 +17,75 @@ void FinishGatherMap(const std::vector<int>& targetOf, AssemblyPattern& pattern)
   pattern.packedIndex = std::move(gather.items);
 }
 
+NodeNeighbours LowerNodeNeighbours(const int* cells, Eigen::Index numCells, int nodesPerCell,
+                                   const std::vector<int>& dofNode, int numDofNodes) {
+  // A node-to-cell index first (cell corners grouped by node), then the nodes in parallel, each
+  // writing only its own list.
+  const Groups cornersOf = GroupByKey(numCells * nodesPerCell, numDofNodes, [&](std::int64_t corner) {
+    return dofNode[cells[corner]];
+  });
+  NodeNeighbours lower(numDofNodes);
+  ParallelFor(numDofNodes, 20000, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t na = begin; na < end; ++na) {
+      std::vector<int>& rows = lower[na];
+      for (int k = cornersOf.start[na]; k < cornersOf.start[na + 1]; ++k) {
+        const int* cell = cells + (cornersOf.items[k] / nodesPerCell) * std::int64_t{nodesPerCell};
+        for (int b = 0; b < nodesPerCell; ++b) {
+          const int nb = dofNode[cell[b]];
+          if (nb >= 0 && nb <= na)
+            rows.push_back(nb);
+        }
+      }
+      std::sort(rows.begin(), rows.end());
+      rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    }
+  });
+  return lower;
+}
+
+Status UpperPatternOfNodes(const NodeNeighbours& lower, int nodes, bool zeroValues,
+                           SparseMatrix& upper) {
+  const int n = 3 * nodes;
+  std::vector<long long> colStart(static_cast<size_t>(n) + 1, 0);
+  for (int c = 0; c < nodes; ++c) {
+    const long long offDiagonal = 3LL * (static_cast<long long>(lower[c].size()) - 1);
+    for (int j = 0; j < 3; ++j)
+      colStart[3 * c + j + 1] = colStart[3 * c + j] + offDiagonal + j + 1;
+  }
+  if (colStart[n] > std::numeric_limits<int>::max())
+    return Status::Error("stiffness matrix too large for 32-bit indices");
+  const int nnz = static_cast<int>(colStart[n]);
+  upper.resize(n, n);
+  upper.resizeNonZeros(nnz);
+  for (int k = 0; k <= n; ++k)
+    upper.outerIndexPtr()[k] = static_cast<int>(colStart[k]);
+  int* rowIndex = upper.innerIndexPtr();
+  ParallelFor(nodes, 20000, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t c = begin; c < end; ++c)
+      for (int j = 0; j < 3; ++j) {
+        long long k = colStart[3 * c + j];
+        for (int r : lower[c]) {
+          const int components = (r == c) ? j + 1 : 3;
+          for (int i = 0; i < components; ++i)
+            rowIndex[k++] = 3 * r + i;
+        }
+      }
+  });
+  if (zeroValues)
+    std::fill(upper.valuePtr(), upper.valuePtr() + nnz, 0.0);
+  return Status::Ok();
+}
+
 Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
                                 const std::vector<int>& dofNode, int numDofNodes,
+                                AssemblyPattern& pattern) {
+  return BuildCellAssemblyPattern(
+      cells, numCells, nodesPerCell, dofNode,
+      LowerNodeNeighbours(cells, numCells, nodesPerCell, dofNode, numDofNodes), pattern);
+}
+
+Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
+                                const std::vector<int>& dofNode, const NodeNeighbours& lower,
                                 AssemblyPattern& pattern) {
   pattern = AssemblyPattern{};
   const int dofs = 3 * nodesPerCell;
@@ -26,53 +93,10 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
   if (numCells > std::numeric_limits<int>::max() / packedSize)
     return Status::Error("mesh too large for 32-bit packed indices");
   auto node = [&](Eigen::Index e, int k) { return cells[e * nodesPerCell + k]; };
-
-  // Each DOF node's neighbours of lower or equal index, from its cells: a node-to-cell index first
-  // (cell corners grouped by node), then the nodes in parallel, each writing only its own list.
-  const Groups cornersOf = GroupByKey(numCells * nodesPerCell, numDofNodes, [&](std::int64_t corner) {
-    return dofNode[cells[corner]];
-  });
-  std::vector<std::vector<int>> rowsOf(numDofNodes);
-  ParallelFor(numDofNodes, 20000, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t na = begin; na < end; ++na) {
-      std::vector<int>& rows = rowsOf[na];
-      for (int k = cornersOf.start[na]; k < cornersOf.start[na + 1]; ++k)
-        for (int b = 0; b < nodesPerCell; ++b) {
-          const int nb = dofNode[node(cornersOf.items[k] / nodesPerCell, b)];
-          if (nb >= 0 && nb <= na)
-            rows.push_back(nb);
-        }
-      std::sort(rows.begin(), rows.end());
-      rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-    }
-  });
-
-  const int n = 3 * numDofNodes;
-  std::vector<long long> colStart(n + 1, 0);
-  for (int c = 0; c < numDofNodes; ++c) {
-    const long long offDiagonal = 3LL * (static_cast<long long>(rowsOf[c].size()) - 1);
-    for (int j = 0; j < 3; ++j) colStart[3 * c + j + 1] = colStart[3 * c + j] + offDiagonal + j + 1;
-  }
-  if (colStart[n] > std::numeric_limits<int>::max())
-    return Status::Error("stiffness matrix too large for 32-bit indices");
-  const int nnz = static_cast<int>(colStart[n]);
-  pattern.upper.resize(n, n);
-  pattern.upper.resizeNonZeros(nnz);
-  for (int k = 0; k <= n; ++k)
-    pattern.upper.outerIndexPtr()[k] = static_cast<int>(colStart[k]);
-  int* rowIndex = pattern.upper.innerIndexPtr();
-  ParallelFor(numDofNodes, 20000, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t c = begin; c < end; ++c)
-      for (int j = 0; j < 3; ++j) {
-        long long k = colStart[3 * c + j];
-        for (int r : rowsOf[c]) {
-          const int components = (r == c) ? j + 1 : 3;
-          for (int i = 0; i < components; ++i)
-            rowIndex[k++] = 3 * r + i;
-        }
-      }
-  });
-  std::fill(pattern.upper.valuePtr(), pattern.upper.valuePtr() + nnz, 0.0);
+  if (Status built = UpperPatternOfNodes(lower, static_cast<int>(lower.size()), true, pattern.upper);
+      !built)
+    return built;
+  const int* colStart = pattern.upper.outerIndexPtr();
 
   std::vector<int> rowStart(dofs); // packed position of (p, p)
   for (int p = 0, pos = 0; p < dofs; ++p) {
@@ -92,10 +116,10 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
               std::swap(nr, nc);
               std::swap(ir, ic);
             }
-            const auto& rows = rowsOf[nc];
+            const auto& rows = lower[nc];
             const int idx =
                 static_cast<int>(std::lower_bound(rows.begin(), rows.end(), nr) - rows.begin());
-            t = static_cast<int>(colStart[3 * nc + ic]) + 3 * idx + ir;
+            t = colStart[3 * nc + ic] + 3 * idx + ir;
           }
           targetOf[e * packedSize + rowStart[p] + (q - p)] = t;
         }

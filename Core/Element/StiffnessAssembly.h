@@ -22,6 +22,19 @@ struct AssemblyPattern {
   std::vector<int> packedIndex; // int: up to 27M tetrahedra (checked when built)
 };
 
+// Each DOF node's neighbours of lower or equal index (itself included), sorted: the node graph
+// from which both the assembly pattern and the fill-reducing ordering start (the Precompute
+// orders the free nodes from it while the pattern's gather map is still being built).
+using NodeNeighbours = std::vector<std::vector<int>>;
+NodeNeighbours LowerNodeNeighbours(const int* cells, Eigen::Index numCells, int nodesPerCell,
+                                   const std::vector<int>& dofNode, int numDofNodes);
+
+// The upper-triangle structure (3 DOFs per node, rows sorted) of the first `nodes` DOF nodes of
+// `lower`; values are zero when zeroValues, else left uninitialised (a structure to analyse).
+// Fails when the matrix would overflow 32-bit indices.
+Status UpperPatternOfNodes(const NodeNeighbours& lower, int nodes, bool zeroValues,
+                           SparseMatrix& upper);
+
 // The pattern of cells with any node count: `cells` holds numCells x nodesPerCell node ids row by
 // row; each packed element matrix is the row-by-row upper triangle of its (3 k) x (3 k) matrix,
 // (3 k)(3 k + 1) / 2 entries. dofNode[i] is the new index of node i (its DOFs are
@@ -29,6 +42,10 @@ struct AssemblyPattern {
 // Fails when the packed indices or the matrix would overflow 32-bit ints.
 Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
                                 const std::vector<int>& dofNode, int numDofNodes,
+                                AssemblyPattern& pattern);
+// The same from the cells' LowerNodeNeighbours, already built.
+Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
+                                const std::vector<int>& dofNode, const NodeNeighbours& lower,
                                 AssemblyPattern& pattern);
 
 // The same for the 4-node cells of `mesh`.

@@ -159,6 +159,7 @@ Status CholmodFactor::analyze(const SparseMatrix& upper,
   const bool ownChoice = !impl_->factor;
   if (ownChoice) { // no candidate, or none could be analysed: CHOLMOD's own ordering
     common.status = CHOLMOD_OK;
+    std::lock_guard<std::mutex> metis(MetisMutex()); // CHOLMOD may try METIS
     impl_->factor = cholmod_analyze(&view, &common);
   }
   if (!impl_->factor || common.status < CHOLMOD_OK)

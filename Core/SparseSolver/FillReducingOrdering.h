@@ -15,9 +15,15 @@
 #include "Common/Status.h"
 #include "Element/StiffnessAssembly.h"
 
+#include <mutex>
 #include <vector>
 
 namespace faceplan {
+
+// Held around every METIS call. METIS keeps its random generator in global state: two orderings
+// at once (two threads, or two precomputes) would draw from it in turn, so the same graph would
+// get a different ordering from run to run, and round-off-different results.
+std::mutex& MetisMutex();
 
 struct FillReducingOrdering {
   std::vector<int> permutation; // position -> DOF (CHOLMOD's Perm convention)
@@ -30,6 +36,17 @@ struct FillReducingOrdering {
 Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
                               const std::vector<char>& trailingNode,
                               FillReducingOrdering& ordering);
+
+// The same from the node graph itself: `lower` as LowerNodeNeighbours gives it
+// (Element/StiffnessAssembly.h), of which the first `nodes` are ordered. Gives the ordering
+// OrderNodesWithTrailing gives for the upper triangle UpperPatternOfNodes builds from `lower`.
+Status OrderNodeGraphWithTrailing(const NodeNeighbours& lower, int nodes, int dofsPerNode,
+                                  const std::vector<char>& trailingNode,
+                                  FillReducingOrdering& ordering);
+
+// The first `nodes` nodes of `lower` that share a cell with a later node: with the free nodes
+// first and the ROI nodes after them, the rows of K_FR by node (NodesCoupledTo of K_FR).
+std::vector<char> NodesCoupledToLaterNodes(const NodeNeighbours& lower, int nodes);
 
 // Nodes (of `dofsPerNode` DOFs) with a non-zero in some column of `coupling` (free x ROI), as a
 // per-node mark for OrderNodesWithTrailing.

@@ -7,7 +7,7 @@
 #      libquadmath0 libgomp1 libgtest-dev zlib1g-dev)
 #   tar -czf .devcarry/eigen3.tar.gz -C / usr/include/eigen3 usr/share/eigen3/cmake
 # It builds the working tree as it is and fails when that does not build (no stale fallback).
-# Usage there: OUT=<results dir> Cuda/tools/gpu_machine_run.sh [gpu_benchmark arguments...]
+# Usage there: OUT=<results dir> [BUILD=<dir>] [SKIP_BENCHMARK=1] Cuda/tools/gpu_machine_run.sh [gpu_benchmark arguments...]
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 ROOT=$PWD
@@ -40,7 +40,8 @@ configure() { # $1 source dir, $2 build dir
     -DSUITESPARSECONFIG_LIBRARY="$LIB/libsuitesparseconfig.so" \
     -DCMAKE_EXE_LINKER_FLAGS="-Wl,-rpath-link,$RUNLIBS -Wl,-rpath,$RUNLIBS" "${ZLIBARGS[@]}"
 }
-BUILD=/tmp/build
+# BUILD: the build folder (two trees side by side use two); SKIP_BENCHMARK=1 builds and tests only.
+BUILD=${BUILD:-/tmp/build}
 TARGETS="TestCudaBackend TestCudaFallback gpu_benchmark"
 ok=0
 if configure "$ROOT" "$BUILD" > "$OUT/configure.log" 2>&1 && \
@@ -62,4 +63,5 @@ export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-8}
 (cd "$TESTDIR" && ctest --output-on-failure -L cuda) >> "$OUT/ctest-gpu.log" 2>&1
 grep -E "tests passed|Passed|Failed|Skipped|relative|residual" "$OUT/ctest-gpu.log" | tail -30
 (cd "$TESTDIR" && ctest -L gpu -V 2>&1 | grep -E "relative|residual|passes" ) | head -20
+[ "${SKIP_BENCHMARK:-0}" = 1 ] && exit 0
 "$BUILD/bin/gpu_benchmark" --out "$OUT/gpu_benchmark.json" "$@" 2>&1 | tee "$OUT/gpu_benchmark.txt"

@@ -73,7 +73,7 @@ public:
       cuda::FactorAndResponseDetail detail;
       const Status status =
           cuda::FactorAndBuildResponse(kff, kfr, keptDofs, factor, response, op, detail);
-      report.factorizationMs = detail.factorizeMs + detail.factorDownloadMs;
+      report.factorizationMs = detail.factorizeMs + detail.factorDownloadWaitMs;
       report.worstRelativeResidual = detail.response.worstRelativeResidual;
       return status;
     }

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
 
 using namespace faceplan;
@@ -70,6 +71,44 @@ TEST(FillReducingOrdering, PutsMarkedNodesLastAndKeepsNodesTogether) {
     EXPECT_EQ(ordering.permutation[p + 2], ordering.permutation[p] + 2);
     const bool last = p >= n - ordering.trailingDofs;
     EXPECT_EQ(static_cast<bool>(coupled[ordering.permutation[p] / 3]), last) << "position " << p;
+  }
+}
+
+// The Precompute orders K_FF from the cells' node graph while the assembly runs: the structure,
+// the ROI-coupled marks and the ordering it gets that way must be those of the assembled blocks.
+TEST(FillReducingOrdering, NodeGraphGivesTheOrderingOfTheAssembledBlock) {
+  PrecomputeRequest request = ShellRequest(15, 6);
+  request.options.method = SolveMethod::CachedFactor;
+  const auto system = PrecomputeOrFail(request);
+  ASSERT_TRUE(system);
+  EXPECT_TRUE(system->info.orderedBesideAssembly);
+  const int freeNodes = system->layout.freeNodes();
+  ASSERT_GE(freeNodes, 12000); // large enough for the dissection's parallel top levels
+  const NodeNeighbours lower =
+      LowerNodeNeighbours(system->cornerMesh.tets.data(), system->cornerMesh.numTets(), 4,
+                          system->layout.dofNode, static_cast<int>(system->layout.meshNode.size()));
+
+  SparseMatrix pattern;
+  ASSERT_TRUE(UpperPatternOfNodes(lower, freeNodes, true, pattern).ok);
+  const SparseMatrix& kff = system->kff;
+  ASSERT_EQ(pattern.rows(), kff.rows());
+  ASSERT_EQ(pattern.nonZeros(), kff.nonZeros());
+  EXPECT_TRUE(std::equal(kff.outerIndexPtr(), kff.outerIndexPtr() + kff.cols() + 1,
+                         pattern.outerIndexPtr()));
+  EXPECT_TRUE(std::equal(kff.innerIndexPtr(), kff.innerIndexPtr() + kff.nonZeros(),
+                         pattern.innerIndexPtr()));
+
+  const std::vector<char> coupled = NodesCoupledToLaterNodes(lower, freeNodes);
+  EXPECT_EQ(coupled, NodesCoupledTo(system->kfr, freeNodes, 3));
+  for (const std::vector<char>& marks : {coupled, std::vector<char>{}}) {
+    FillReducingOrdering fromGraph, fromMatrix;
+    ASSERT_TRUE(OrderNodeGraphWithTrailing(lower, freeNodes, 3, marks, fromGraph).ok);
+    ASSERT_TRUE(OrderNodesWithTrailing(kff, 3, marks, fromMatrix).ok);
+    FillReducingOrdering again;
+    ASSERT_TRUE(OrderNodesWithTrailing(kff, 3, marks, again).ok);
+    EXPECT_EQ(again.permutation, fromMatrix.permutation) << "matrix twice";
+    EXPECT_EQ(fromGraph.permutation, fromMatrix.permutation);
+    EXPECT_EQ(fromGraph.trailingDofs, fromMatrix.trailingDofs);
   }
 }
 
