@@ -536,6 +536,8 @@ int main(int argc, char** argv) {
           pj.num("factor_copy_left_after_response_ms", fd.factorDownloadWaitMs);
           pj.num("factor_mark_factorized_ms", fd.markFactorizedMs);
           pj.num("response_wall_ms", rd.wallMs);
+          pj.num("response_host_prepare_ms", rd.hostPrepareMs);
+          pj.num("response_allocate_ms", rd.allocateMs);
           pj.num("response_upload_ms", rd.uploadMs);
           pj.num("response_host_touch_wait_ms", rd.hostTouchWaitMs);
           pj.num("response_forward_ms", rd.forwardMs);
@@ -552,11 +554,11 @@ int main(int argc, char** argv) {
           pj.num("worst_relative_residual", rd.worstRelativeResidual);
           j.raw("core_precompute_cuda_backend_gpu_factor_and_response", pj.text());
           std::printf("  GPU factor + response inside Precompute: %.0f ms = factorize %.0f + response %.0f ms "
-                      "(upload %.0f, forward %.0f, backward %.0f, residual %.0f, extract %.0f, download %.0f; "
+                      "(host %.0f, allocate %.0f, upload %.0f, forward %.0f, backward %.0f, residual %.0f, extract %.0f, download %.0f; "
                       "%d supernodes, %.0f GFLOP at %.2f TFLOP/s, residual %.2e; host pages %.0f ms after the "
                       "sweeps); beside the response the copy to CHOLMOD %.0f ms and its trailing block %.0f ms, %.0f ms of "
                       "them left after\n",
-                      fd.wallMs, fd.factorizeMs, rd.wallMs, rd.uploadMs, rd.forwardMs, rd.backwardMs,
+                      fd.wallMs, fd.factorizeMs, rd.wallMs, rd.hostPrepareMs, rd.allocateMs, rd.uploadMs, rd.forwardMs, rd.backwardMs,
                       rd.residualMs, rd.extractMs, rd.downloadMs, rd.supernodes, rd.flops / 1e9, sweepTflops,
                       rd.worstRelativeResidual, rd.hostTouchWaitMs, fd.factorDownloadMs, fd.markFactorizedMs,
                       fd.factorDownloadWaitMs);

@@ -75,6 +75,8 @@ struct DenseResponseDetail {
   int blocks = 0;            // passes over the ROI columns (1 when all fit in GPU memory)
   int columnsPerBlock = 0;
   double flops = 0.0;        // of the two triangular sweeps
+  double hostPrepareMs = 0.0; // host work before the uploads (permutation, reach, K_perm when made here)
+  double allocateMs = 0.0;    // device buffers for the right-hand sides and the residual
   double uploadMs = 0.0;     // factor, K_FF and K_FR to the device
   double forwardMs = 0.0;    // device time of the forward sweeps
   double backwardMs = 0.0;   // device time of the backward sweeps

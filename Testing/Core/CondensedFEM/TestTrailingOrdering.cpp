@@ -83,7 +83,7 @@ TEST(FillReducingOrdering, NodeGraphGivesTheOrderingOfTheAssembledBlock) {
   ASSERT_TRUE(system);
   EXPECT_TRUE(system->info.orderedBesideAssembly);
   const int freeNodes = system->layout.freeNodes();
-  ASSERT_GE(freeNodes, 12000); // large enough for the dissection's parallel top levels
+  ASSERT_GE(freeNodes, 12000); // large enough for a dissection of many levels
   const NodeNeighbours lower =
       LowerNodeNeighbours(system->cornerMesh.tets.data(), system->cornerMesh.numTets(), 4,
                           system->layout.dofNode, static_cast<int>(system->layout.meshNode.size()));
