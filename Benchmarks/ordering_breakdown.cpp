@@ -1,0 +1,91 @@
+// Where the ordering of K_FF spends its time (issue 14 §2: the ordering thread is the precompute's
+// longest CPU path at 1M cells): the calls StartEarlyOrdering makes, timed one by one on one thread,
+// each the median of --repeats runs, on MakeFaceLikeScene(subdivisions, layers).
+//   ordering_breakdown [--subdivisions 50] [--layers 7] [--repeats 3]
+// 50/7 is the GPU benchmark's 1M scene, 18/5 faceplan_benchmark's ~100k one.
+#include "CondensedFEM/PrecomputeStages.h"
+#include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/FillReducingOrdering.h"
+#include "Support/ShellMeshGenerator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <vector>
+
+using namespace faceplan;
+
+namespace {
+
+double MedianMs(int repeats, const std::function<void()>& work) {
+  std::vector<double> ms;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    work();
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  std::sort(ms.begin(), ms.end());
+  return ms[ms.size() / 2];
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+  int subdivisions = 50, layers = 7, repeats = 3;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--subdivisions")) subdivisions = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--layers")) layers = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--repeats")) repeats = std::max(1, std::atoi(argv[i + 1]));
+    else {
+      std::fprintf(stderr, "usage: %s [--subdivisions S] [--layers L] [--repeats R]\n", argv[0]);
+      return 2;
+    }
+  }
+  const FaceLikeScene scene = MakeFaceLikeScene(subdivisions, layers, 0.1);
+  PrecomputeRequest request;
+  request.mesh = scene.shell.mesh;
+  request.materials = Materials::Uniform(3e3, 0.45);
+  request.sets.constrained = scene.constrained;
+  request.sets.movable = scene.movable;
+  request.sets.kept = scene.kept;
+  request.options.method = SolveMethod::DenseResponse;
+  PrecomputeState state(request, nullptr, ProgressCallback());
+  // The validation starts the mesh checks on a thread: wait for them so nothing runs beside the
+  // timed calls.
+  if (Status s = ValidatePrecomputeRequest(state); !s) return std::fprintf(stderr, "%s\n", s.message.c_str()), 1;
+  if (Status s = FinishMeshChecks(state); !s) return std::fprintf(stderr, "%s\n", s.message.c_str()), 1;
+  if (Status s = SeparateNodes(state); !s) return std::fprintf(stderr, "%s\n", s.message.c_str()), 1;
+  const NodeLayout& layout = state.sys->layout;
+  const int freeNodes = layout.freeNodes();
+
+  NodeNeighbours lower;
+  const double lowerMs = MedianMs(repeats, [&] {
+    lower = LowerNodeNeighbours(request.mesh.tets.data(), request.mesh.numTets(), 4, layout.dofNode,
+                                static_cast<int>(layout.meshNode.size()));
+  });
+  SparseMatrix pattern;
+  const double patternMs = MedianMs(repeats, [&] { UpperPatternOfNodes(lower, freeNodes, false, pattern); });
+  std::vector<char> coupled;
+  const double coupledMs = MedianMs(repeats, [&] { coupled = NodesCoupledToLaterNodes(lower, freeNodes); });
+  FillReducingOrdering ordering;
+  const double metisMs = MedianMs(repeats, [&] {
+    ordering = FillReducingOrdering();
+    OrderNodeGraphWithTrailing(lower, freeNodes, 3, coupled, ordering);
+  });
+  CholmodFactor factor;
+  const std::vector<FillReducingOrdering> candidates{ordering};
+  const double analyzeMs = MedianMs(repeats, [&] { factor.analyze(pattern, candidates, nullptr); });
+  std::printf("scene %d/%d: %ld tets, %d free nodes, K_FF %ld x %ld with %ld stored entries, factor %.3g "
+              "nonzeros (%d trailing DOFs)\n",
+              subdivisions, layers, static_cast<long>(request.mesh.numTets()), freeNodes,
+              static_cast<long>(pattern.rows()), static_cast<long>(pattern.cols()),
+              static_cast<long>(pattern.nonZeros()), factor.factorNonzeros(), factor.trailingDofs());
+  std::printf("median of %d, ms: node graph %.0f | K_FF pattern %.0f | ROI-coupled marks %.0f | "
+              "METIS ordering %.0f | CHOLMOD symbolic analysis %.0f | sum %.0f\n",
+              repeats, lowerMs, patternMs, coupledMs, metisMs, analyzeMs,
+              lowerMs + patternMs + coupledMs + metisMs + analyzeMs);
+  return 0;
+}
