@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <set>
+#include <thread>
 
 using namespace faceplan;
 using namespace faceplan::testing;
@@ -109,6 +110,36 @@ TEST(FillReducingOrdering, NodeGraphGivesTheOrderingOfTheAssembledBlock) {
     EXPECT_EQ(again.permutation, fromMatrix.permutation) << "matrix twice";
     EXPECT_EQ(fromGraph.permutation, fromMatrix.permutation);
     EXPECT_EQ(fromGraph.trailingDofs, fromMatrix.trailingDofs);
+  }
+}
+
+// Orderings made at once on several threads (two precomputes, or the precompute's ordering thread
+// beside another) are those made alone: METIS keeps its random generator in global state, so
+// without MetisMutex concurrent calls draw from it in turn and get different orderings.
+TEST(FillReducingOrdering, OrderingsMadeAtOnceEqualTheOneMadeAlone) {
+  const auto system = PrecomputeOrFail(ShellRequest(12, 5));
+  ASSERT_TRUE(system);
+  const int freeNodes = system->layout.freeNodes();
+  const std::vector<char> coupled = NodesCoupledTo(system->kfr, freeNodes, 3);
+  FillReducingOrdering alone;
+  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, coupled, alone).ok);
+  constexpr int kThreads = 4;
+  std::vector<FillReducingOrdering> atOnce(kThreads);
+  std::vector<char> ok(kThreads, 0);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t)
+    threads.emplace_back([&, t]() {
+      // Half of them with no marks: different graphs at once, as two different requests.
+      const std::vector<char> marks = t % 2 == 0 ? coupled : std::vector<char>{};
+      ok[t] = OrderNodesWithTrailing(system->kff, 3, marks, atOnce[t]).ok;
+    });
+  for (std::thread& thread : threads)
+    thread.join();
+  FillReducingOrdering plain;
+  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, {}, plain).ok);
+  for (int t = 0; t < kThreads; ++t) {
+    ASSERT_TRUE(ok[t]) << "thread " << t;
+    EXPECT_EQ(atOnce[t].permutation, (t % 2 == 0 ? alone : plain).permutation) << "thread " << t;
   }
 }
 
