@@ -413,11 +413,7 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   std::future<void> hostPagesTouched;
   if (responseHost)
     hostPagesTouched = std::async(std::launch::async, [responseHost]() {
-      double* data = responseHost->data();
-      const std::int64_t count = static_cast<std::int64_t>(responseHost->size());
-      ParallelFor(count, std::int64_t(1) << 20, [data](std::int64_t begin, std::int64_t end) {
-        std::fill(data + begin, data + end, 0.0);
-      });
+      detail::TouchPagesInParallel(responseHost->data(), static_cast<std::int64_t>(responseHost->size()));
     });
 
   // Host-side structure: inverse permutation, largest off-diagonal block, flops.
@@ -674,10 +670,7 @@ Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& 
   // 1M cells made that copy take 1-2 s and crowd the response's own download.
   if (!detail::AllocateHostFactor(L, factor.cholmodCommon(), error)) return Status::Error(error);
   std::future<void> hostFactorTouched = std::async(std::launch::async, [L]() {
-    double* x = static_cast<double*>(L->x);
-    const std::int64_t count = static_cast<std::int64_t>(L->xsize);
-    ParallelFor(count, std::int64_t(1) << 20,
-                [x](std::int64_t begin, std::int64_t end) { std::fill(x + begin, x + end, 0.0); });
+    detail::TouchPagesInParallel(static_cast<double*>(L->x), static_cast<std::int64_t>(L->xsize));
   });
   if (!detail::FactorAnalysedOnGpu(kffUpper, L, factor.cholmodCommon(), deviceX, false, detail.factorizeMs,
                                    unused, error))

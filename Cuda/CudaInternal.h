@@ -98,6 +98,13 @@ inline void ParallelCopy(void* dst, const void* src, size_t bytes) {
   });
 }
 
+// Writes zeros over `count` doubles on every core: the first touch of freshly allocated host
+// memory (its page faults), done beside GPU work so that a later copy into it is a plain copy.
+inline void TouchPagesInParallel(double* data, std::int64_t count) {
+  ParallelFor(count, std::int64_t(1) << 20,
+              [data](std::int64_t begin, std::int64_t end) { std::fill(data + begin, data + end, 0.0); });
+}
+
 // Large device-to-host copy into pageable memory: through two page-locked buffers, the device
 // copy of one chunk overlapping the parallel host copy of the previous one.
 bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream, std::string& error);
