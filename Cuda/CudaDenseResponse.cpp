@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numeric>
 #include <vector>
 
@@ -295,6 +296,35 @@ double SupernodalCholesky::factorNonzeros() const {
 
 namespace {
 
+// Streams of the backward sweep: the supernodes of different subtrees of the elimination tree are
+// independent there, so subtrees run on their own streams, each with its own cuBLAS handle and
+// workspace, and wait only for their parent supernode. FACEPLAN_CUDA_SWEEP_STREAMS overrides the
+// count (1: one stream, the supernodes in sequence), for measuring.
+int SweepStreamCount() {
+  if (const char* text = std::getenv("FACEPLAN_CUDA_SWEEP_STREAMS"); text && *text)
+    return std::clamp(std::atoi(text), 1, 16);
+  return 4;
+}
+
+// The extra streams (entries 1..count-1; entry 0 stays null: stream 0 is the response's own), their
+// handles and events.
+struct SweepStreams {
+  std::vector<cudaStream_t> stream;
+  std::vector<cublasHandle_t> blas;
+  std::vector<cudaEvent_t> done;       // per supernode that has a child on another stream
+  std::vector<cudaEvent_t> streamDone; // per extra stream, at the end of a sweep
+  ~SweepStreams() {
+    for (cublasHandle_t h : blas)
+      if (h) cublasDestroy(h);
+    for (cudaEvent_t e : done)
+      if (e) cudaEventDestroy(e);
+    for (cudaEvent_t e : streamDone)
+      if (e) cudaEventDestroy(e);
+    for (cudaStream_t q : stream)
+      if (q) cudaStreamDestroy(q);
+  }
+};
+
 struct Resources {
   cudaStream_t stream = nullptr;
   cublasHandle_t blas = nullptr;
@@ -446,6 +476,53 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   FP_CUBLAS_TRY(cublasSetStream(r.blas, r.stream));
   FP_CUBLAS_TRY(cublasSetPointerMode(r.blas, CUBLAS_POINTER_MODE_HOST));
 
+  // The backward sweep's subtrees on streams: each supernode's parent is the supernode of its first
+  // off-diagonal row; going down from the roots, a supernode's first child keeps its stream and the
+  // others take the next stream in turn. A supernode waits for its parent's event only when the
+  // parent ran on another stream (the parent's own wait covers the ancestors above it).
+  const int streamCount = SweepStreamCount();
+  std::vector<int> sweepStream(L.nsuper, 0), parentOf(L.nsuper, -1);
+  std::vector<char> parentHasChild(L.nsuper, 0), needsEvent(L.nsuper, 0);
+  {
+    std::vector<int> columnSuper(n);
+    for (int s = 0; s < L.nsuper; ++s)
+      for (int k = L.super[s]; k < L.super[s + 1]; ++k) columnSuper[k] = s;
+    int nextStream = 0;
+    for (int s = L.nsuper - 1; s >= 0; --s) {
+      const int nscol = L.super[s + 1] - L.super[s];
+      if (L.pi[s + 1] - L.pi[s] > nscol) parentOf[s] = columnSuper[L.s[L.pi[s] + nscol]];
+      const int p = parentOf[s];
+      if (p < 0 || streamCount == 1) {
+        sweepStream[s] = p < 0 ? 0 : sweepStream[p];
+      } else if (!parentHasChild[p]) {
+        sweepStream[s] = sweepStream[p];
+      } else {
+        nextStream = (nextStream + 1) % streamCount;
+        sweepStream[s] = nextStream;
+      }
+      if (p >= 0) {
+        parentHasChild[p] = 1;
+        if (sweepStream[s] != sweepStream[p]) needsEvent[p] = 1;
+      }
+    }
+  }
+  SweepStreams sweep;
+  sweep.stream.assign(streamCount, nullptr);
+  sweep.blas.assign(streamCount, nullptr);
+  sweep.streamDone.assign(streamCount, nullptr);
+  sweep.done.assign(L.nsuper, nullptr);
+  for (int q = 1; q < streamCount; ++q) {
+    FP_CUDA_TRY(cudaStreamCreateWithFlags(&sweep.stream[q], cudaStreamNonBlocking));
+    FP_CUBLAS_TRY(cublasCreate(&sweep.blas[q]));
+    FP_CUBLAS_TRY(cublasSetStream(sweep.blas[q], sweep.stream[q]));
+    FP_CUBLAS_TRY(cublasSetPointerMode(sweep.blas[q], CUBLAS_POINTER_MODE_HOST));
+    FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.streamDone[q], cudaEventDisableTiming));
+  }
+  for (int s = 0; s < L.nsuper; ++s)
+    if (needsEvent[s]) FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.done[s], cudaEventDisableTiming));
+  auto streamFor = [&](int q) { return q == 0 ? r.stream : sweep.stream[q]; };
+  auto blasFor = [&](int q) { return q == 0 ? r.blas : sweep.blas[q]; };
+
   // Fixed device data: factor, permutation, K_FR, K_perm (for the residual), the response.
   DeviceArray dLx, dLs, dPinv, dFrStart, dFrRow, dFrVal, dKStart, dKCol, dKVal, dResponse, dY, dT, dR, dSums, dSpmmBuffer;
   const size_t lxCount = static_cast<size_t>(L.px[L.nsuper]);
@@ -477,11 +554,18 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   hostClock.lapMs();
   if (!dResponse.ensure(sizeof(double) * static_cast<size_t>(keptRows) * roi, error)) return false;
 
-  // Columns per pass: Y (n x nb), T (maxOff x nb) and, for the residual, R (n x nb).
+  // Columns per pass: Y (n x nb) and T (maxOff x nb per sweep stream); R is fixed (n x 512).
   size_t freeBytes = 0, totalBytes = 0;
   FP_CUDA_TRY(cudaMemGetInfo(&freeBytes, &totalBytes));
-  const double perColumn = 8.0 * (double(n) + double(maxOff) + (kff ? double(n) : 0.0)) + 8.0;
-  const double usable = double(freeBytes) * 0.9 - 512.0 * 1024 * 1024;
+  // T: one workspace of maxOff rows per sweep stream.
+  // The residual is checked in chunks of kResidualColumns columns through one n x chunk buffer:
+  // with one n x nb buffer the 1M case needed two passes on an 80 GB card (7,601 + 16 columns),
+  // and each pass walks every supernode.
+  constexpr int kResidualColumns = 512;
+  const int residualColumns = std::min(kResidualColumns, roi);
+  const double perColumn = 8.0 * (double(n) + double(streamCount) * double(maxOff)) + 8.0;
+  const double usable = double(freeBytes) * 0.9 - 512.0 * 1024 * 1024 -
+                        (kff ? 8.0 * double(n) * double(residualColumns) : 0.0);
   const long long fit = usable > 0 ? static_cast<long long>(usable / perColumn) : 0;
   if (fit < 1) {
     error = "not enough GPU memory for the dense response's right-hand sides";
@@ -492,11 +576,11 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   detail.columnsPerBlock = nbMax;
   const size_t yCount = static_cast<size_t>(n) * nbMax;
   if (!dY.ensure(sizeof(double) * yCount, error) ||
-      !dT.ensure(sizeof(double) * std::max<size_t>(static_cast<size_t>(maxOff) * nbMax, 1), error) ||
+      !dT.ensure(sizeof(double) * std::max<size_t>(static_cast<size_t>(streamCount) * maxOff * nbMax, 1), error) ||
       !dSums.ensure(sizeof(double) * nbMax, error))
     return false;
   if (kff) {
-    if (!dR.ensure(sizeof(double) * yCount, error)) return false;
+    if (!dR.ensure(sizeof(double) * static_cast<size_t>(n) * std::min(residualColumns, nbMax), error)) return false;
     FP_CUSPARSE_TRY(cusparseCreate(&r.sparse));
     FP_CUSPARSE_TRY(cusparseSetStream(r.sparse, r.stream));
     FP_CUSPARSE_TRY(cusparseCreateCsr(&r.K, n, n, static_cast<int64_t>(kCol.size()), dKStart.as<int>(),
@@ -541,45 +625,61 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       }
     }
     FP_CUDA_TRY(cudaEventRecord(r.ev[3], r.stream));
-    // Backward: L^T X = Z.
+    // Backward: L^T X = Z, the subtrees on their streams (SweepStreams).
+    for (int q = 1; q < streamCount; ++q) FP_CUDA_TRY(cudaStreamWaitEvent(sweep.stream[q], r.ev[3], 0));
     for (int s = L.nsuper - 1; s >= 0; --s) {
       const int k1 = L.super[s], nscol = L.super[s + 1] - k1, nsrow = L.pi[s + 1] - L.pi[s];
       const int off = nsrow - nscol;
+      const int q = sweepStream[s];
+      cudaStream_t stream = streamFor(q);
+      cublasHandle_t blas = blasFor(q);
+      double* Tq = T + static_cast<size_t>(q) * maxOff * nb;
+      if (parentOf[s] >= 0 && sweepStream[parentOf[s]] != q)
+        FP_CUDA_TRY(cudaStreamWaitEvent(stream, sweep.done[parentOf[s]], 0));
       const double* block = Lx + L.px[s];
       double* X1 = Y + static_cast<size_t>(k1) * nb;
       if (off > 0) {
-        FP_CUDA_TRY(detail::LaunchGatherRows(Y, T, Ls + L.pi[s] + nscol, off, nb, r.stream));
-        FP_CUBLAS_TRY(cublasDgemm(r.blas, CUBLAS_OP_N, CUBLAS_OP_N, nb, nscol, off, &minusOne, T, nb,
+        FP_CUDA_TRY(detail::LaunchGatherRows(Y, Tq, Ls + L.pi[s] + nscol, off, nb, stream));
+        FP_CUBLAS_TRY(cublasDgemm(blas, CUBLAS_OP_N, CUBLAS_OP_N, nb, nscol, off, &minusOne, Tq, nb,
                                   block + nscol, nsrow, &one, X1, nb));
       }
-      FP_CUBLAS_TRY(cublasDtrsm(r.blas, CUBLAS_SIDE_RIGHT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N,
+      FP_CUBLAS_TRY(cublasDtrsm(blas, CUBLAS_SIDE_RIGHT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N,
                                 CUBLAS_DIAG_NON_UNIT, nb, nscol, &one, block, nsrow, X1, nb));
+      if (needsEvent[s]) FP_CUDA_TRY(cudaEventRecord(sweep.done[s], stream));
+    }
+    for (int q = 1; q < streamCount; ++q) {
+      FP_CUDA_TRY(cudaEventRecord(sweep.streamDone[q], sweep.stream[q]));
+      FP_CUDA_TRY(cudaStreamWaitEvent(r.stream, sweep.streamDone[q], 0));
     }
     FP_CUDA_TRY(cudaEventRecord(r.ev[4], r.stream));
     // Residual in the permuted numbering: R = K_perm Y - P b (norms are permutation-invariant).
     if (kff) {
-      cusparseDnMatDescr_t dnY = nullptr, dnR = nullptr;
-      FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnY, n, nb, nb, Y, CUDA_R_64F, CUSPARSE_ORDER_ROW));
-      FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnR, n, nb, nb, dR.as<double>(), CUDA_R_64F, CUSPARSE_ORDER_ROW));
-      size_t bufferBytes = 0;
-      bool ok = cusparseSpMM_bufferSize(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE, CUSPARSE_OPERATION_NON_TRANSPOSE,
-                                        &one, r.K, dnY, &zero, dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT,
-                                        &bufferBytes) == CUSPARSE_STATUS_SUCCESS;
-      ok = ok && dSpmmBuffer.ensure(std::max<size_t>(bufferBytes, 8), error);
-      const cusparseStatus_t st =
-          ok ? cusparseSpMM(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE, CUSPARSE_OPERATION_NON_TRANSPOSE, &one, r.K,
-                            dnY, &zero, dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT, dSpmmBuffer.as<void>())
-             : CUSPARSE_STATUS_INTERNAL_ERROR;
-      cusparseDestroyDnMat(dnY);
-      cusparseDestroyDnMat(dnR);
-      if (st != CUSPARSE_STATUS_SUCCESS) {
-        if (error.empty()) error = std::string("cuSPARSE SpMM failed: ") + cusparseGetErrorString(st);
-        return false;
-      }
-      FP_CUDA_TRY(detail::LaunchScatterCsc(dFrStart.as<int>(), dFrRow.as<int>(), dFrVal.as<double>(),
-                                           dPinv.as<int>(), c0, nb, -1.0, dR.as<double>(), r.stream));
       FP_CUDA_TRY(cudaMemsetAsync(dSums.as<double>(), 0, sizeof(double) * nb, r.stream));
-      FP_CUDA_TRY(detail::LaunchColumnSquaredNorms(dR.as<double>(), n, nb, dSums.as<double>(), r.stream));
+      for (int j0 = 0; j0 < nb; j0 += residualColumns) {
+        const int cols = std::min(residualColumns, nb - j0);
+        // Columns j0.. of the row-major Y (leading dimension nb) into R (n x cols, row-major).
+        cusparseDnMatDescr_t dnY = nullptr, dnR = nullptr;
+        FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnY, n, cols, nb, Y + j0, CUDA_R_64F, CUSPARSE_ORDER_ROW));
+        FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnR, n, cols, cols, dR.as<double>(), CUDA_R_64F, CUSPARSE_ORDER_ROW));
+        size_t bufferBytes = 0;
+        bool ok = cusparseSpMM_bufferSize(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE, CUSPARSE_OPERATION_NON_TRANSPOSE,
+                                          &one, r.K, dnY, &zero, dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT,
+                                          &bufferBytes) == CUSPARSE_STATUS_SUCCESS;
+        ok = ok && dSpmmBuffer.ensure(std::max<size_t>(bufferBytes, 8), error);
+        const cusparseStatus_t st =
+            ok ? cusparseSpMM(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE, CUSPARSE_OPERATION_NON_TRANSPOSE, &one,
+                              r.K, dnY, &zero, dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT, dSpmmBuffer.as<void>())
+               : CUSPARSE_STATUS_INTERNAL_ERROR;
+        cusparseDestroyDnMat(dnY);
+        cusparseDestroyDnMat(dnR);
+        if (st != CUSPARSE_STATUS_SUCCESS) {
+          if (error.empty()) error = std::string("cuSPARSE SpMM failed: ") + cusparseGetErrorString(st);
+          return false;
+        }
+        FP_CUDA_TRY(detail::LaunchScatterCsc(dFrStart.as<int>(), dFrRow.as<int>(), dFrVal.as<double>(),
+                                             dPinv.as<int>(), c0 + j0, cols, -1.0, dR.as<double>(), r.stream));
+        FP_CUDA_TRY(detail::LaunchColumnSquaredNorms(dR.as<double>(), n, cols, dSums.as<double>() + j0, r.stream));
+      }
       FP_CUDA_TRY(cudaMemcpyAsync(sums.data(), dSums.as<double>(), sizeof(double) * nb, cudaMemcpyDeviceToHost,
                                   r.stream));
     }
