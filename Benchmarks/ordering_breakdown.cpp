@@ -8,7 +8,7 @@
 #include "CondensedFEM/PrecomputeStages.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/FillReducingOrdering.h"
-#include "Support/ShellMeshGenerator.h"
+#include "Support/FEMTestScenes.h"
 
 #include <cholmod.h>
 
@@ -48,13 +48,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const FaceLikeScene scene = MakeFaceLikeScene(subdivisions, layers, 0.1);
-  PrecomputeRequest request;
-  request.mesh = scene.shell.mesh;
-  request.materials = Materials::Uniform(3e3, 0.45);
-  request.sets.constrained = scene.constrained;
-  request.sets.movable = scene.movable;
-  request.sets.kept = scene.kept;
+  PrecomputeRequest request = testing::ShellRequest(subdivisions, layers);
   request.options.method = SolveMethod::DenseResponse;
   PrecomputeState state(request, nullptr, ProgressCallback());
   // The validation starts the mesh checks on a thread: wait for them so nothing runs beside the
@@ -95,20 +89,19 @@ int main(int argc, char** argv) {
     const int* super = static_cast<const int*>(L->super);
     const int* pi = static_cast<const int*>(L->pi);
     double offRows = 0.0, diagonalRows = 0.0, trsmFlops = 0.0, gemmFlops = 0.0, bigTrsmFlops = 0.0;
-    const double r0 = 3.0 * double(request.sets.movable.size());
+    const double r = 3.0 * double(request.sets.movable.size()); // the ROI DOFs: response columns
     for (size_t s = 0; s < L->nsuper; ++s) {
       const double nscol = super[s + 1] - super[s], nsrow = pi[s + 1] - pi[s];
       diagonalRows += nscol;
       offRows += nsrow - nscol;
-      trsmFlops += r0 * nscol * nscol;
-      gemmFlops += 2.0 * r0 * nscol * (nsrow - nscol);
+      trsmFlops += r * nscol * nscol;
+      gemmFlops += 2.0 * r * nscol * (nsrow - nscol);
       if (nscol >= 256)
-        bigTrsmFlops += r0 * nscol * nscol;
+        bigTrsmFlops += r * nscol * nscol;
     }
     std::printf("backward sweep flops: triangular solves on the diagonal blocks %.3g TFLOP (%.3g in "
                 "supernodes of >= 256 columns), products with the off-diagonal blocks %.3g TFLOP\n",
                 trsmFlops / 1e12, bigTrsmFlops / 1e12, gemmFlops / 1e12);
-    const double r = 3.0 * double(request.sets.movable.size()); // the ROI DOFs: response columns
     std::printf("supernodes %zu: %.3g diagonal and %.3g off-diagonal rows; with %.0f right-hand sides "
                 "the backward sweep's row traffic is at least %.3g TB\n",
                 L->nsuper, diagonalRows, offRows, r, 8.0 * r * (3.0 * offRows + 2.0 * diagonalRows) / 1e12);
