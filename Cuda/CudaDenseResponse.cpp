@@ -481,16 +481,12 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   // others take the next stream in turn. A supernode waits for its parent's event only when the
   // parent ran on another stream (the parent's own wait covers the ancestors above it).
   const int streamCount = SweepStreamCount();
-  std::vector<int> sweepStream(L.nsuper, 0), parentOf(L.nsuper, -1);
+  const std::vector<int> parentOf = SupernodeParents(tree, SupernodeOfColumns(tree));
+  std::vector<int> sweepStream(L.nsuper, 0);
   std::vector<char> parentHasChild(L.nsuper, 0), needsEvent(L.nsuper, 0);
   {
-    std::vector<int> columnSuper(n);
-    for (int s = 0; s < L.nsuper; ++s)
-      for (int k = L.super[s]; k < L.super[s + 1]; ++k) columnSuper[k] = s;
     int nextStream = 0;
     for (int s = L.nsuper - 1; s >= 0; --s) {
-      const int nscol = L.super[s + 1] - L.super[s];
-      if (L.pi[s + 1] - L.pi[s] > nscol) parentOf[s] = columnSuper[L.s[L.pi[s] + nscol]];
       const int p = parentOf[s];
       if (p < 0 || streamCount == 1) {
         sweepStream[s] = p < 0 ? 0 : sweepStream[p];

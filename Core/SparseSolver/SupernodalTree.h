@@ -32,6 +32,13 @@ struct SupernodalStructure {
 // The structure of a numeric, supernodal LL^T factor; fails for any other.
 Status NumericSupernodalStructure(const cholmod_factor& factor, SupernodalStructure& out);
 
+// The supernode holding each column of the factor.
+std::vector<int> SupernodeOfColumns(const SupernodalStructure& tree);
+
+// Each supernode's parent in the tree: the supernode of its first off-diagonal row, always later in
+// the order; -1 for a root. supernodeOf as SupernodeOfColumns gives it.
+std::vector<int> SupernodeParents(const SupernodalStructure& tree, const std::vector<int>& supernodeOf);
+
 // marked[k] = 1 for every supernode k that holds one of `rows` or lies above one in the tree;
 // every supernode when `rows` is empty. A supernode's parent is the supernode of its first
 // off-diagonal row, always later in the order, so one ascending pass suffices. Fails for a row
