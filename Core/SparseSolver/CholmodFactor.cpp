@@ -199,6 +199,9 @@ Status CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const 
   if (static_cast<size_t>(b.rows()) != impl_->factor->n)
     return Status::Error("internal: right-hand side has the wrong size");
   cholmod_dense rhs = ViewDense(b);
+  // A pinned BLAS thread count (the factorization's cap): a solve's round-off must not depend on
+  // the count another thread's precompute set meanwhile (OpenBLAS splits some products by it).
+  ScopedBlasThreads pinnedBlas(WorkerThreads(8), BlasScope::Pinned);
   const int ok = cholmod_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr,
                                 &impl_->y, &impl_->e, &impl_->common);
   if (!ok || !impl_->x) return Status::Error("CHOLMOD solve failed (out of memory?)");
@@ -265,6 +268,7 @@ Status CholmodFactor::solveTrailing(const SparseMatrix& b, Eigen::MatrixXd& x) c
   QuietCholmodCommon local;
   cholmod_dense rhs = ViewDense(forward);
   cholmod_dense *solution = nullptr, *y = nullptr, *e = nullptr;
+  ScopedBlasThreads pinnedBlas(WorkerThreads(8), BlasScope::Pinned); // as in solve()
   const int ok = cholmod_solve2(CHOLMOD_Lt, const_cast<cholmod_factor*>(L), &rhs, nullptr,
                                 &solution, nullptr, &y, &e, &local.common);
   Status status = Status::Ok();

@@ -84,6 +84,49 @@ TEST(BlasThreads, NestedScopesGiveBackTheEnclosingCount) {
   EXPECT_EQ(OpenBlasThreads(), original);
 }
 
+// A pinned scope (a solve) keeps its count while another thread opens and closes a shared one (a
+// precompute's single-threaded response), and shared scopes give way to the smallest request.
+TEST(BlasThreads, APinnedScopeHoldsAgainstSharedScopesOnOtherThreads) {
+  const int original = OpenBlasThreads();
+  if (original <= 0)
+    GTEST_SKIP() << "the BLAS in use is not OpenBLAS";
+  Turns turns;
+  int seenInsideShared = -1, seenAfterShared = -1;
+  std::thread solver([&] {
+    {
+      ScopedBlasThreads pinned(original + 3, BlasScope::Pinned);
+      turns.done(1);
+      turns.waitFor(2);
+      seenInsideShared = OpenBlasThreads();
+      turns.done(3);
+      turns.waitFor(4);
+      seenAfterShared = OpenBlasThreads();
+    }
+    turns.done(5);
+  });
+  std::thread precompute([&] {
+    turns.waitFor(1);
+    {
+      ScopedBlasThreads shared(1);
+      turns.done(2);
+      turns.waitFor(3);
+    }
+    turns.done(4);
+  });
+  solver.join();
+  precompute.join();
+  EXPECT_EQ(seenInsideShared, original + 3);
+  EXPECT_EQ(seenAfterShared, original + 3);
+  EXPECT_EQ(OpenBlasThreads(), original);
+  {
+    ScopedBlasThreads wide(original + 2);
+    ScopedBlasThreads narrow(1);
+    ScopedBlasThreads wider(original + 4);
+    EXPECT_EQ(OpenBlasThreads(), 1);
+  }
+  EXPECT_EQ(OpenBlasThreads(), original);
+}
+
 // The kernel report names OpenBLAS's choice (the tests link OpenBLAS) and gives advice only while
 // AVX2 kernels run on an AVX-512 CPU and the user made no choice of their own.
 TEST(BlasKernels, AdviceOnlyForAvx2KernelsOnAnAvx512CpuWithoutAUserChoice) {
