@@ -1,12 +1,15 @@
 #include "SparseSolver/FillReducingOrdering.h"
 
 #include "SparseSolver/CholmodViews.h"
+#include "SparseSolver/MetisRandom.h"
 
+#include "Common/WorkerThreads.h"
 
 #include <algorithm>
 #include <cholmod.h>
-#include <string>
 #include <mutex>
+#include <string>
+#include <thread>
 
 namespace faceplan {
 
@@ -42,27 +45,101 @@ void NodeGraphUpper(const std::vector<int>& compact, int compactNodes, VisitNeig
   }
 }
 
-// METIS nested dissection of a graph (CSC upper pattern), AMD when METIS fails. `method` names
-// what ordered it.
-Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows,
+// Held around a METIS call unless every thread has its own METIS random generator.
+std::unique_lock<std::mutex> LockMetisIfShared() {
+  if (MetisRandomIsPerThread())
+    return {};
+  return std::unique_lock<std::mutex>(MetisMutex());
+}
+
+// METIS nested dissection of a graph (CSC upper pattern), AMD when METIS fails. With `depth` > 0
+// and a graph large enough, the top levels are split here instead: a METIS node separator
+// (cholmod_bisect), the two halves ordered at once on two threads (recursively), the separator
+// last, which is the order METIS's own dissection gives its top levels. Each thread has its own
+// cholmod_common and (MetisRandom.h) its own METIS random generator, so the ordering is the same
+// on every run. `method` names what ordered the leaves.
+constexpr int kParallelDissectionNodes = 10000;
+
+Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, int depth,
                   std::vector<int>& order, const char*& method) {
   order.resize(n);
   std::vector<int> dummyRow(1, 0);
   cholmod_sparse graph = ViewPattern(n, columnStart, rows, dummyRow);
   QuietCholmodCommon quiet;
   cholmod_common& common = quiet.common;
-  method = "METIS";
-  {
-    std::lock_guard<std::mutex> metis(MetisMutex());
-    if (cholmod_metis(&graph, nullptr, 0, 0, order.data(), &common))
-      return Status::Ok();
+  std::vector<int> part;
+  if (depth > 0 && n >= kParallelDissectionNodes) {
+    part.resize(n);
+    SuiteSparse_long separator = -1;
+    {
+      std::unique_lock<std::mutex> metis = LockMetisIfShared();
+      separator = cholmod_bisect(&graph, nullptr, 0, 1, part.data(), &common);
+    }
+    const long long left = std::count(part.begin(), part.end(), 0);
+    if (separator < 0 || left == 0 || left + separator >= n)
+      part.clear(); // no useful split: order the whole graph below
   }
-  method = "AMD";
-  common.status = CHOLMOD_OK;
-  if (cholmod_amd(&graph, nullptr, 0, order.data(), &common))
-    return Status::Ok();
-  return Status::Error("fill-reducing ordering failed (CHOLMOD status " +
-                       std::to_string(common.status) + ")");
+  if (part.empty()) {
+    method = "METIS";
+    {
+      std::unique_lock<std::mutex> metis = LockMetisIfShared();
+      if (cholmod_metis(&graph, nullptr, 0, 0, order.data(), &common))
+        return Status::Ok();
+    }
+    method = "AMD";
+    common.status = CHOLMOD_OK;
+    if (cholmod_amd(&graph, nullptr, 0, order.data(), &common))
+      return Status::Ok();
+    return Status::Error("fill-reducing ordering failed (CHOLMOD status " +
+                         std::to_string(common.status) + ")");
+  }
+  // The two halves' induced subgraphs, nodes numbered in increasing order within each half.
+  std::vector<int> local(n), halfNodes[2];
+  for (int node = 0; node < n; ++node)
+    if (part[node] < 2) {
+      local[node] = static_cast<int>(halfNodes[part[node]].size());
+      halfNodes[part[node]].push_back(node);
+    }
+  std::vector<int> halfStart[2], halfRows[2], halfOrder[2];
+  for (int h = 0; h < 2; ++h) {
+    halfStart[h].assign(1, 0);
+    for (int node : halfNodes[h]) {
+      for (int k = columnStart[node]; k < columnStart[node + 1]; ++k)
+        if (part[rows[k]] == h)
+          halfRows[h].push_back(local[rows[k]]);
+      halfStart[h].push_back(static_cast<int>(halfRows[h].size()));
+    }
+  }
+  Status halfStatus[2] = {Status::Ok(), Status::Ok()};
+  const char* halfMethod[2] = {"METIS", "METIS"};
+  auto orderHalf = [&](int h) {
+    halfStatus[h] = OrderGraph(static_cast<int>(halfNodes[h].size()), halfStart[h], halfRows[h],
+                               depth - 1, halfOrder[h], halfMethod[h]);
+  };
+  std::thread other(orderHalf, 1);
+  orderHalf(0);
+  other.join();
+  for (int h = 0; h < 2; ++h)
+    if (!halfStatus[h])
+      return halfStatus[h];
+  method = std::string(halfMethod[0]) == "AMD" || std::string(halfMethod[1]) == "AMD" ? "AMD"
+                                                                                       : "METIS";
+  size_t next = 0;
+  for (int h = 0; h < 2; ++h)
+    for (int k : halfOrder[h])
+      order[next++] = halfNodes[h][k];
+  for (int node = 0; node < n; ++node)
+    if (part[node] == 2)
+      order[next++] = node;
+  return Status::Ok();
+}
+
+// Levels of the dissection split over threads: up to 8 leaves, as many as there are cores.
+int ParallelDissectionDepth() {
+  int depth = 0;
+  for (int leaves = 2; leaves <= std::min(WorkerThreads(16), 8); leaves *= 2)
+    ++depth;
+  return depth;
 }
 
 } // namespace
@@ -98,7 +175,9 @@ Status OrderWithTrailing(int nodes, int dofsPerNode, const std::vector<char>& tr
     NodeGraphUpper(compact, leadingNodes, visitNeighbours, columnStart, rows);
     const char* method = "METIS";
     // No postorder here: CHOLMOD postorders the final DOF ordering in analyze.
-    if (Status s = OrderGraph(leadingNodes, columnStart, rows, nodeOrder, method); !s)
+    if (Status s = OrderGraph(leadingNodes, columnStart, rows, ParallelDissectionDepth(), nodeOrder,
+                              method);
+        !s)
       return s;
     ordering.method = method;
   }

@@ -20,9 +20,11 @@
 
 namespace faceplan {
 
-// Held around every METIS call. METIS keeps its random generator in global state: two orderings
-// at once (two threads, or two precomputes) would draw from it in turn, so the same graph would
-// get a different ordering from run to run, and round-off-different results.
+// Held around every METIS call where MetisRandomIsPerThread() is false. METIS keeps its random
+// generator in global state: two orderings at once (two threads, or two precomputes) would draw
+// from it in turn, so the same graph would get a different ordering from run to run, and
+// round-off-different results. Where each thread has its own generator (MetisRandom.h), METIS
+// calls run at once: the top levels of the nested dissection are split over threads.
 std::mutex& MetisMutex();
 
 struct FillReducingOrdering {

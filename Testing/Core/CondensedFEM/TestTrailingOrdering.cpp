@@ -115,9 +115,11 @@ TEST(FillReducingOrdering, NodeGraphGivesTheOrderingOfTheAssembledBlock) {
 
 // Orderings made at once on several threads (two precomputes, or the precompute's ordering thread
 // beside another) are those made alone: METIS keeps its random generator in global state, so
-// without MetisMutex concurrent calls draw from it in turn and get different orderings.
+// without the per-thread generator (MetisRandom.h) or MetisMutex concurrent calls draw from it in
+// turn and get different orderings. The shell is large enough (>= 10,000 free nodes) for each
+// ordering to split its dissection over threads too.
 TEST(FillReducingOrdering, OrderingsMadeAtOnceEqualTheOneMadeAlone) {
-  const auto system = PrecomputeOrFail(ShellRequest(12, 5));
+  const auto system = PrecomputeOrFail(ShellRequest(16, 5));
   ASSERT_TRUE(system);
   const int freeNodes = system->layout.freeNodes();
   const std::vector<char> coupled = NodesCoupledTo(system->kfr, freeNodes, 3);
