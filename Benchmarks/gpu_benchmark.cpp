@@ -545,6 +545,7 @@ int main(int argc, char** argv) {
           pj.num("response_residual_ms", rd.residualMs);
           pj.num("response_extract_ms", rd.extractMs);
           pj.num("response_download_ms", rd.downloadMs);
+          pj.num("response_download_wait_ms", rd.downloadWaitMs);
           pj.num("response_sweep_gflops", rd.flops / 1e9);
           pj.num("response_sweep_tflop_per_s", sweepTflops);
           pj.num("supernodes", rd.supernodes);
@@ -554,12 +555,12 @@ int main(int argc, char** argv) {
           pj.num("worst_relative_residual", rd.worstRelativeResidual);
           j.raw("core_precompute_cuda_backend_gpu_factor_and_response", pj.text());
           std::printf("  GPU factor + response inside Precompute: %.0f ms = factorize %.0f + response %.0f ms "
-                      "(host %.0f, allocate %.0f, upload %.0f, forward %.0f, backward %.0f, residual %.0f, extract %.0f, download %.0f; "
+                      "(host %.0f, allocate %.0f, upload %.0f, forward %.0f, backward %.0f, residual %.0f, extract %.0f, download %.0f beside the residual, %.0f of it after; "
                       "%d supernodes, %.0f GFLOP at %.2f TFLOP/s, residual %.2e; host pages %.0f ms after the "
                       "sweeps); beside the response the copy to CHOLMOD %.0f ms and its trailing block %.0f ms, %.0f ms of "
                       "them left after\n",
                       fd.wallMs, fd.factorizeMs, rd.wallMs, rd.hostPrepareMs, rd.allocateMs, rd.uploadMs, rd.forwardMs, rd.backwardMs,
-                      rd.residualMs, rd.extractMs, rd.downloadMs, rd.supernodes, rd.flops / 1e9, sweepTflops,
+                      rd.residualMs, rd.extractMs, rd.downloadMs, rd.downloadWaitMs, rd.supernodes, rd.flops / 1e9, sweepTflops,
                       rd.worstRelativeResidual, rd.hostTouchWaitMs, fd.factorDownloadMs, fd.markFactorizedMs,
                       fd.factorDownloadWaitMs);
           std::fflush(stdout);

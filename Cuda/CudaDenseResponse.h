@@ -82,8 +82,9 @@ struct DenseResponseDetail {
   double backwardMs = 0.0;   // device time of the backward sweeps
   double residualMs = 0.0;   // device time of the residual check
   double extractMs = 0.0;    // device time of the kept-row extraction
-  double downloadMs = 0.0;   // response to the host (when asked for)
-  double hostTouchWaitMs = 0.0; // waiting for the host response's pages, touched beside the sweeps
+  double downloadMs = 0.0;   // response to the host (when asked for), on its own thread beside the residual
+  double downloadWaitMs = 0.0; // of that copy, left after the last pass's residual check
+  double hostTouchWaitMs = 0.0; // the copy waiting for the host response's pages, touched beside the sweeps
   double wallMs = 0.0;       // the whole call on the host clock
   double worstRelativeResidual = 0.0; // max over columns of ||K_FF x - b|| / ||b||
 };
