@@ -3,6 +3,8 @@
 // after them from the separated blocks.
 #include "CondensedFEM/PrecomputeStages.h"
 
+#include "SparseSolver/MetisRandom.h"
+
 #include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/MethodChoice.h"
 #include "SparseSolver/FillReducingOrdering.h"
@@ -60,9 +62,16 @@ Status OrderAndAnalyse(const OrderingInputs& in, CholmodFactor& factor, std::str
     if (!as)
       return as;
   }
-  ordering = candidates.empty() ? "CHOLMOD default"
-                                : std::string(candidates.front().method) +
-                                      (factor.trailingDofs() > 0 ? ", ROI-coupled DOFs last" : "");
+  ordering = "CHOLMOD default";
+  if (!candidates.empty()) {
+    const FillReducingOrdering& used = candidates.front();
+    ordering = used.method;
+    if (used.leaves > 1)
+      ordering += " (dissection's top split into " + std::to_string(used.leaves) + " parts on threads" +
+                  (MetisRandomIsPerThread() ? ")" : ", METIS calls serialised)");
+    if (factor.trailingDofs() > 0)
+      ordering += ", ROI-coupled DOFs last";
+  }
   return Status::Ok();
 }
 

@@ -57,11 +57,13 @@ std::unique_lock<std::mutex> LockMetisIfShared() {
 // (cholmod_bisect), the two halves ordered at once on two threads (recursively), the separator
 // last, which is the order METIS's own dissection gives its top levels. Each thread has its own
 // cholmod_common and (MetisRandom.h) its own METIS random generator, so the ordering is the same
-// on every run. `method` names what ordered the leaves.
+// on every run. `method` names what ordered the leaves; `leaves` counts the graphs METIS (or AMD)
+// ordered whole.
 constexpr int kParallelDissectionNodes = 10000;
 
 Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, int depth,
-                  std::vector<int>& order, const char*& method) {
+                  std::vector<int>& order, const char*& method, int& leaves) {
+  leaves = 1;
   order.resize(n);
   std::vector<int> dummyRow(1, 0);
   cholmod_sparse graph = ViewPattern(n, columnStart, rows, dummyRow);
@@ -112,9 +114,10 @@ Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, 
   }
   Status halfStatus[2] = {Status::Ok(), Status::Ok()};
   const char* halfMethod[2] = {"METIS", "METIS"};
+  int halfLeaves[2] = {1, 1};
   auto orderHalf = [&](int h) {
     halfStatus[h] = OrderGraph(static_cast<int>(halfNodes[h].size()), halfStart[h], halfRows[h],
-                               depth - 1, halfOrder[h], halfMethod[h]);
+                               depth - 1, halfOrder[h], halfMethod[h], halfLeaves[h]);
   };
   std::thread other(orderHalf, 1);
   orderHalf(0);
@@ -122,6 +125,7 @@ Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, 
   for (int h = 0; h < 2; ++h)
     if (!halfStatus[h])
       return halfStatus[h];
+  leaves = halfLeaves[0] + halfLeaves[1];
   method = std::string(halfMethod[0]) == "AMD" || std::string(halfMethod[1]) == "AMD" ? "AMD"
                                                                                        : "METIS";
   size_t next = 0;
@@ -176,7 +180,7 @@ Status OrderWithTrailing(int nodes, int dofsPerNode, const std::vector<char>& tr
     const char* method = "METIS";
     // No postorder here: CHOLMOD postorders the final DOF ordering in analyze.
     if (Status s = OrderGraph(leadingNodes, columnStart, rows, ParallelDissectionDepth(), nodeOrder,
-                              method);
+                              method, ordering.leaves);
         !s)
       return s;
     ordering.method = method;

@@ -31,6 +31,7 @@ struct FillReducingOrdering {
   std::vector<int> permutation; // position -> DOF (CHOLMOD's Perm convention)
   int trailingDofs = 0;         // the last trailingDofs positions hold the requested nodes' DOFs
   const char* method = "";      // "METIS" or "AMD"
+  int leaves = 1;               // graphs ordered whole: > 1 when the dissection's top was split here
 };
 
 // `upper`: the free block's upper triangle, `dofsPerNode` consecutive DOFs per node;
