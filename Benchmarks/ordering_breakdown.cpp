@@ -107,8 +107,8 @@ int main(int argc, char** argv) {
                 L->nsuper, diagonalRows, offRows, r, 8.0 * r * (3.0 * offRows + 2.0 * diagonalRows) / 1e12);
   }
   std::printf("median of %d, ms: node graph %.0f | K_FF pattern %.0f | ROI-coupled marks %.0f | "
-              "METIS ordering %.0f | CHOLMOD symbolic analysis %.0f | sum %.0f\n",
-              repeats, lowerMs, patternMs, coupledMs, metisMs, analyzeMs,
+              "METIS ordering %.0f (%d parts) | CHOLMOD symbolic analysis %.0f | sum %.0f\n",
+              repeats, lowerMs, patternMs, coupledMs, metisMs, ordering.leaves, analyzeMs,
               lowerMs + patternMs + coupledMs + metisMs + analyzeMs);
   return 0;
 }

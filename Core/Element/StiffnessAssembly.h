@@ -52,11 +52,6 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
 Status BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode, int numDofNodes,
                             AssemblyPattern& pattern);
 
-// Builds gatherStart/packedIndex from the target nonzero of every packed element entry (-1 for
-// none), by a counting sort: each gather list holds its packed indices in increasing order.
-// pattern.upper must already hold the final structure.
-void FinishGatherMap(const std::vector<int>& targetOf, AssemblyPattern& pattern);
-
 // upper.valuePtr()[k] = sum of packed[packedIndex[...]] over its gather range.
 void AssembleFromPacked(const std::vector<double>& packed, AssemblyPattern& pattern);
 

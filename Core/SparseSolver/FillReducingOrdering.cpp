@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cholmod.h>
+#include <cstdlib>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -139,9 +140,13 @@ Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, 
 }
 
 // Levels of the dissection split over threads: up to 8 leaves, as many as there are cores.
+// FACEPLAN_DISSECTION_LEAVES (1, 2, 4, ... 64) overrides it, for benchmarks.
 int ParallelDissectionDepth() {
+  int most = std::min(WorkerThreads(16), 8);
+  if (const char* text = std::getenv("FACEPLAN_DISSECTION_LEAVES"); text && std::atoi(text) >= 1)
+    most = std::min(std::atoi(text), 64);
   int depth = 0;
-  for (int leaves = 2; leaves <= std::min(WorkerThreads(16), 8); leaves *= 2)
+  for (int leaves = 2; leaves <= most; leaves *= 2)
     ++depth;
   return depth;
 }

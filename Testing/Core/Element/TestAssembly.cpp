@@ -53,3 +53,61 @@ TEST(Assembly, DroppedNodesHaveNoDofs) {
   EXPECT_EQ(pattern.upper.rows(), 3 * next);
   EXPECT_EQ(pattern.upper.cols(), 3 * next);
 }
+
+// The gather map against its definition: every packed entry (p <= q) of every cell whose two nodes
+// have DOFs contributes once to the upper entry of its (row, column) pair, and each entry lists its
+// contributions in increasing packed index (the summation order, which fixes the round-off).
+// Permuted DOF numbering with dropped nodes, so that rows and columns swap inside cells.
+TEST(Assembly, GatherMapEqualsItsDefinition) {
+  const ShellMesh shell = MakeSphericalShell(3, 2, 1.0, 1.5);
+  const TetMesh& mesh = shell.mesh;
+  const int points = static_cast<int>(mesh.numPoints());
+  std::vector<int> dofNode(points, -1);
+  int next = 0;
+  for (int i = points - 1; i >= 0; --i) // reversed, every fifth node dropped
+    if (i % 5 != 2)
+      dofNode[i] = next++;
+  AssemblyPattern pattern;
+  ASSERT_TRUE(BuildAssemblyPattern(mesh, dofNode, next, pattern));
+
+  const SparseMatrix& upper = pattern.upper;
+  auto entryOf = [&](int row, int col) {
+    for (SparseMatrix::InnerIterator it(upper, col); it; ++it)
+      if (it.row() == row)
+        return static_cast<int>(&it.value() - upper.valuePtr());
+    return -1;
+  };
+  std::vector<std::vector<int>> expected(upper.nonZeros());
+  int packed = 0;
+  for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
+    for (int p = 0; p < 12; ++p)
+      for (int q = p; q < 12; ++q, ++packed) {
+        const int a = dofNode[mesh.tets(e, p / 3)], b = dofNode[mesh.tets(e, q / 3)];
+        if (a < 0 || b < 0)
+          continue;
+        int row = 3 * a + p % 3, col = 3 * b + q % 3;
+        if (row > col)
+          std::swap(row, col);
+        const int k = entryOf(row, col);
+        ASSERT_GE(k, 0) << "cell " << e << " entry (" << row << ", " << col << ") not in the pattern";
+        expected[k].push_back(packed);
+      }
+  ASSERT_EQ(pattern.gatherStart.size(), static_cast<size_t>(upper.nonZeros()) + 1);
+  for (Eigen::Index k = 0; k < upper.nonZeros(); ++k) {
+    const std::vector<int> listed(pattern.packedIndex.begin() + pattern.gatherStart[k],
+                                  pattern.packedIndex.begin() + pattern.gatherStart[k + 1]);
+    ASSERT_EQ(listed, expected[k]) << "entry " << k;
+  }
+}
+
+TEST(Assembly, RefusesACellWithARepeatedNode) {
+  const ShellMesh shell = MakeSphericalShell(2, 1, 1.0, 1.5);
+  TetMesh mesh = shell.mesh;
+  mesh.tets(3, 2) = mesh.tets(3, 0);
+  std::vector<int> identity(mesh.numPoints());
+  std::iota(identity.begin(), identity.end(), 0);
+  AssemblyPattern pattern;
+  const Status s = BuildAssemblyPattern(mesh, identity, static_cast<int>(mesh.numPoints()), pattern);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("same node twice"), std::string::npos) << s.message;
+}
