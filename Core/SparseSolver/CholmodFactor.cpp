@@ -2,6 +2,7 @@
 #include "Common/WorkerThreads.h"
 
 #include "SparseSolver/CholmodViews.h"
+#include "SparseSolver/SymbolicAnalysis.h"
 
 #include "Common/BlasThreads.h"
 
@@ -12,83 +13,6 @@
 #include <vector>
 
 namespace faceplan {
-
-namespace {
-
-// The upper triangle's pattern of A(perm, perm) (CSC, rows unsorted but in the same order on every
-// run): a parallel counting sort, each thread counting and placing the entries of its own range
-// of columns.
-void PermutedUpperPattern(const SparseMatrix& upper, const std::vector<int>& inverse,
-                          std::vector<int>& columnStart, std::vector<int>& rows) {
-  const int n = static_cast<int>(upper.rows());
-  const int* start = upper.outerIndexPtr();
-  const int* index = upper.innerIndexPtr();
-  const int threads = std::max(1, std::min(WorkerThreads(16), n / 20000 + 1));
-  const int chunk = (n + threads - 1) / threads;
-  std::vector<std::vector<int>> count(threads);
-  auto inParallel = [&](auto&& work) {
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t)
-      pool.emplace_back(work, t);
-    work(0);
-    for (std::thread& thread : pool)
-      thread.join();
-  };
-  auto forEntries = [&](int t, auto&& visit) {
-    for (int j = t * chunk; j < std::min(n, (t + 1) * chunk); ++j)
-      for (int k = start[j]; k < start[j + 1]; ++k) {
-        const int a = inverse[index[k]], b = inverse[j];
-        visit(std::max(a, b), std::min(a, b)); // (column, row) in the permuted upper triangle
-      }
-  };
-  inParallel([&](int t) {
-    count[t].assign(n, 0);
-    forEntries(t, [&](int column, int) { ++count[t][column]; });
-  });
-  // Offsets: column by column, thread by thread within a column.
-  columnStart.assign(static_cast<size_t>(n) + 1, 0);
-  int next = 0;
-  for (int c = 0; c < n; ++c) {
-    columnStart[c] = next;
-    for (int t = 0; t < threads; ++t) {
-      const int here = count[t][c];
-      count[t][c] = next;
-      next += here;
-    }
-  }
-  columnStart[n] = next;
-  rows.resize(next);
-  inParallel([&](int t) { forEntries(t, [&](int column, int row) { rows[count[t][column]++] = row; }); });
-}
-
-// CHOLMOD's supernodal analysis of `upper` in the given order, the factor's Perm in `upper`'s
-// numbering: what cholmod_analyze_p gives with this ordering (CHOLMOD_GIVEN, postordered), from a
-// copy of the pattern permuted here. CHOLMOD then transposes a matrix already in elimination order
-// (and its postorder, which keeps most entries near) instead of permuting the original numbering
-// twice: those two permuted transposes were most of the ~0.4-0.5 s analysis at 1M cells.
-cholmod_factor* AnalyzeInGivenOrder(const SparseMatrix& upper, const std::vector<int>& perm,
-                                    cholmod_common& common) {
-  const int n = static_cast<int>(upper.rows());
-  std::vector<int> inverse(n);
-  for (int k = 0; k < n; ++k)
-    inverse[perm[k]] = k;
-  std::vector<int> columnStart, rows, dummyRow(1, 0);
-  PermutedUpperPattern(upper, inverse, columnStart, rows);
-  cholmod_sparse view = ViewPattern(n, columnStart, rows, dummyRow);
-  const int given = common.method[0].ordering;
-  common.method[0].ordering = CHOLMOD_NATURAL;
-  cholmod_factor* L = cholmod_analyze(&view, &common);
-  common.method[0].ordering = given;
-  if (!L)
-    return nullptr;
-  int* position = static_cast<int*>(L->Perm); // into the permuted copy: back to `upper`'s DOFs
-  for (int k = 0; k < n; ++k)
-    position[k] = perm[position[k]];
-  L->ordering = CHOLMOD_GIVEN; // factorize and solve permute by L->Perm unless NATURAL
-  return L;
-}
-
-} // namespace
 
 struct CholmodFactor::Impl {
   QuietCholmodCommon quiet;

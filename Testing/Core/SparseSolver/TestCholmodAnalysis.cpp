@@ -1,11 +1,12 @@
-// CholmodFactor::analyze with a given ordering analyses a copy of the pattern permuted by that
-// ordering (so that CHOLMOD transposes a matrix already in elimination order): its symbolic factor
-// must be the one CHOLMOD makes from the original matrix with the same ordering (CHOLMOD_GIVEN,
-// postordered), array for array.
+// SparseSolver/SymbolicAnalysis: the supernodal analysis in a given order, from the node graph when
+// the matrix is node-blocked and from a permuted copy otherwise, must be the factor CHOLMOD makes
+// from the original matrix with the same ordering (cholmod_analyze_p, CHOLMOD_GIVEN, postordered),
+// array for array, with the same nonzero and flop counts; CholmodFactor::analyze uses it.
 #include "CondensedFEM/CondensedSystem.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/CholmodViews.h"
 #include "SparseSolver/FillReducingOrdering.h"
+#include "SparseSolver/SymbolicAnalysis.h"
 #include "Support/FEMTestScenes.h"
 
 #include <cholmod.h>
@@ -23,53 +24,115 @@ std::vector<int> Ints(const void* data, size_t count) {
   return std::vector<int>(begin, begin + count);
 }
 
-TEST(CholmodAnalysis, InGivenOrderEqualsCholmodsOwnAnalysisOfThatOrdering) {
+// CholmodFactor's settings (relaxed supernodes, supernodal).
+void UseCholmodFactorSettings(cholmod_common& common) {
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  const int nrelax[3] = {16, 64, 128};
+  const double zrelax[3] = {0.9, 0.3, 0.1};
+  for (int k = 0; k < 3; ++k) {
+    common.nrelax[k] = nrelax[k];
+    common.zrelax[k] = zrelax[k];
+  }
+}
+
+void ExpectSameFactor(const cholmod_factor* mine, const cholmod_factor* theirs) {
+  ASSERT_TRUE(mine && theirs && mine->is_super && theirs->is_super);
+  const size_t n = theirs->n, nsuper = theirs->nsuper;
+  EXPECT_EQ(mine->n, n);
+  ASSERT_EQ(mine->nsuper, nsuper);
+  EXPECT_EQ(mine->ordering, theirs->ordering);
+  EXPECT_EQ(Ints(mine->Perm, n), Ints(theirs->Perm, n));
+  EXPECT_EQ(Ints(mine->ColCount, n), Ints(theirs->ColCount, n));
+  EXPECT_EQ(Ints(mine->super, nsuper + 1), Ints(theirs->super, nsuper + 1));
+  EXPECT_EQ(Ints(mine->pi, nsuper + 1), Ints(theirs->pi, nsuper + 1));
+  EXPECT_EQ(Ints(mine->px, nsuper + 1), Ints(theirs->px, nsuper + 1));
+  ASSERT_EQ(mine->ssize, theirs->ssize);
+  EXPECT_EQ(Ints(mine->s, theirs->ssize), Ints(theirs->s, theirs->ssize));
+  EXPECT_EQ(mine->xsize, theirs->xsize);
+  EXPECT_EQ(mine->maxcsize, theirs->maxcsize);
+  EXPECT_EQ(mine->maxesize, theirs->maxesize);
+  EXPECT_EQ(mine->is_ll, theirs->is_ll);
+  EXPECT_EQ(mine->xtype, theirs->xtype);
+}
+
+// AnalyzeInGivenOrder against cholmod_analyze_p for one matrix and order.
+void ExpectAnalysisAsCholmodGives(const SparseMatrix& upper, const std::vector<int>& perm,
+                                  bool expectNodeBlocked) {
+  QuietCholmodCommon mineQuiet, theirsQuiet;
+  UseCholmodFactorSettings(mineQuiet.common);
+  UseCholmodFactorSettings(theirsQuiet.common);
+  cholmod_common& theirsCommon = theirsQuiet.common;
+  theirsCommon.nmethods = 1;
+  theirsCommon.method[0].ordering = CHOLMOD_GIVEN;
+  theirsCommon.postorder = 1;
+  bool nodeBlocked = !expectNodeBlocked;
+  cholmod_factor* mine = AnalyzeInGivenOrder(upper, perm, mineQuiet.common, &nodeBlocked);
+  cholmod_sparse view = ViewUpper(upper);
+  cholmod_factor* theirs =
+      cholmod_analyze_p(&view, const_cast<int*>(perm.data()), nullptr, 0, &theirsCommon);
+  EXPECT_EQ(nodeBlocked, expectNodeBlocked);
+  ExpectSameFactor(mine, theirs);
+  EXPECT_EQ(mineQuiet.common.lnz, theirsCommon.lnz);
+  EXPECT_EQ(mineQuiet.common.fl, theirsCommon.fl);
+  cholmod_free_factor(&mine, &mineQuiet.common);
+  cholmod_free_factor(&theirs, &theirsCommon);
+}
+
+std::shared_ptr<const CondensedSystem> ShellSystem() {
   std::shared_ptr<const CondensedSystem> system;
   const Status precomputed = Precompute(ShellRequest(10, 4), system);
-  ASSERT_TRUE(precomputed.ok && system) << precomputed.message;
+  EXPECT_TRUE(precomputed.ok && system) << precomputed.message;
+  return system;
+}
+
+TEST(CholmodAnalysis, NodeBlockedStiffnessInANodeOrder) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
   const int freeNodes = system->layout.freeNodes();
   for (const std::vector<char>& marks : {NodesCoupledTo(system->kfr, freeNodes, 3), std::vector<char>{}}) {
     FillReducingOrdering ordering;
     ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, marks, ordering).ok);
-    CholmodFactor factor;
-    ASSERT_TRUE(factor.analyze(system->kff, &ordering).ok);
-    const cholmod_factor* mine = factor.cholmodFactor();
-    ASSERT_TRUE(mine && mine->is_super);
-
-    // CHOLMOD's own analysis with the same settings as CholmodFactor's.
-    QuietCholmodCommon quiet;
-    cholmod_common& common = quiet.common;
-    common.supernodal = CHOLMOD_SUPERNODAL;
-    const int nrelax[3] = {16, 64, 128};
-    const double zrelax[3] = {0.9, 0.3, 0.1};
-    for (int k = 0; k < 3; ++k) {
-      common.nrelax[k] = nrelax[k];
-      common.zrelax[k] = zrelax[k];
-    }
-    common.nmethods = 1;
-    common.method[0].ordering = CHOLMOD_GIVEN;
-    common.postorder = 1;
-    cholmod_sparse view = ViewUpper(system->kff);
-    cholmod_factor* theirs =
-        cholmod_analyze_p(&view, const_cast<int*>(ordering.permutation.data()), nullptr, 0, &common);
-    ASSERT_TRUE(theirs && theirs->is_super);
-    const size_t n = theirs->n;
-    EXPECT_EQ(mine->n, n);
-    EXPECT_EQ(mine->nsuper, theirs->nsuper);
-    EXPECT_EQ(mine->ordering, theirs->ordering);
-    EXPECT_EQ(Ints(mine->Perm, n), Ints(theirs->Perm, n));
-    EXPECT_EQ(Ints(mine->ColCount, n), Ints(theirs->ColCount, n));
-    if (mine->nsuper == theirs->nsuper) {
-      EXPECT_EQ(Ints(mine->super, n == 0 ? 0 : theirs->nsuper + 1), Ints(theirs->super, theirs->nsuper + 1));
-      EXPECT_EQ(Ints(mine->pi, theirs->nsuper + 1), Ints(theirs->pi, theirs->nsuper + 1));
-      EXPECT_EQ(Ints(mine->px, theirs->nsuper + 1), Ints(theirs->px, theirs->nsuper + 1));
-      EXPECT_EQ(Ints(mine->s, theirs->ssize), Ints(theirs->s, theirs->ssize));
-    }
-    EXPECT_EQ(mine->xsize, theirs->xsize);
-    EXPECT_EQ(mine->maxcsize, theirs->maxcsize);
-    EXPECT_EQ(mine->maxesize, theirs->maxesize);
-    cholmod_free_factor(&theirs, &common);
+    ExpectAnalysisAsCholmodGives(system->kff, ordering.permutation, true);
   }
+}
+
+// An order that splits a node's DOFs, and a matrix with one block entry missing, take the general
+// path and give CHOLMOD's factor too.
+TEST(CholmodAnalysis, OrdersAndMatricesThatAreNotNodeBlocked) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  FillReducingOrdering ordering;
+  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, {}, ordering).ok);
+  std::vector<int> swapped = ordering.permutation;
+  std::swap(swapped[3], swapped[4]); // a node's DOFs out of order
+  ExpectAnalysisAsCholmodGives(system->kff, swapped, false);
+
+  SparseMatrix missing = system->kff; // drop the first off-diagonal entry of a late column
+  const int column = static_cast<int>(missing.cols()) - 1;
+  for (SparseMatrix::InnerIterator it(missing, column); it; ++it)
+    if (it.row() != column) {
+      missing.coeffRef(it.row(), column) = 0.0;
+      break;
+    }
+  missing.prune([](Eigen::Index, Eigen::Index, double value) { return value != 0.0; });
+  missing.makeCompressed();
+  ASSERT_LT(missing.nonZeros(), system->kff.nonZeros());
+  ExpectAnalysisAsCholmodGives(missing, ordering.permutation, false);
+}
+
+TEST(CholmodAnalysis, CholmodFactorUsesIt) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  FillReducingOrdering ordering;
+  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, {}, ordering).ok);
+  CholmodFactor factor;
+  ASSERT_TRUE(factor.analyze(system->kff, &ordering).ok);
+  QuietCholmodCommon quiet;
+  UseCholmodFactorSettings(quiet.common);
+  cholmod_factor* direct = AnalyzeInGivenOrder(system->kff, ordering.permutation, quiet.common);
+  ExpectSameFactor(factor.cholmodFactor(), direct);
+  EXPECT_EQ(factor.factorNonzeros(), quiet.common.lnz);
+  cholmod_free_factor(&direct, &quiet.common);
 }
 
 } // namespace
