@@ -139,11 +139,20 @@ Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, 
   return Status::Ok();
 }
 
-// Levels of the dissection split over threads: up to 8 leaves, as many as there are cores.
-// FACEPLAN_DISSECTION_LEAVES (1, 2, 4, ... 64) overrides it, for benchmarks.
-int ParallelDissectionDepth() {
-  int most = std::min(WorkerThreads(16), 8);
-  if (const char* text = std::getenv("FACEPLAN_DISSECTION_LEAVES"); text && std::atoi(text) >= 1)
+// Levels of the dissection split over threads for a graph of `nodes` nodes. `leaves` > 0 asks for
+// that many (1, 2, 4, ... 64); 0 chooses: no split below kSplitFromNodes nodes, else up to 8 leaves,
+// as many as there are cores. Why not always: a split top costs some fill (its separator comes
+// from one bisection, METIS's own dissection tries harder): at ~100k cells (16k nodes) the CPU
+// factorization took ~5 % longer with two leaves, while the ordering (~0.1 s) was hidden beside
+// the assembly anyway; at 1M cells (175k nodes) the ordering is the longest CPU path and the split
+// factor was no larger. FACEPLAN_DISSECTION_LEAVES overrides the choice, for benchmarks.
+constexpr int kSplitFromNodes = 50000;
+
+int ParallelDissectionDepth(int nodes, int leaves) {
+  int most = nodes >= kSplitFromNodes ? std::min(WorkerThreads(16), 8) : 1;
+  if (leaves > 0)
+    most = std::min(leaves, 64);
+  else if (const char* text = std::getenv("FACEPLAN_DISSECTION_LEAVES"); text && std::atoi(text) >= 1)
     most = std::min(std::atoi(text), 64);
   int depth = 0;
   for (int leaves = 2; leaves <= most; leaves *= 2)
@@ -166,7 +175,8 @@ namespace {
 // Both entry points: the leading (unmarked) nodes by OrderGraph, the marked ones after them.
 template <class VisitNeighbours>
 Status OrderWithTrailing(int nodes, int dofsPerNode, const std::vector<char>& trailingNode,
-                         VisitNeighbours&& visitNeighbours, FillReducingOrdering& ordering) {
+                         VisitNeighbours&& visitNeighbours, FillReducingOrdering& ordering,
+                         int leaves) {
   if (!trailingNode.empty() && static_cast<int>(trailingNode.size()) != nodes)
     return Status::Error("internal: trailing-node marks do not match the matrix");
   auto isTrailing = [&](int node) { return !trailingNode.empty() && trailingNode[node]; };
@@ -184,8 +194,9 @@ Status OrderWithTrailing(int nodes, int dofsPerNode, const std::vector<char>& tr
     NodeGraphUpper(compact, leadingNodes, visitNeighbours, columnStart, rows);
     const char* method = "METIS";
     // No postorder here: CHOLMOD postorders the final DOF ordering in analyze.
-    if (Status s = OrderGraph(leadingNodes, columnStart, rows, ParallelDissectionDepth(), nodeOrder,
-                              method, ordering.leaves);
+    if (Status s = OrderGraph(leadingNodes, columnStart, rows,
+                              ParallelDissectionDepth(leadingNodes, leaves), nodeOrder, method,
+                              ordering.leaves);
         !s)
       return s;
     ordering.method = method;
@@ -210,7 +221,7 @@ Status OrderWithTrailing(int nodes, int dofsPerNode, const std::vector<char>& tr
 
 Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
                               const std::vector<char>& trailingNode,
-                              FillReducingOrdering& ordering) {
+                              FillReducingOrdering& ordering, int leaves) {
   if (dofsPerNode <= 0 || upper.rows() % dofsPerNode != 0 || upper.rows() != upper.cols())
     return Status::Error("internal: ordering needs a square matrix of whole nodes");
   const int nodes = static_cast<int>(upper.rows() / dofsPerNode);
@@ -221,12 +232,12 @@ Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
           for (SparseMatrix::InnerIterator it(upper, node * dofsPerNode + d); it; ++it)
             f(static_cast<int>(it.row() / dofsPerNode));
       },
-      ordering);
+      ordering, leaves);
 }
 
 Status OrderNodeGraphWithTrailing(const NodeNeighbours& lower, int nodes, int dofsPerNode,
                                   const std::vector<char>& trailingNode,
-                                  FillReducingOrdering& ordering) {
+                                  FillReducingOrdering& ordering, int leaves) {
   if (dofsPerNode <= 0 || nodes < 0 || nodes > static_cast<int>(lower.size()))
     return Status::Error("internal: ordering needs whole nodes of the graph");
   return OrderWithTrailing(
@@ -235,7 +246,7 @@ Status OrderNodeGraphWithTrailing(const NodeNeighbours& lower, int nodes, int do
         for (int neighbour : lower[node])
           f(neighbour);
       },
-      ordering);
+      ordering, leaves);
 }
 
 std::vector<char> NodesCoupledToLaterNodes(const NodeNeighbours& lower, int nodes) {

@@ -35,17 +35,19 @@ struct FillReducingOrdering {
 };
 
 // `upper`: the free block's upper triangle, `dofsPerNode` consecutive DOFs per node;
-// `trailingNode[node]` marks the nodes to order last (may be empty: none).
+// `trailingNode[node]` marks the nodes to order last (may be empty: none). `leaves`: the parts the
+// nested dissection's top is split into, each ordered on its own thread (1, 2, 4, ... 64); 0 lets
+// the ordering choose (no split below 50,000 nodes, else as many as there are cores, up to 8).
 Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
                               const std::vector<char>& trailingNode,
-                              FillReducingOrdering& ordering);
+                              FillReducingOrdering& ordering, int leaves = 0);
 
 // The same from the node graph itself: `lower` as LowerNodeNeighbours gives it
 // (Element/StiffnessAssembly.h), of which the first `nodes` are ordered. Gives the ordering
 // OrderNodesWithTrailing gives for the upper triangle UpperPatternOfNodes builds from `lower`.
 Status OrderNodeGraphWithTrailing(const NodeNeighbours& lower, int nodes, int dofsPerNode,
                                   const std::vector<char>& trailingNode,
-                                  FillReducingOrdering& ordering);
+                                  FillReducingOrdering& ordering, int leaves = 0);
 
 // The first `nodes` nodes of `lower` that share a cell with a later node: with the free nodes
 // first and the ROI nodes after them, the rows of K_FR by node (NodesCoupledTo of K_FR).

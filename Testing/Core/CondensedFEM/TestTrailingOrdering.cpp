@@ -116,15 +116,17 @@ TEST(FillReducingOrdering, NodeGraphGivesTheOrderingOfTheAssembledBlock) {
 // Orderings made at once on several threads (two precomputes, or the precompute's ordering thread
 // beside another) are those made alone: METIS keeps its random generator in global state, so
 // without the per-thread generator (MetisRandom.h) or MetisMutex concurrent calls draw from it in
-// turn and get different orderings. The shell is large enough (>= 10,000 free nodes) for each
-// ordering to split its dissection over threads too.
+// turn and get different orderings. Each ordering also splits its dissection's top into four
+// parts ordered on threads (the shell has >= 10,000 free nodes, enough for two levels).
 TEST(FillReducingOrdering, OrderingsMadeAtOnceEqualTheOneMadeAlone) {
   const auto system = PrecomputeOrFail(ShellRequest(16, 5));
   ASSERT_TRUE(system);
   const int freeNodes = system->layout.freeNodes();
   const std::vector<char> coupled = NodesCoupledTo(system->kfr, freeNodes, 3);
+  constexpr int kLeaves = 4;
   FillReducingOrdering alone;
-  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, coupled, alone).ok);
+  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, coupled, alone, kLeaves).ok);
+  EXPECT_GT(alone.leaves, 1);
   constexpr int kThreads = 4;
   std::vector<FillReducingOrdering> atOnce(kThreads);
   std::vector<char> ok(kThreads, 0);
@@ -133,12 +135,12 @@ TEST(FillReducingOrdering, OrderingsMadeAtOnceEqualTheOneMadeAlone) {
     threads.emplace_back([&, t]() {
       // Half of them with no marks: different graphs at once, as two different requests.
       const std::vector<char> marks = t % 2 == 0 ? coupled : std::vector<char>{};
-      ok[t] = OrderNodesWithTrailing(system->kff, 3, marks, atOnce[t]).ok;
+      ok[t] = OrderNodesWithTrailing(system->kff, 3, marks, atOnce[t], kLeaves).ok;
     });
   for (std::thread& thread : threads)
     thread.join();
   FillReducingOrdering plain;
-  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, {}, plain).ok);
+  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, {}, plain, kLeaves).ok);
   for (int t = 0; t < kThreads; ++t) {
     ASSERT_TRUE(ok[t]) << "thread " << t;
     EXPECT_EQ(atOnce[t].permutation, (t % 2 == 0 ? alone : plain).permutation) << "thread " << t;
