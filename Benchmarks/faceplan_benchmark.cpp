@@ -56,6 +56,7 @@ RowVectors3d RandomEdit(const PrecomputeRequest& r, std::mt19937& rng) {
 int main(int argc, char** argv) {
   int subdivisions = 8, layers = 3, edits = 200, precomputeRepeats = 3, referenceRepeats = 1;
   std::string method = "Auto", ccxDir, jsonPath;
+  int responseBlockColumns = 0; // 0: the default of PrecomputeOptions
   int ccxRepeats = 1; // CalculiX runs, median wall time (the machine is noisy, as for our repeats)
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i], value = argv[i + 1];
@@ -69,6 +70,7 @@ int main(int argc, char** argv) {
     else if (key == "--ccx-repeats")
       ccxRepeats = std::max(1, std::stoi(value));
     else if (key == "--json") jsonPath = value;
+    else if (key == "--response-block-columns") responseBlockColumns = std::max(1, std::stoi(value));
     else {
       std::fprintf(stderr, "unknown option %s\n", key.c_str());
       return 2;
@@ -81,6 +83,7 @@ int main(int argc, char** argv) {
   request.sets = {scene.constrained, scene.movable, scene.kept};
   if (method == "DenseResponse") request.options.method = SolveMethod::DenseResponse;
   else if (method == "CachedFactor") request.options.method = SolveMethod::CachedFactor;
+  if (responseBlockColumns > 0) request.options.responseBlockColumns = responseBlockColumns;
 
   // Precompute (median of repeats, stage by stage).
   std::shared_ptr<const CondensedSystem> system;

@@ -175,11 +175,15 @@ def main():
     parser.add_argument("--shell-scene", help="export_shell_scene's .vtk (the ~100k scene)")
     parser.add_argument("--edits", type=int, default=30)
     parser.add_argument("--json")
+    parser.add_argument("--shell-only", action="store_true",
+                        help="only the shell scene (to compare with Benchmarks/FilterLatency's driver)")
     args = parser.parse_args()
     simple.LoadPlugin(args.plugin)  # into paraview.simple, where faceplan_pipeline finds the filters
-    results = [face_scene(args.data, args.edits, "Volume"),
-               face_scene(args.data, args.edits, "Surface"),
-               osteotomy_scene(args.data, args.edits, "Surface")]
+    results = []
+    if not args.shell_only:
+        results = [face_scene(args.data, args.edits, "Volume"),
+                   face_scene(args.data, args.edits, "Surface"),
+                   osteotomy_scene(args.data, args.edits, "Surface")]
     if args.shell_scene:
         results.append(shell_scene(args.shell_scene, args.edits, "Surface"))
     if args.json:
