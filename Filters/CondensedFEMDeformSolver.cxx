@@ -39,7 +39,7 @@ void ApplyMethodAndOrder(const Settings& settings, PrecomputeOptions& options) {
   }
 }
 
-void Solver::chooseBackend(const Settings& settings, PrecomputeRequest& request,
+void Solver::chooseBackend(const Settings& settings, PrecomputeOptions& options,
                            std::vector<std::string>& notes) {
   if (static_cast<BackendChoice>(settings.backend) == BackendChoice::CPU)
     return;
@@ -54,27 +54,37 @@ void Solver::chooseBackend(const Settings& settings, PrecomputeRequest& request,
 #endif
   }
   if (cudaBackend_)
-    request.options.backend = cudaBackend_;
+    options.backend = cudaBackend_;
   else if (static_cast<BackendChoice>(settings.backend) == BackendChoice::CUDA)
     notes.push_back("Backend CUDA is not available (" + cudaUnavailable_ + "); using the CPU");
 }
 
-Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Settings& settings,
+Status Solver::run(const PrecomputeRequest& given, const SolveInput& input, const Settings& settings,
                    const std::function<void(double)>& progress, SolveOutcome& outcome) {
   outcome = SolveOutcome();
-  ApplyMethodAndOrder(settings, request.options);
-  if (settings.fullReference() && request.options.elementOrder != ElementOrder::Linear) {
+  PrecomputeOptions options = given.options;
+  ApplyMethodAndOrder(settings, options);
+  if (settings.fullReference() && options.elementOrder != ElementOrder::Linear) {
     outcome.notes.push_back(
         "the FullReference method supports linear elements only: solved with linear elements");
-    request.options.elementOrder = ElementOrder::Linear;
+    options.elementOrder = ElementOrder::Linear;
   }
   if (settings.largeDeformation()) {
     if (static_cast<BackendChoice>(settings.backend) == BackendChoice::CUDA)
       outcome.notes.push_back("Model NeoHookean runs on the CPU: Backend CUDA applies to the "
                               "linear model");
   } else {
-    chooseBackend(settings, request, outcome.notes);
+    chooseBackend(settings, options, outcome.notes);
   }
+  // The request as solved: the given inputs with these options. Made only where a path keeps it or
+  // is slow anyway (a new precompute, the reference and large-deformation solves, Verify): an edit
+  // that reuses the precompute compares, and copies nothing (at ~100k cells the mesh and materials
+  // copied on every edit cost ~0.3 ms, most of it page faults).
+  auto withOptions = [&given, &options]() {
+    PrecomputeRequest request = given;
+    request.options = options;
+    return request;
+  };
   if (settings.liftOff && !settings.largeDeformation())
     outcome.notes.push_back("LiftOff applies to Model NeoHookean only: the linear model keeps "
                             "sliding tissue on the bone");
@@ -83,18 +93,19 @@ Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Set
   if (settings.largeDeformation()) {
     // Newton iterations on the whole mesh: no precompute to cache, nothing to hand to a worker.
     outcome.largeDeformation = true;
-    LargeDeformationOptions options;
-    options.slidingLiftOff = settings.liftOff;
-    options.progress = progress;
-    status = SolveLargeDeformation(request, input, options, outcome.result,
+    LargeDeformationOptions largeOptions;
+    largeOptions.slidingLiftOff = settings.liftOff;
+    largeOptions.progress = progress;
+    status = SolveLargeDeformation(withOptions(), input, largeOptions, outcome.result,
                                    outcome.largeDeformationReport);
   } else if (settings.fullReference()) {
-    status = SolveFullReference(request, input, outcome.result);
+    status = SolveFullReference(withOptions(), input, outcome.result);
   } else {
     auto fraction = std::make_shared<std::atomic<double>>(0.0);
-    if (!haveRequest_ || !SameRequest(request, lastRequest_)) {
-      background_.start(request, [fraction](double f, const char*) { fraction->store(f); });
-      lastRequest_ = request;
+    if (!haveRequest_ || !SameOptions(options, lastRequest_.options) ||
+        !SameInputs(given, lastRequest_)) {
+      lastRequest_ = withOptions();
+      background_.start(lastRequest_, [fraction](double f, const char*) { fraction->store(f); });
       haveRequest_ = true;
       outcome.freshPrecompute = true;
       ++precomputeCount_;
@@ -133,7 +144,7 @@ Status Solver::run(PrecomputeRequest request, const SolveInput& input, const Set
 
   if (settings.verify) {
     const Status verified =
-        VerifyAgainstReference(request, input, outcome.result, outcome.verifyError);
+        VerifyAgainstReference(withOptions(), input, outcome.result, outcome.verifyError);
     if (!verified)
       return verified;
   }

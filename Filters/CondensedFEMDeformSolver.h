@@ -28,12 +28,14 @@ struct SolveOutcome {
 class Solver {
 public:
   // `progress` is called on the calling thread with a fraction in [0, 1] while the worker runs.
-  Status run(PrecomputeRequest request, const SolveInput& input, const Settings& settings,
+  // `request`: the inputs; its options are adjusted to the settings here. An edit that keeps the
+  // precompute compares the request with the last one and copies nothing.
+  Status run(const PrecomputeRequest& request, const SolveInput& input, const Settings& settings,
              const std::function<void(double)>& progress, SolveOutcome& outcome);
   int precomputeCount() const { return precomputeCount_; }
 
 private:
-  void chooseBackend(const Settings& settings, PrecomputeRequest& request,
+  void chooseBackend(const Settings& settings, PrecomputeOptions& options,
                      std::vector<std::string>& notes);
 
   BackgroundPrecompute background_;

@@ -8,6 +8,8 @@
 namespace faceplan {
 
 bool SameOptions(const PrecomputeOptions& a, const PrecomputeOptions& b);
+// Mesh, materials and node sets (everything but the options).
+bool SameInputs(const PrecomputeRequest& a, const PrecomputeRequest& b);
 bool SameRequest(const PrecomputeRequest& a, const PrecomputeRequest& b);
 
 } // namespace faceplan
