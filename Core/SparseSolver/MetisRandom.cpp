@@ -1,8 +1,13 @@
 #include "SparseSolver/MetisRandom.h"
 
+#include "SparseSolver/CholmodViews.h"
+#include "SparseSolver/FillReducingOrdering.h"
+
+#include <cholmod.h>
 #include <cstdint>
 #include <cstdlib>
-#include <dlfcn.h>
+#include <mutex>
+#include <vector>
 
 namespace {
 
@@ -12,9 +17,10 @@ struct ThreadRandom {
   random_data data{};
   char state[128] = {};
   bool initialised = false;
-  unsigned long long draws = 0;
+  unsigned long long draws = 0, seeds = 0;
 
   void seed(unsigned int value) {
+    ++seeds;
     if (!initialised) {
       initstate_r(value, state, sizeof state, &data);
       initialised = true;
@@ -60,20 +66,26 @@ unsigned long long MetisRandomDrawsOnThisThread() { return threadRandom.draws; }
 
 bool MetisRandomIsPerThread() {
   static const bool perThread = [] {
-    // libmetis as the process already has it (CHOLMOD loads it); not loaded here otherwise.
-    void* metis = dlopen("libmetis.so.5", RTLD_LAZY | RTLD_NOLOAD);
-    if (!metis)
-      return false;
-    using Draw = int (*)(void);
-    auto irand = reinterpret_cast<Draw>(dlsym(metis, "libmetis__irand"));
-    bool reached = false;
-    if (irand) {
-      const unsigned long long before = MetisRandomDrawsOnThisThread();
-      irand(); // METIS's own function: its draw goes through libmetis's PLT
-      reached = MetisRandomDrawsOnThisThread() == before + 1;
+    // METIS seeds its generator at the start of every call: order a small graph (a cycle of 8
+    // nodes) through CHOLMOD and see whether this thread's generator was seeded. (Not dlopen of
+    // libmetis: ThreadSanitizer re-reads the loaded libraries on every dlopen and then reports
+    // its own suppressions as ambiguous.) Under MetisMutex, in case the answer is no.
+    std::lock_guard<std::mutex> metis(MetisMutex());
+    constexpr int n = 8;
+    std::vector<int> columnStart(n + 1), rows, order(n), dummyRow(1, 0);
+    for (int c = 0; c < n; ++c) { // upper pattern: c-1 above c, and 0 above n-1
+      columnStart[c] = static_cast<int>(rows.size());
+      if (c > 0)
+        rows.push_back(c - 1);
+      if (c == n - 1)
+        rows.push_back(0);
     }
-    dlclose(metis);
-    return reached;
+    columnStart[n] = static_cast<int>(rows.size());
+    cholmod_sparse graph = ViewPattern(n, columnStart, rows, dummyRow);
+    QuietCholmodCommon quiet;
+    const unsigned long long before = threadRandom.seeds;
+    const bool ordered = cholmod_metis(&graph, nullptr, 0, 0, order.data(), &quiet.common);
+    return ordered && threadRandom.seeds > before;
   }();
   return perThread;
 }

@@ -14,10 +14,10 @@
 
 namespace faceplan {
 
-// True when libmetis's own calls reach the per-thread generator in this process (checked once,
-// by calling libmetis's irand and watching this thread's draw count). When false (a METIS built
-// another way, or linked so that its calls bind inside itself), callers must serialise METIS
-// calls with MetisMutex (FillReducingOrdering.h).
+// True when libmetis's own calls reach the per-thread generator in this process (checked once, by
+// ordering a small graph through CHOLMOD and watching this thread's generator being seeded). When
+// false (a METIS built another way, or linked so that its calls bind inside itself), callers must
+// serialise METIS calls with MetisMutex (FillReducingOrdering.h).
 bool MetisRandomIsPerThread();
 
 // Number of draws this thread made from the per-thread generator (for tests).
