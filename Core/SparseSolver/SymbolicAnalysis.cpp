@@ -154,7 +154,8 @@ std::vector<int> NodeOrderOf(const std::vector<int>& perm) {
 cholmod_factor* AnalyzeNodeBlocked(const SparseMatrix& upper, const std::vector<int>& perm,
                                    cholmod_common& common) {
   const int n = static_cast<int>(upper.rows());
-  if (n == 0 || n % 3 != 0)
+  // Supernodal only (what CholmodFactor asks for); other settings take CHOLMOD's own path.
+  if (n == 0 || n % 3 != 0 || common.supernodal != CHOLMOD_SUPERNODAL)
     return nullptr;
   const std::vector<int> nodeOrder = NodeOrderOf(perm);
   std::vector<int> nodeStart, nodeRows;
