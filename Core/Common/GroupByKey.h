@@ -2,6 +2,7 @@
 // Items 0 .. count-1 grouped by an integer key, by a counting sort (two passes, no comparison):
 // group k holds the items with key k, in increasing order, at items[start[k] .. start[k+1]).
 // Items with a negative key are left out. Indices are int: callers check their counts fit.
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 

@@ -26,11 +26,13 @@ Status AssembleStiffness(PrecomputeState& state) {
   // The node graph first: K_FF's ordering starts from it on its own thread (when its structure
   // follows from the cells alone) while the gather map, the element matrices and the separation
   // are made here.
-  auto lower = std::make_shared<const NodeNeighbours>(LowerNodeNeighbours(
-      cells, numCells, nodesPerCell, layout.dofNode, static_cast<int>(layout.meshNode.size())));
+  const Groups cornersOf = CornersByNode(cells, numCells, nodesPerCell, layout.dofNode,
+                                        static_cast<int>(layout.meshNode.size()));
+  auto lower = std::make_shared<const NodeNeighbours>(
+      LowerNodeNeighbours(cells, nodesPerCell, layout.dofNode, cornersOf));
   StartEarlyOrdering(state, lower);
-  const Status patternBuilt =
-      BuildCellAssemblyPattern(cells, numCells, nodesPerCell, layout.dofNode, *lower, pattern);
+  const Status patternBuilt = BuildCellAssemblyPattern(cells, numCells, nodesPerCell, layout.dofNode,
+                                                       cornersOf, *lower, pattern);
   if (!patternBuilt)
     return patternBuilt;
   const double patternMs = clock.lapMs();

@@ -9,13 +9,22 @@
 
 namespace faceplan {
 
+Groups CornersByNode(const int* cells, Eigen::Index numCells, int nodesPerCell,
+                     const std::vector<int>& dofNode, int numDofNodes) {
+  return GroupByKey(numCells * nodesPerCell, numDofNodes,
+                    [&](std::int64_t corner) { return dofNode[cells[corner]]; });
+}
+
 NodeNeighbours LowerNodeNeighbours(const int* cells, Eigen::Index numCells, int nodesPerCell,
                                    const std::vector<int>& dofNode, int numDofNodes) {
-  // A node-to-cell index first (cell corners grouped by node), then the nodes in parallel, each
-  // writing only its own list.
-  const Groups cornersOf = GroupByKey(numCells * nodesPerCell, numDofNodes, [&](std::int64_t corner) {
-    return dofNode[cells[corner]];
-  });
+  return LowerNodeNeighbours(cells, nodesPerCell, dofNode,
+                             CornersByNode(cells, numCells, nodesPerCell, dofNode, numDofNodes));
+}
+
+NodeNeighbours LowerNodeNeighbours(const int* cells, int nodesPerCell, const std::vector<int>& dofNode,
+                                   const Groups& cornersOf) {
+  // The nodes in parallel, each writing only its own list.
+  const int numDofNodes = static_cast<int>(cornersOf.start.size()) - 1;
   NodeNeighbours lower(numDofNodes);
   ParallelFor(numDofNodes, 20000, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t na = begin; na < end; ++na) {
@@ -71,14 +80,15 @@ Status UpperPatternOfNodes(const NodeNeighbours& lower, int nodes, bool zeroValu
 Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
                                 const std::vector<int>& dofNode, int numDofNodes,
                                 AssemblyPattern& pattern) {
-  return BuildCellAssemblyPattern(
-      cells, numCells, nodesPerCell, dofNode,
-      LowerNodeNeighbours(cells, numCells, nodesPerCell, dofNode, numDofNodes), pattern);
+  const Groups cornersOf = CornersByNode(cells, numCells, nodesPerCell, dofNode, numDofNodes);
+  return BuildCellAssemblyPattern(cells, numCells, nodesPerCell, dofNode, cornersOf,
+                                  LowerNodeNeighbours(cells, nodesPerCell, dofNode, cornersOf),
+                                  pattern);
 }
 
 Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
-                                const std::vector<int>& dofNode, const NodeNeighbours& lower,
-                                AssemblyPattern& pattern) {
+                                const std::vector<int>& dofNode, const Groups& cornersOf,
+                                const NodeNeighbours& lower, AssemblyPattern& pattern) {
   pattern = AssemblyPattern{};
   const int dofs = 3 * nodesPerCell;
   const long long packedSize = static_cast<long long>(dofs) * (dofs + 1) / 2;
@@ -100,9 +110,8 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
   // contributions of the cells at that node (in increasing cell order, so each entry lists its
   // packed indices in increasing order), one per cell and entry. No cells x 78 intermediate and
   // no serial grouping of it: at 1M cells those took ~1 s of the precompute.
-  const Groups cornersOf = GroupByKey(numCells * nodesPerCell, nodes, [&](std::int64_t corner) {
-    return dofNode[cells[corner]];
-  });
+  if (static_cast<int>(cornersOf.start.size()) != nodes + 1)
+    return Status::Error("internal: the corner index does not match the node graph");
   // visit(nc, t, packed): every contribution to the columns of node nc, t its entry in `upper`.
   auto visitNode = [&](int nc, auto&& visit) -> bool {
     const std::vector<int>& rows = lower[nc];

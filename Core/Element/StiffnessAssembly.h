@@ -2,6 +2,7 @@
 // Sparse symmetric assembly: the pattern and a gather map are built once per mesh and DOF
 // numbering; assembling new element values into it is then a pure gather (no atomics, no search),
 // which both the CPU and the CUDA backend run.
+#include "Common/GroupByKey.h"
 #include "Common/Status.h"
 #include "Mesh/TetMesh.h"
 
@@ -29,6 +30,14 @@ using NodeNeighbours = std::vector<std::vector<int>>;
 NodeNeighbours LowerNodeNeighbours(const int* cells, Eigen::Index numCells, int nodesPerCell,
                                    const std::vector<int>& dofNode, int numDofNodes);
 
+// The cells' corners (cell * nodesPerCell + place) grouped by DOF node, each group in increasing
+// order: the node-to-cell index both the node graph and the gather map walk.
+Groups CornersByNode(const int* cells, Eigen::Index numCells, int nodesPerCell,
+                     const std::vector<int>& dofNode, int numDofNodes);
+// LowerNodeNeighbours from that index, already built.
+NodeNeighbours LowerNodeNeighbours(const int* cells, int nodesPerCell, const std::vector<int>& dofNode,
+                                   const Groups& cornersOf);
+
 // The upper-triangle structure (3 DOFs per node, rows sorted) of the first `nodes` DOF nodes of
 // `lower`; values are zero when zeroValues, else left uninitialised (a structure to analyse).
 // Fails when the matrix would overflow 32-bit indices.
@@ -43,10 +52,10 @@ Status UpperPatternOfNodes(const NodeNeighbours& lower, int nodes, bool zeroValu
 Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
                                 const std::vector<int>& dofNode, int numDofNodes,
                                 AssemblyPattern& pattern);
-// The same from the cells' LowerNodeNeighbours, already built.
+// The same from the cells' CornersByNode and LowerNodeNeighbours, already built.
 Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nodesPerCell,
-                                const std::vector<int>& dofNode, const NodeNeighbours& lower,
-                                AssemblyPattern& pattern);
+                                const std::vector<int>& dofNode, const Groups& cornersOf,
+                                const NodeNeighbours& lower, AssemblyPattern& pattern);
 
 // The same for the 4-node cells of `mesh`.
 Status BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode, int numDofNodes,

@@ -155,7 +155,7 @@ int ParallelDissectionDepth(int nodes, int leaves) {
   else if (const char* text = std::getenv("FACEPLAN_DISSECTION_LEAVES"); text && std::atoi(text) >= 1)
     most = std::min(std::atoi(text), 64);
   int depth = 0;
-  for (int leaves = 2; leaves <= most; leaves *= 2)
+  for (int parts = 2; parts <= most; parts *= 2)
     ++depth;
   return depth;
 }

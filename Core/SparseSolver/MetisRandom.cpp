@@ -17,7 +17,7 @@ struct ThreadRandom {
   random_data data{};
   char state[128] = {};
   bool initialised = false;
-  unsigned long long draws = 0, seeds = 0;
+  unsigned long long seeds = 0; // how often METIS seeded it (MetisRandomIsPerThread's check)
 
   void seed(unsigned int value) {
     ++seeds;
@@ -33,7 +33,6 @@ struct ThreadRandom {
       seed(1); // rand() without srand() starts as after srand(1)
     int32_t value = 0;
     random_r(&data, &value);
-    ++draws;
     return static_cast<uint32_t>(value);
   }
 };
@@ -61,8 +60,6 @@ __attribute__((visibility("default"))) uint64_t gk_randint64(void) {
 } // extern "C"
 
 namespace faceplan {
-
-unsigned long long MetisRandomDrawsOnThisThread() { return threadRandom.draws; }
 
 bool MetisRandomIsPerThread() {
   static const bool perThread = [] {

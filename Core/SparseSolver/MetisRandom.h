@@ -20,7 +20,4 @@ namespace faceplan {
 // serialise METIS calls with MetisMutex (FillReducingOrdering.h).
 bool MetisRandomIsPerThread();
 
-// Number of draws this thread made from the per-thread generator (for tests).
-unsigned long long MetisRandomDrawsOnThisThread();
-
 } // namespace faceplan
