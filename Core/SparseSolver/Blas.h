@@ -1,5 +1,5 @@
 #pragma once
-// The two reference-BLAS routines Core calls directly (the same library CHOLMOD links, OpenBLAS on
+// The BLAS and LAPACK routines Core calls directly (the same library CHOLMOD links, OpenBLAS on
 // the project's machines). Fortran calling convention: every argument by pointer, column-major.
 extern "C" {
 void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
@@ -8,4 +8,8 @@ void dgemm_(const char* transa, const char* transb, const int* m, const int* n, 
 void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
             const int* n, const double* alpha, const double* a, const int* lda, double* b,
             const int* ldb);
+void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
+            const double* a, const int* lda, const double* beta, double* c, const int* ldc);
+// LAPACK (OpenBLAS carries it; CMake links LAPACK::LAPACK for other BLAS).
+void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info);
 }

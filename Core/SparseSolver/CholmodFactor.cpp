@@ -2,12 +2,15 @@
 #include "Common/WorkerThreads.h"
 
 #include "SparseSolver/CholmodViews.h"
+#include "SparseSolver/MultifrontalCholesky.h"
 #include "SparseSolver/SymbolicAnalysis.h"
 
 #include "Common/BlasThreads.h"
 
 #include <algorithm>
 #include <cholmod.h>
+#include <cstdlib>
+#include <cstring>
 #include <string>
 #include <thread>
 #include <vector>
@@ -29,6 +32,7 @@ struct CholmodFactor::Impl {
   int trailing = 0;
   std::vector<int> position;
   Eigen::MatrixXd trailingBlock;
+  MultifrontalReport multifrontal; // of the last multifrontal factorization
 
   void extractTrailingBlock();
 
@@ -82,6 +86,11 @@ void CopyOut(const cholmod_dense* solution, Eigen::Index rows, Eigen::Index cols
   const double* src = static_cast<const double*>(solution->x);
   for (Eigen::Index c = 0; c < cols; ++c)
     std::copy(src + c * solution->d, src + c * solution->d + rows, x.col(c).data());
+}
+
+bool CholmodFactorizationForced() {
+  const char* choice = std::getenv("FACEPLAN_FACTORIZATION");
+  return choice && std::strcmp(choice, "cholmod") == 0;
 }
 
 } // namespace
@@ -175,6 +184,19 @@ Status CholmodFactor::factorize(const SparseMatrix& upper) {
   if (!impl_->factor) return Status::Error("internal: factorize before analyze");
   cholmod_sparse view = ViewUpper(upper);
   impl_->numeric = false;
+  // Supernodal analyses are factored multifrontally, subtrees on their own threads
+  // (MultifrontalCholesky.h). Where that fails (not positive definite) CHOLMOD factors again, so
+  // the message names the first failing column as before. FACEPLAN_FACTORIZATION=cholmod keeps
+  // CHOLMOD's own (for comparisons).
+  if (impl_->factor->is_super && impl_->factor->itype == CHOLMOD_INT && !CholmodFactorizationForced()) {
+    Status s = MultifrontalFactorize(upper, impl_->factor, &impl_->common, WorkerThreads(16),
+                                     &impl_->multifrontal);
+    if (s) {
+      impl_->numeric = true;
+      impl_->extractTrailingBlock();
+      return Status::Ok();
+    }
+  }
   // At most 8 OpenBLAS threads for the supernodal BLAS calls: on the 16-core GPU machine OpenBLAS
   // with all 16 threads made this factorization many times slower than with 8 (BENCHMARKS.md, GPU
   // section), and fewer threads lose little elsewhere. A no-op when the BLAS is not OpenBLAS.

@@ -1,0 +1,311 @@
+#include "SparseSolver/MultifrontalCholesky.h"
+#include "Common/BlasThreads.h"
+#include "SparseSolver/Blas.h"
+
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace faceplan {
+
+namespace {
+
+// The factor's supernodal structure and tree, and the matrix's entries grouped by the
+// elimination-order column they land in (the lower triangle of P A P^T).
+struct Plan {
+  int n = 0, nsuper = 0;
+  const int *super = nullptr, *pi = nullptr, *px = nullptr, *s = nullptr;
+  std::vector<int> parent, childStart, children; // children in ascending order
+  std::vector<double> flops;                     // of each supernode's own factorization
+  std::vector<int> entryStart, entryRow;         // permuted lower triangle, by column
+  std::vector<double> entryValue;
+
+  int columns(int t) const { return super[t + 1] - super[t]; }
+  int rows(int t) const { return pi[t + 1] - pi[t]; }
+};
+
+Status MakePlan(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
+  p.n = static_cast<int>(L.n);
+  p.nsuper = static_cast<int>(L.nsuper);
+  p.super = static_cast<const int*>(L.super);
+  p.pi = static_cast<const int*>(L.pi);
+  p.px = static_cast<const int*>(L.px);
+  p.s = static_cast<const int*>(L.s);
+  const int* perm = static_cast<const int*>(L.Perm);
+  if (!p.super || !p.pi || !p.px || !p.s || !perm)
+    return Status::Error("internal: the factor has no supernodal analysis");
+  std::vector<int> pinv(p.n), supernodeOf(p.n);
+  for (int k = 0; k < p.n; ++k)
+    pinv[perm[k]] = k;
+  for (int t = 0; t < p.nsuper; ++t)
+    for (int k = p.super[t]; k < p.super[t + 1]; ++k)
+      supernodeOf[k] = t;
+  p.parent.assign(p.nsuper, -1);
+  p.flops.resize(p.nsuper);
+  std::vector<int> childCount(p.nsuper + 1, 0);
+  for (int t = 0; t < p.nsuper; ++t) {
+    const double w = p.columns(t), off = p.rows(t) - p.columns(t);
+    p.flops[t] = w * w * w / 3.0 + w * w * off + w * off * off;
+    if (off > 0) {
+      p.parent[t] = supernodeOf[p.s[p.pi[t] + p.columns(t)]];
+      if (p.parent[t] <= t)
+        return Status::Error("internal: the supernodal tree is not postordered");
+      ++childCount[p.parent[t]];
+    }
+  }
+  p.childStart.assign(p.nsuper + 1, 0);
+  for (int t = 0; t < p.nsuper; ++t)
+    p.childStart[t + 1] = p.childStart[t] + childCount[t];
+  p.children.resize(p.childStart[p.nsuper]);
+  std::vector<int> fill(p.childStart.begin(), p.childStart.end() - 1);
+  for (int t = 0; t < p.nsuper; ++t)
+    if (p.parent[t] >= 0)
+      p.children[fill[p.parent[t]]++] = t;
+
+  // Entries of the upper triangle, each moved to (max, min) of its permuted row and column.
+  const int* start = upper.outerIndexPtr();
+  const int* row = upper.innerIndexPtr();
+  const double* value = upper.valuePtr();
+  p.entryStart.assign(p.n + 1, 0);
+  for (int j = 0; j < p.n; ++j)
+    for (int q = start[j]; q < start[j + 1]; ++q)
+      ++p.entryStart[std::min(pinv[row[q]], pinv[j]) + 1];
+  for (int c = 0; c < p.n; ++c)
+    p.entryStart[c + 1] += p.entryStart[c];
+  p.entryRow.resize(p.entryStart[p.n]);
+  p.entryValue.resize(p.entryStart[p.n]);
+  std::vector<int> next(p.entryStart.begin(), p.entryStart.end() - 1);
+  for (int j = 0; j < p.n; ++j)
+    for (int q = start[j]; q < start[j + 1]; ++q) {
+      const int a = pinv[row[q]], b = pinv[j];
+      const int at = next[std::min(a, b)]++;
+      p.entryRow[at] = std::max(a, b);
+      p.entryValue[at] = value[q];
+    }
+  return Status::Ok();
+}
+
+// Adds child's update matrix into supernode t's columns of L (`block`) and its own update
+// matrix, for the child's update columns [b0, b1). A child's update rows are a subset of t's rows;
+// distinct update columns land in distinct target columns, so column ranges may run in parallel.
+void ExtendAdd(const Plan& p, int t, int child, const std::vector<double>& childUpdate,
+               const std::vector<int>& position, double* block, std::vector<double>& update, int b0,
+               int b1) {
+  const int width = p.columns(t), height = p.rows(t), off = height - width;
+  const int childOff = p.rows(child) - p.columns(child);
+  const int* childRows = p.s + p.pi[child] + p.columns(child);
+  for (int b = b0; b < b1; ++b) {
+    const int pb = position[childRows[b]];
+    const double* source = childUpdate.data() + size_t(b) * childOff;
+    double* target =
+        pb < width ? block + size_t(pb) * height : update.data() + size_t(pb - width) * off - width;
+    for (int a = b; a < childOff; ++a)
+      target[position[childRows[a]]] += source[a];
+  }
+}
+
+// Splits the columns of a lower triangle of `size` columns into `parts` ranges of about equal
+// entries and runs work(begin, end) on each, on threads when parts > 1.
+template <class Work> void OverTriangleColumns(int size, int parts, Work&& work) {
+  if (parts <= 1 || size < 2) {
+    work(0, size);
+    return;
+  }
+  std::vector<std::thread> pool;
+  int begin = 0;
+  const double total = 0.5 * double(size) * (size + 1);
+  double entries = 0.0;
+  for (int part = 0, b = 0; part < parts; ++part) {
+    const double goal = total * (part + 1) / parts;
+    while (b < size && entries < goal)
+      entries += size - b++;
+    const int end = part + 1 == parts ? size : b;
+    if (begin < end)
+      pool.emplace_back([&work, begin, end] { work(begin, end); });
+    begin = end;
+  }
+  for (std::thread& th : pool)
+    th.join();
+}
+
+// Factors supernode t: its columns of L (assembled from the matrix and its children's update
+// matrices), and its own update matrix for its parent (off x off, column-major, lower triangle).
+// `threads` > 1 splits the assembly over threads (the top's large blocks, where it is memory-bound
+// work the size of the block). Returns the failing elimination-order column, or -1.
+int FactorSupernode(const Plan& p, int t, double* x, std::vector<std::vector<double>>& updates,
+                    std::vector<int>& position, int threads) {
+  const int width = p.columns(t), height = p.rows(t), off = height - width;
+  const int* rows = p.s + p.pi[t];
+  for (int k = 0; k < height; ++k)
+    position[rows[k]] = k;
+  double* block = x + p.px[t];
+  std::vector<double>& update = updates[t];
+  constexpr double kParallelFrom = 1 << 20; // entries of the block
+  const int parts = double(height) * height >= kParallelFrom ? threads : 1;
+  update.resize(size_t(off) * off);
+  OverTriangleColumns(height, parts, [&](int c0, int c1) {
+    for (int c = c0; c < c1; ++c) { // column c of the front: of L while c < width, else of update
+      if (c < width) {
+        double* column = block + size_t(c) * height;
+        std::memset(column, 0, sizeof(double) * height);
+        const int k = p.super[t] + c;
+        for (int q = p.entryStart[k]; q < p.entryStart[k + 1]; ++q)
+          column[position[p.entryRow[q]]] += p.entryValue[q];
+      } else {
+        std::memset(update.data() + size_t(c - width) * off, 0, sizeof(double) * off);
+      }
+    }
+  });
+  for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q) {
+    const int child = p.children[q];
+    const int childOff = p.rows(child) - p.columns(child);
+    OverTriangleColumns(childOff, double(childOff) * childOff >= kParallelFrom ? parts : 1,
+                        [&](int b0, int b1) {
+                          ExtendAdd(p, t, child, updates[child], position, block, update, b0, b1);
+                        });
+    std::vector<double>().swap(updates[child]);
+  }
+  int info = 0;
+  dpotrf_("L", &width, block, &height, &info);
+  if (info != 0)
+    return p.super[t] + std::max(info, 1) - 1;
+  if (off > 0) {
+    const double one = 1.0, minusOne = -1.0;
+    dtrsm_("R", "L", "T", "N", &off, &width, &one, block, &height, block + width, &height);
+    dsyrk_("L", "N", &off, &width, &minusOne, block + width, &height, &one, update.data(), &off);
+  }
+  return -1;
+}
+
+// The top: supernodes run last with threaded BLAS. A supernode is in it when its own
+// factorization is a large share of the work (a dense block big enough for threaded BLAS), and
+// so is every ancestor of one; the rest, independent subtrees and the cheap supernodes between
+// them, runs as tasks.
+std::vector<char> MarkTop(const Plan& p, int threads) {
+  double total = 0.0;
+  for (double f : p.flops)
+    total += f;
+  std::vector<char> top(p.nsuper, 0);
+  if (threads <= 1)
+    return top;
+  const double large = total / (2.0 * threads);
+  for (int t = 0; t < p.nsuper; ++t)
+    if (p.flops[t] >= large)
+      top[t] = 1;
+  for (int t = 0; t < p.nsuper; ++t) // postorder: a parent comes after its children
+    if (top[t] && p.parent[t] >= 0)
+      top[p.parent[t]] = 1;
+  return top;
+}
+
+} // namespace
+
+Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
+                             int threads, MultifrontalReport* report) {
+  if (!L || !common || !L->is_super || L->itype != CHOLMOD_INT)
+    return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
+  if (!upper.isCompressed() || upper.rows() != upper.cols() ||
+      static_cast<size_t>(upper.rows()) != L->n)
+    return Status::Error("internal: the matrix does not match the factor's analysis");
+  Plan p;
+  if (Status s = MakePlan(upper, *L, p); !s)
+    return s;
+  const size_t xsize = static_cast<size_t>(p.px[p.nsuper]);
+  if (!cholmod_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, L, common) || !L->x || L->xsize != xsize)
+    return Status::Error("CHOLMOD could not allocate the numeric factor (out of memory?)");
+  double* x = static_cast<double*>(L->x);
+  threads = std::max(1, threads);
+  const std::vector<char> top = MarkTop(p, threads);
+
+  std::vector<std::vector<double>> updates(p.nsuper);
+  std::atomic<int> failedColumn{-1};
+  auto noteFailure = [&](int column) {
+    int expected = -1;
+    failedColumn.compare_exchange_strong(expected, column);
+  };
+
+  // Tasks: every supernode outside the top, ready once its children are done. Last in, first
+  // out, so a thread follows a subtree upwards while its update matrices are warm.
+  {
+    ScopedBlasThreads singleThreadedBlas(1);
+    std::vector<int> pending(p.nsuper);
+    std::vector<int> ready;
+    int remaining = 0;
+    for (int t = 0; t < p.nsuper; ++t) {
+      pending[t] = p.childStart[t + 1] - p.childStart[t];
+      if (!top[t]) {
+        ++remaining;
+        if (pending[t] == 0)
+          ready.push_back(t);
+      }
+    }
+    std::reverse(ready.begin(), ready.end()); // lowest-numbered leaves first
+    std::mutex mutex;
+    std::condition_variable wake;
+    auto worker = [&] {
+      std::vector<int> position(p.n, 0); // each row's place in the supernode being factored
+      std::unique_lock<std::mutex> lock(mutex);
+      while (true) {
+        wake.wait(lock, [&] { return !ready.empty() || remaining == 0 || failedColumn >= 0; });
+        if (remaining == 0 || failedColumn >= 0)
+          return;
+        const int t = ready.back();
+        ready.pop_back();
+        lock.unlock();
+        const int failed = FactorSupernode(p, t, x, updates, position, 1);
+        if (failed >= 0)
+          noteFailure(failed);
+        lock.lock();
+        --remaining;
+        const int parent = p.parent[t];
+        if (parent >= 0 && --pending[parent] == 0 && !top[parent])
+          ready.push_back(parent);
+        wake.notify_all();
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int k = 1; k < threads; ++k)
+      pool.emplace_back(worker);
+    worker();
+    for (std::thread& th : pool)
+      th.join();
+  }
+  if (failedColumn < 0) {
+    // At most 8 BLAS threads, as CholmodFactor::factorize had for CHOLMOD: on the 16-core GPU
+    // machine OpenBLAS with 16 threads was many times slower on these blocks.
+    ScopedBlasThreads threadedBlas(std::min(threads, 8));
+    std::vector<int> position(p.n, 0);
+    for (int t = 0; t < p.nsuper && failedColumn < 0; ++t)
+      if (top[t])
+        if (const int failed = FactorSupernode(p, t, x, updates, position, threads); failed >= 0)
+          noteFailure(failed);
+  }
+  if (report) {
+    double total = 0.0, topFlops = 0.0;
+    report->topSupernodes = 0;
+    for (int t = 0; t < p.nsuper; ++t) {
+      total += p.flops[t];
+      if (top[t]) {
+        topFlops += p.flops[t];
+        ++report->topSupernodes;
+      }
+    }
+    report->supernodes = p.nsuper;
+    report->topFlopsShare = total > 0.0 ? topFlops / total : 0.0;
+    report->threads = threads;
+  }
+  if (failedColumn >= 0) {
+    L->minor = static_cast<size_t>(failedColumn.load());
+    return Status::Error("stiffness matrix is not positive definite (pivot failed at column " +
+                         std::to_string(failedColumn.load()) + ")");
+  }
+  L->minor = L->n;
+  return Status::Ok();
+}
+
+} // namespace faceplan

@@ -1,0 +1,40 @@
+#pragma once
+// Numeric supernodal Cholesky factorization into CHOLMOD's own layout (the factor CHOLMOD's
+// analysis made: its supernodes, row lists and value offsets), computed multifrontally over the
+// supernodal elimination tree so that independent subtrees run on their own threads.
+//
+// Why not cholmod_factorize: CHOLMOD parallelises only inside each supernode's BLAS calls, so the
+// many small supernodes below the top of the nested dissection use one core at a time; on the
+// 2-core machine its factorization gained 1.5x from the second core (BENCHMARKS.md). Here every
+// supernode is a task that runs as soon as its children are done, with single-threaded BLAS, and
+// only the few large supernodes at the top, whose dense blocks are big enough for threaded BLAS to
+// pay, run one after another with all threads.
+//
+// Deterministic: a supernode's frontal matrix adds its children's update matrices in ascending
+// child order whatever thread ran them, so the factor is the same bit for bit on every run with
+// the same thread count for the top (OpenBLAS's threaded kernels may split sums by thread count).
+// For .cpp files only (CHOLMOD is a private dependency of FacePlanSparseSolver).
+#include "Common/Status.h"
+#include "Element/StiffnessAssembly.h"
+
+#include <cholmod.h>
+
+namespace faceplan {
+
+struct MultifrontalReport {
+  int supernodes = 0;
+  int topSupernodes = 0;    // run last, one after another, with threaded BLAS
+  double topFlopsShare = 0; // their share of the factorization's flops
+  int threads = 0;
+};
+
+// L: a supernodal symbolic (or numeric) factor of `upper`'s matrix with 32-bit indices, as
+// CholmodFactor's analysis makes it; `upper`: the matrix's upper triangle in the original order
+// (compressed). Fills L's values (allocating them through `common`) and marks L numeric LL^T.
+// Fails, leaving L's values undefined, when the matrix is not positive definite; then
+// `failedColumn` is the elimination-order column where a pivot failed (not necessarily the first
+// such column: subtrees run in parallel) — callers that report it should refactor with CHOLMOD.
+Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
+                             int threads, MultifrontalReport* report = nullptr);
+
+} // namespace faceplan

@@ -1,0 +1,156 @@
+// SparseSolver/MultifrontalCholesky: the multifrontal factor in CHOLMOD's layout must be CHOLMOD's
+// factor up to round-off, the same bit for bit from run to run whatever the thread schedule, and
+// refuse a matrix that is not positive definite (CholmodFactor then names CHOLMOD's first failing
+// column, as before).
+#include "CondensedFEM/CondensedSystem.h"
+#include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/CholmodViews.h"
+#include "SparseSolver/MultifrontalCholesky.h"
+#include "SparseSolver/SymbolicAnalysis.h"
+#include "Support/FEMTestScenes.h"
+
+#include <cholmod.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <vector>
+
+using namespace faceplan;
+using namespace faceplan::testing;
+
+namespace {
+
+std::shared_ptr<const CondensedSystem> ShellSystem() {
+  std::shared_ptr<const CondensedSystem> system;
+  const Status precomputed = Precompute(ShellRequest(10, 4), system);
+  EXPECT_TRUE(precomputed.ok && system) << precomputed.message;
+  return system;
+}
+
+// A supernodal analysis of `upper` in METIS's order with the ROI-coupled nodes last (as the
+// precompute makes it), relaxed supernodes as CholmodFactor sets them.
+cholmod_factor* Analysed(const CondensedSystem& system, const SparseMatrix& upper,
+                         cholmod_common& common) {
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  const int nrelax[3] = {16, 64, 128};
+  const double zrelax[3] = {0.9, 0.3, 0.1};
+  for (int k = 0; k < 3; ++k) {
+    common.nrelax[k] = nrelax[k];
+    common.zrelax[k] = zrelax[k];
+  }
+  FillReducingOrdering ordering;
+  EXPECT_TRUE(OrderNodesWithTrailing(
+                  upper, 3, NodesCoupledTo(system.kfr, system.layout.freeNodes(), 3), ordering)
+                  .ok);
+  return AnalyzeInGivenOrder(upper, ordering.permutation, common);
+}
+
+std::vector<double> Values(const cholmod_factor* L) {
+  const double* x = static_cast<const double*>(L->x);
+  return std::vector<double>(x, x + L->xsize);
+}
+
+TEST(MultifrontalCholesky, IsCholmodsFactorUpToRoundOff) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  QuietCholmodCommon mineQuiet, theirsQuiet;
+  cholmod_factor* mine = Analysed(*system, system->kff, mineQuiet.common);
+  cholmod_factor* theirs = Analysed(*system, system->kff, theirsQuiet.common);
+  ASSERT_TRUE(mine && theirs);
+  ASSERT_GT(mine->nsuper, 20u); // a tree with subtrees to run in parallel
+  MultifrontalReport report;
+  ASSERT_TRUE(MultifrontalFactorize(system->kff, mine, &mineQuiet.common, 4, &report).ok);
+  EXPECT_EQ(report.supernodes, static_cast<int>(mine->nsuper));
+  EXPECT_GT(report.topSupernodes, 0);
+  EXPECT_LT(report.topSupernodes, report.supernodes);
+  cholmod_sparse view = ViewUpper(system->kff);
+  ASSERT_TRUE(cholmod_factorize(&view, theirs, &theirsQuiet.common));
+  ASSERT_EQ(theirs->minor, theirs->n);
+  EXPECT_EQ(mine->minor, mine->n);
+  EXPECT_TRUE(mine->is_ll && mine->is_super && mine->xtype == CHOLMOD_REAL);
+  const std::vector<double> a = Values(mine), b = Values(theirs);
+  ASSERT_EQ(a.size(), b.size());
+  double largest = 0.0, difference = 0.0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    largest = std::max(largest, std::abs(b[k]));
+    difference = std::max(difference, std::abs(a[k] - b[k]));
+  }
+  EXPECT_GT(largest, 0.0);
+  EXPECT_LT(difference, 1e-12 * largest);
+  cholmod_free_factor(&mine, &mineQuiet.common);
+  cholmod_free_factor(&theirs, &theirsQuiet.common);
+}
+
+// Subtrees run on whichever thread is free, but each supernode adds its children in a fixed
+// order: two runs with the same thread count give the same bits (the top's threaded BLAS gets the
+// same count both times).
+TEST(MultifrontalCholesky, SameBitsOnEveryRun) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  QuietCholmodCommon quiet;
+  cholmod_factor* L = Analysed(*system, system->kff, quiet.common);
+  ASSERT_TRUE(L);
+  ASSERT_TRUE(MultifrontalFactorize(system->kff, L, &quiet.common, 4).ok);
+  const std::vector<double> first = Values(L);
+  for (int run = 0; run < 3; ++run) {
+    ASSERT_TRUE(MultifrontalFactorize(system->kff, L, &quiet.common, 4).ok);
+    EXPECT_EQ(Values(L), first) << "run " << run;
+  }
+  cholmod_free_factor(&L, &quiet.common);
+}
+
+TEST(MultifrontalCholesky, RefusesAMatrixThatIsNotPositiveDefinite) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  SparseMatrix indefinite = system->kff;
+  const int column = static_cast<int>(indefinite.cols()) / 2;
+  indefinite.coeffRef(column, column) = -1.0;
+  QuietCholmodCommon quiet;
+  cholmod_factor* L = Analysed(*system, indefinite, quiet.common);
+  ASSERT_TRUE(L);
+  const Status s = MultifrontalFactorize(indefinite, L, &quiet.common, 4);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("not positive definite"), std::string::npos) << s.message;
+  EXPECT_LT(L->minor, L->n);
+  cholmod_free_factor(&L, &quiet.common);
+
+  // Through CholmodFactor the message names CHOLMOD's first failing column, as with
+  // FACEPLAN_FACTORIZATION=cholmod.
+  std::string messages[2];
+  for (int m = 0; m < 2; ++m) {
+    if (m == 1)
+      setenv("FACEPLAN_FACTORIZATION", "cholmod", 1);
+    CholmodFactor factor;
+    ASSERT_TRUE(factor.analyze(indefinite).ok);
+    const Status failed = factor.factorize(indefinite);
+    EXPECT_FALSE(failed.ok);
+    EXPECT_FALSE(factor.isFactorized());
+    messages[m] = failed.message;
+  }
+  unsetenv("FACEPLAN_FACTORIZATION");
+  EXPECT_EQ(messages[0], messages[1]);
+  EXPECT_NE(messages[0].find("CHOLMOD stopped at column"), std::string::npos) << messages[0];
+}
+
+// The factor CholmodFactor makes multifrontally solves as CHOLMOD's does.
+TEST(MultifrontalCholesky, CholmodFactorSolvesWithIt) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(system->kff.rows(), 3);
+  Eigen::MatrixXd x[2];
+  for (int m = 0; m < 2; ++m) {
+    if (m == 1)
+      setenv("FACEPLAN_FACTORIZATION", "cholmod", 1);
+    CholmodFactor factor;
+    ASSERT_TRUE(factor.analyze(system->kff).ok);
+    ASSERT_TRUE(factor.factorize(system->kff).ok);
+    ASSERT_TRUE(factor.solve(b, x[m]).ok);
+  }
+  unsetenv("FACEPLAN_FACTORIZATION");
+  EXPECT_LT((x[0] - x[1]).norm(), 1e-12 * x[1].norm());
+  const Eigen::MatrixXd residual = system->kff.selfadjointView<Eigen::Upper>() * x[0] - b;
+  EXPECT_LT(residual.norm(), 1e-12 * b.norm());
+}
+
+} // namespace
