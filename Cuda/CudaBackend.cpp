@@ -1,20 +1,23 @@
 #include "CudaBackend.h"
 
+#include "Common/ParallelFor.h"
+#include "Common/StageTimings.h"
 #include "CudaCheck.h"
 #include "CudaDenseResponse.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
 #include "Element/ElementStiffness.h"
-#include "Common/ParallelFor.h"
-#include "Common/StageTimings.h"
 
 #include <algorithm>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <sstream>
+#include <thread>
 #include <vector>
 
 #ifndef FACEPLAN_CUDA_ARCHITECTURES
@@ -24,9 +27,9 @@
 namespace faceplan::cuda {
 
 using detail::CudaResponse;
+using detail::DeviceArray;
 using detail::InitDevice;
 using detail::ParallelCopy;
-using detail::DeviceArray;
 using detail::PinnedArray;
 
 namespace {
@@ -36,7 +39,8 @@ namespace {
 std::uint64_t Fingerprint(const int* data, size_t count, std::uint64_t seed) {
   std::uint64_t h = 1469598103934665603ull ^ seed ^ (static_cast<std::uint64_t>(count) << 17);
   auto mix = [&h](std::uint32_t v) { h = (h ^ v) * 1099511628211ull; };
-  if (count == 0) return h;
+  if (count == 0)
+    return h;
   const size_t samples = std::min<size_t>(count, 2048);
   for (size_t s = 0; s < samples; ++s) {
     const size_t i = samples == count ? s : s * (count - 1) / (samples - 1);
@@ -64,20 +68,26 @@ class CudaBackendImpl final : public ComputeBackend {
 public:
   ~CudaBackendImpl() override {
     for (cudaEvent_t& e : events_)
-      if (e) cudaEventDestroy(e);
+      if (e)
+        cudaEventDestroy(e);
     for (cudaEvent_t& e : chunkDone_)
-      if (e) cudaEventDestroy(e);
-    if (stream_) cudaStreamDestroy(stream_);
+      if (e)
+        cudaEventDestroy(e);
+    if (stream_)
+      cudaStreamDestroy(stream_);
   }
 
   bool init(std::string& error) {
-    if (!InitDevice(error)) return false;
+    if (!InitDevice(error))
+      return false;
     cudaDeviceProp prop{};
     FP_CUDA_TRY(cudaGetDeviceProperties(&prop, 0));
     name_ = std::string("CUDA (") + prop.name + ")";
     FP_CUDA_TRY(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
-    for (cudaEvent_t& e : events_) FP_CUDA_TRY(cudaEventCreate(&e));
-    for (cudaEvent_t& e : chunkDone_) FP_CUDA_TRY(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+    for (cudaEvent_t& e : events_)
+      FP_CUDA_TRY(cudaEventCreate(&e));
+    for (cudaEvent_t& e : chunkDone_)
+      FP_CUDA_TRY(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
     return true;
   }
 
@@ -91,8 +101,10 @@ public:
     std::string error;
     const bool ok = assemble(mesh, materials, pattern, timings, detail, error);
     detail.wallMs = clock.elapsedMs();
-    if (ok) last_ = detail;
-    if (!ok) releasePattern(); // a failed call leaves nothing half-cached
+    if (ok)
+      last_ = detail;
+    if (!ok)
+      releasePattern(); // a failed call leaves nothing half-cached
     return ok ? Status::Ok() : Status::Error(error);
   }
 
@@ -122,10 +134,11 @@ public:
     report.worstRelativeResidual = detail.response.worstRelativeResidual;
     std::ostringstream line;
     line.precision(3);
-    line << "GPU numeric factorization " << detail.factorizeMs << " ms (+ " << detail.factorDownloadMs
-         << " ms copy into CHOLMOD beside the response, " << detail.factorDownloadWaitMs
-         << " ms of it after), GPU response " << detail.response.wallMs << " ms ("
-         << detail.response.supernodes << " supernodes, " << detail.response.blocks << " pass(es), residual "
+    line << "GPU numeric factorization " << detail.factorizeMs << " ms (+ "
+         << detail.factorDownloadMs << " ms copy into CHOLMOD beside the response, "
+         << detail.factorDownloadWaitMs << " ms of it after), GPU response "
+         << detail.response.wallMs << " ms (" << detail.response.supernodes << " supernodes, "
+         << detail.response.blocks << " pass(es), residual "
          << detail.response.worstRelativeResidual << ")";
     report.detail = line.str();
     std::lock_guard<std::mutex> lock(factorMutex_);
@@ -144,7 +157,6 @@ public:
     std::lock_guard<std::mutex> lock(mutex_);
     return last_;
   }
-
 
 private:
   void releasePattern() {
@@ -171,7 +183,6 @@ public:
   }
 
 private:
-
   bool assemble(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
                 AssemblyTimings& timings, AssemblyDetail& detail, std::string& error) {
     const long long m = mesh.numTets();
@@ -242,8 +253,9 @@ private:
     }
     if (!tets_.ensure(tetBytes, error) || !gatherStart_.ensure(gatherBytes, error) ||
         !packedIndex_.ensure(indexBytes, error) || !points_.ensure(pointBytes, error) ||
-        !youngs_.ensure(sizeof(double) * nE, error) || !poisson_.ensure(sizeof(double) * nNu, error) ||
-        !packed_.ensure(elementBytes, error) || !values_.ensure(valueBytes, error))
+        !youngs_.ensure(sizeof(double) * nE, error) ||
+        !poisson_.ensure(sizeof(double) * nNu, error) || !packed_.ensure(elementBytes, error) ||
+        !values_.ensure(valueBytes, error))
       return false;
 
     // Points and materials go through page-locked staging (a parallel host copy, then a copy at
@@ -253,7 +265,8 @@ private:
     const double* srcPoisson = materials.poissonRatio.data();
     if (pinnedTransfers_) {
       const size_t inBytes = pointBytes + sizeof(double) * (nE + nNu);
-      if (!stageIn_.ensure(inBytes, error) || !stageOut_.ensure(valueBytes, error)) return false;
+      if (!stageIn_.ensure(inBytes, error) || !stageOut_.ensure(valueBytes, error))
+        return false;
       double* stage = stageIn_.as<double>();
       ParallelCopy(stage, srcPoints, pointBytes);
       ParallelCopy(stage + 3 * n, srcYoungs, sizeof(double) * nE);
@@ -267,7 +280,8 @@ private:
     double uploaded = 0.0;
     FP_CUDA_TRY(cudaEventRecord(events_[0], stream_));
     if (!reuse) {
-      FP_CUDA_TRY(cudaMemcpyAsync(tets_.as<int>(), mesh.tets.data(), tetBytes, cudaMemcpyHostToDevice, stream_));
+      FP_CUDA_TRY(cudaMemcpyAsync(tets_.as<int>(), mesh.tets.data(), tetBytes,
+                                  cudaMemcpyHostToDevice, stream_));
       FP_CUDA_TRY(cudaMemcpyAsync(gatherStart_.as<int>(), pattern.gatherStart.data(), gatherBytes,
                                   cudaMemcpyHostToDevice, stream_));
       if (packedCount > 0)
@@ -275,38 +289,44 @@ private:
                                     sizeof(int) * packedCount, cudaMemcpyHostToDevice, stream_));
       uploaded += static_cast<double>(tetBytes + gatherBytes + sizeof(int) * packedCount);
     }
-    FP_CUDA_TRY(cudaMemcpyAsync(points_.as<double>(), srcPoints, pointBytes, cudaMemcpyHostToDevice, stream_));
-    FP_CUDA_TRY(cudaMemcpyAsync(youngs_.as<double>(), srcYoungs, sizeof(double) * nE, cudaMemcpyHostToDevice, stream_));
-    FP_CUDA_TRY(cudaMemcpyAsync(poisson_.as<double>(), srcPoisson, sizeof(double) * nNu, cudaMemcpyHostToDevice,
+    FP_CUDA_TRY(cudaMemcpyAsync(points_.as<double>(), srcPoints, pointBytes, cudaMemcpyHostToDevice,
                                 stream_));
+    FP_CUDA_TRY(cudaMemcpyAsync(youngs_.as<double>(), srcYoungs, sizeof(double) * nE,
+                                cudaMemcpyHostToDevice, stream_));
+    FP_CUDA_TRY(cudaMemcpyAsync(poisson_.as<double>(), srcPoisson, sizeof(double) * nNu,
+                                cudaMemcpyHostToDevice, stream_));
     uploaded += static_cast<double>(pointBytes + sizeof(double) * (nE + nNu));
     FP_CUDA_TRY(cudaEventRecord(events_[1], stream_));
 
-    FP_CUDA_TRY(detail::LaunchElementStiffness(points_.as<double>(), tets_.as<int>(), m,
-                                               youngs_.as<double>(), nE == 1 ? 0 : 1,
-                                               poisson_.as<double>(), nNu == 1 ? 0 : 1,
-                                               packed_.as<double>(), stream_));
+    FP_CUDA_TRY(detail::LaunchElementStiffness(
+        points_.as<double>(), tets_.as<int>(), m, youngs_.as<double>(), nE == 1 ? 0 : 1,
+        poisson_.as<double>(), nNu == 1 ? 0 : 1, packed_.as<double>(), stream_));
     FP_CUDA_TRY(cudaEventRecord(events_[2], stream_));
-    FP_CUDA_TRY(detail::LaunchGather(gatherStart_.as<int>(), packedIndex_.as<int>(), packed_.as<double>(),
-                                     static_cast<int>(nnz), values_.as<double>(), stream_));
+    FP_CUDA_TRY(detail::LaunchGather(gatherStart_.as<int>(), packedIndex_.as<int>(),
+                                     packed_.as<double>(), static_cast<int>(nnz),
+                                     values_.as<double>(), stream_));
     FP_CUDA_TRY(cudaEventRecord(events_[3], stream_));
     // The values come back in a few chunks, each copied out of the staging buffer while the next
     // one is still on the link.
-    const int chunks = pinnedTransfers_ ? static_cast<int>(std::min<size_t>(4, 1 + valueBytes / (size_t(8) << 20))) : 1;
+    const int chunks =
+        pinnedTransfers_ ? static_cast<int>(std::min<size_t>(4, 1 + valueBytes / (size_t(8) << 20)))
+                         : 1;
     const size_t chunkBytes = (valueBytes / chunks + 7) & ~size_t(7);
     for (int c = 0; c < chunks; ++c) {
-      const size_t from = std::min(valueBytes, c * chunkBytes), to = std::min(valueBytes, (c + 1) * chunkBytes);
+      const size_t from = std::min(valueBytes, c * chunkBytes),
+                   to = std::min(valueBytes, (c + 1) * chunkBytes);
       if (to > from)
         FP_CUDA_TRY(cudaMemcpyAsync(reinterpret_cast<char*>(dstValues) + from,
-                                    reinterpret_cast<const char*>(values_.as<double>()) + from, to - from,
-                                    cudaMemcpyDeviceToHost, stream_));
+                                    reinterpret_cast<const char*>(values_.as<double>()) + from,
+                                    to - from, cudaMemcpyDeviceToHost, stream_));
       FP_CUDA_TRY(cudaEventRecord(chunkDone_[c], stream_));
     }
     FP_CUDA_TRY(cudaEventRecord(events_[4], stream_));
     if (pinnedTransfers_) {
       for (int c = 0; c < chunks; ++c) {
         FP_CUDA_TRY(cudaEventSynchronize(chunkDone_[c]));
-        const size_t from = std::min(valueBytes, c * chunkBytes), to = std::min(valueBytes, (c + 1) * chunkBytes);
+        const size_t from = std::min(valueBytes, c * chunkBytes),
+                     to = std::min(valueBytes, (c + 1) * chunkBytes);
         if (to > from)
           ParallelCopy(reinterpret_cast<char*>(pattern.upper.valuePtr()) + from,
                        reinterpret_cast<const char*>(dstValues) + from, to - from);
@@ -315,7 +335,8 @@ private:
     FP_CUDA_TRY(cudaStreamSynchronize(stream_));
 
     float ms[4] = {0, 0, 0, 0};
-    for (int i = 0; i < 4; ++i) FP_CUDA_TRY(cudaEventElapsedTime(&ms[i], events_[i], events_[i + 1]));
+    for (int i = 0; i < 4; ++i)
+      FP_CUDA_TRY(cudaEventElapsedTime(&ms[i], events_[i], events_[i + 1]));
     detail.uploadMs = ms[0];
     detail.stiffnessKernelMs = ms[1];
     detail.gatherKernelMs = ms[2];
@@ -326,8 +347,8 @@ private:
     detail.kernelBytes = static_cast<double>(tetBytes) + static_cast<double>(pointBytes) +
                          sizeof(double) * static_cast<double>(nE + nNu) +
                          2.0 * static_cast<double>(elementBytes) + // packed: written, read back
-                         sizeof(int) * static_cast<double>(packedCount) + static_cast<double>(gatherBytes) +
-                         static_cast<double>(valueBytes);
+                         sizeof(int) * static_cast<double>(packedCount) +
+                         static_cast<double>(gatherBytes) + static_cast<double>(valueBytes);
     timings.elementStiffnessMs = ms[0] + ms[1];
     timings.assemblyMs = ms[2] + ms[3];
 
@@ -389,58 +410,145 @@ bool InitDevice(std::string& error) {
   return true;
 }
 
-bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream, std::string& error) {
-  constexpr size_t chunk = size_t(64) << 20;
-  if (bytes <= chunk) {
-    PinnedArray stage;
-    if (!stage.ensure(bytes, error)) return false;
-    FP_CUDA_TRY(cudaMemcpyAsync(stage.as<void>(), src, bytes, cudaMemcpyDeviceToHost, stream));
-    FP_CUDA_TRY(cudaStreamSynchronize(stream));
-    ParallelCopy(dst, stage.as<void>(), bytes);
-    return true;
+namespace {
+
+// Page-locked staging buffers, kept for the process once made: allocating two 64 MB buffers took
+// ~70 ms per copy on the GPU machine (host_transfer_probe). A copy takes a set and gives it back;
+// two copies at once (the factor's and the response's) take two sets.
+constexpr size_t kStageBytes = size_t(64) << 20;
+constexpr int kStageBuffers = 3;
+struct StagingSet {
+  PinnedArray buffer[kStageBuffers];
+  cudaEvent_t copied[kStageBuffers] = {};
+  ~StagingSet() {
+    for (cudaEvent_t e : copied)
+      if (e)
+        cudaEventDestroy(e);
   }
-  PinnedArray stage[2];
-  cudaEvent_t done[2] = {nullptr, nullptr};
-  auto cleanup = [&]() {
-    for (cudaEvent_t& e : done)
-      if (e) cudaEventDestroy(e);
-  };
-  auto run = [&]() -> bool {
-    for (int b = 0; b < 2; ++b) {
-      if (!stage[b].ensure(chunk, error)) return false;
-      FP_CUDA_TRY(cudaEventCreateWithFlags(&done[b], cudaEventDisableTiming));
+};
+std::mutex stagingMutex;
+std::vector<std::unique_ptr<StagingSet>> idleStaging;
+
+std::unique_ptr<StagingSet> TakeStaging(std::string& error) {
+  {
+    std::lock_guard<std::mutex> lock(stagingMutex);
+    if (!idleStaging.empty()) {
+      std::unique_ptr<StagingSet> set = std::move(idleStaging.back());
+      idleStaging.pop_back();
+      return set;
     }
-    const size_t chunks = (bytes + chunk - 1) / chunk;
-    for (size_t k = 0; k <= chunks; ++k) {
-      if (k < chunks) { // start chunk k (its buffer's previous chunk was copied out at step k-1)
-        const size_t off = k * chunk, len = std::min(chunk, bytes - off);
-        FP_CUDA_TRY(cudaMemcpyAsync(stage[k % 2].as<void>(), static_cast<const char*>(src) + off, len,
-                                    cudaMemcpyDeviceToHost, stream));
-        FP_CUDA_TRY(cudaEventRecord(done[k % 2], stream));
-      }
-      if (k > 0) { // finish chunk k-1 while chunk k transfers
-        const size_t off = (k - 1) * chunk, len = std::min(chunk, bytes - off);
-        FP_CUDA_TRY(cudaEventSynchronize(done[(k - 1) % 2]));
-        ParallelCopy(static_cast<char*>(dst) + off, stage[(k - 1) % 2].as<void>(), len);
-      }
+  }
+  auto set = std::make_unique<StagingSet>();
+  for (int b = 0; b < kStageBuffers; ++b) {
+    if (!set->buffer[b].ensure(kStageBytes, error))
+      return nullptr;
+    if (cudaEventCreateWithFlags(&set->copied[b], cudaEventDisableTiming) != cudaSuccess) {
+      error = "could not create an event for a staged copy";
+      return nullptr;
     }
+  }
+  return set;
+}
+
+void GiveStaging(std::unique_ptr<StagingSet> set) {
+  std::lock_guard<std::mutex> lock(stagingMutex);
+  idleStaging.push_back(std::move(set));
+}
+
+} // namespace
+
+bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream,
+                   std::string& error) {
+  if (bytes == 0)
     return true;
+  std::unique_ptr<StagingSet> set = TakeStaging(error);
+  if (!set)
+    return false;
+  // A pipeline: this thread queues each 64 MB chunk's device-to-host copy into a free staging
+  // buffer; `threads` host threads, started once, each copy their slice of every chunk out of it
+  // as soon as its copy has arrived. Three buffers keep the link busy while the host copies.
+  const size_t chunks = (bytes + kStageBytes - 1) / kStageBytes;
+  const int threads =
+      static_cast<int>(std::min<size_t>(WorkerThreads(16), std::max<size_t>(1, bytes >> 22)));
+  std::mutex mutex;
+  std::condition_variable changed;
+  size_t queued = 0;                   // chunks whose copy (and event) are queued
+  int slicesDone[kStageBuffers] = {0}; // of the chunk now in each buffer
+  bool failed = false;
+  auto worker = [&](int t) {
+    for (size_t k = 0; k < chunks; ++k) {
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        changed.wait(lock, [&] { return queued > k || failed; });
+        if (failed)
+          return;
+      }
+      const int b = static_cast<int>(k % kStageBuffers);
+      if (cudaEventSynchronize(set->copied[b]) != cudaSuccess) {
+        std::lock_guard<std::mutex> lock(mutex);
+        failed = true;
+        changed.notify_all();
+        return;
+      }
+      const size_t off = k * kStageBytes, len = std::min(kStageBytes, bytes - off);
+      const size_t slice = (len + threads - 1) / threads, from = std::min(len, t * slice),
+                   to = std::min(len, from + slice);
+      if (to > from)
+        std::memcpy(static_cast<char*>(dst) + off + from, set->buffer[b].as<char>() + from,
+                    to - from);
+      std::lock_guard<std::mutex> lock(mutex);
+      if (++slicesDone[b] == threads)
+        changed.notify_all();
+    }
   };
-  const bool ok = run();
-  cleanup();
-  return ok;
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t)
+    pool.emplace_back(worker, t);
+  bool ok = true;
+  for (size_t k = 0; k < chunks && ok; ++k) {
+    const int b = static_cast<int>(k % kStageBuffers);
+    if (k >= kStageBuffers) { // the buffer's previous chunk must be copied out first
+      std::unique_lock<std::mutex> lock(mutex);
+      changed.wait(lock, [&] { return slicesDone[b] == threads || failed; });
+      if (failed)
+        break;
+    }
+    const size_t off = k * kStageBytes, len = std::min(kStageBytes, bytes - off);
+    ok = cudaMemcpyAsync(set->buffer[b].as<void>(), static_cast<const char*>(src) + off, len,
+                         cudaMemcpyDeviceToHost, stream) == cudaSuccess &&
+         cudaEventRecord(set->copied[b], stream) == cudaSuccess;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!ok) {
+      failed = true;
+      error = std::string("staged device-to-host copy: ") + cudaGetErrorString(cudaGetLastError());
+    } else {
+      slicesDone[b] = 0;
+      ++queued;
+    }
+    changed.notify_all();
+  }
+  for (std::thread& th : pool)
+    th.join();
+  if (failed && ok)
+    error = "staged device-to-host copy: waiting for a chunk failed";
+  if (!failed)
+    GiveStaging(std::move(set)); // a set whose copy failed is dropped
+  return !failed;
 }
 
 } // namespace detail
 
 bool DeviceAvailable(std::string* why) {
-  if (const char* off = std::getenv("FACEPLAN_DISABLE_CUDA"); off && *off && std::strcmp(off, "0") != 0) {
-    if (why) *why = "the CUDA backend is disabled by FACEPLAN_DISABLE_CUDA";
+  if (const char* off = std::getenv("FACEPLAN_DISABLE_CUDA");
+      off && *off && std::strcmp(off, "0") != 0) {
+    if (why)
+      *why = "the CUDA backend is disabled by FACEPLAN_DISABLE_CUDA";
     return false;
   }
   std::string error;
   if (!InitDevice(error)) {
-    if (why) *why = error;
+    if (why)
+      *why = error;
     return false;
   }
   return true;
@@ -453,7 +561,8 @@ std::string DeviceDescription() {
     return {};
   }
   cudaDeviceProp prop{};
-  if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess) return {};
+  if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess)
+    return {};
   std::ostringstream out;
   out.precision(4);
   out << prop.name << " (sm_" << prop.major << prop.minor << ", " << prop.multiProcessorCount
@@ -464,9 +573,11 @@ std::string DeviceDescription() {
 Status MakeCudaBackend(std::shared_ptr<ComputeBackend>& backend) {
   backend.reset();
   std::string error;
-  if (!DeviceAvailable(&error)) return Status::Error(error);
+  if (!DeviceAvailable(&error))
+    return Status::Error(error);
   auto made = std::make_shared<CudaBackendImpl>();
-  if (!made->init(error)) return Status::Error(error);
+  if (!made->init(error))
+    return Status::Error(error);
   backend = std::move(made);
   return Status::Ok();
 }
@@ -485,7 +596,8 @@ bool TimeCopies(void* dst, const void* src, size_t bytes, cudaMemcpyKind kind, i
     FP_CUDA_TRY(cudaEventSynchronize(stop));
     float t = 0.f;
     FP_CUDA_TRY(cudaEventElapsedTime(&t, start, stop));
-    if (r >= 0) ms.push_back(t);
+    if (r >= 0)
+      ms.push_back(t);
   }
   std::sort(ms.begin(), ms.end());
   const double median = ms[ms.size() / 2];
@@ -509,31 +621,36 @@ Status MeasureBandwidth(Bandwidth& bw, size_t bytes, int repeats) {
     FP_CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
     FP_CUDA_TRY(cudaEventCreate(&start));
     FP_CUDA_TRY(cudaEventCreate(&stop));
-    if (!a.ensure(bytes, error) || !b.ensure(bytes, error) || !pinned.ensure(bytes / 4, error)) return false;
+    if (!a.ensure(bytes, error) || !b.ensure(bytes, error) || !pinned.ensure(bytes / 4, error))
+      return false;
     FP_CUDA_TRY(cudaMemset(a.as<void>(), 1, bytes));
     std::fill(pageable.begin(), pageable.end(), static_cast<unsigned char>(3));
     std::memset(pinned.as<void>(), 5, bytes / 4);
-    return TimeCopies(b.as<void>(), a.as<void>(), bytes, cudaMemcpyDeviceToDevice, repeats, 2.0, stream,
-                      start, stop, bw.deviceToDeviceGBs, error) &&
-           TimeCopies(a.as<void>(), pinned.as<void>(), bytes / 4, cudaMemcpyHostToDevice, repeats, 1.0,
-                      stream, start, stop, bw.hostToDevicePinnedGBs, error) &&
-           TimeCopies(pinned.as<void>(), a.as<void>(), bytes / 4, cudaMemcpyDeviceToHost, repeats, 1.0,
-                      stream, start, stop, bw.deviceToHostPinnedGBs, error) &&
-           TimeCopies(a.as<void>(), pageable.data(), bytes / 4, cudaMemcpyHostToDevice, repeats, 1.0,
-                      stream, start, stop, bw.hostToDevicePageableGBs, error) &&
-           TimeCopies(pageable.data(), a.as<void>(), bytes / 4, cudaMemcpyDeviceToHost, repeats, 1.0,
-                      stream, start, stop, bw.deviceToHostPageableGBs, error);
+    return TimeCopies(b.as<void>(), a.as<void>(), bytes, cudaMemcpyDeviceToDevice, repeats, 2.0,
+                      stream, start, stop, bw.deviceToDeviceGBs, error) &&
+           TimeCopies(a.as<void>(), pinned.as<void>(), bytes / 4, cudaMemcpyHostToDevice, repeats,
+                      1.0, stream, start, stop, bw.hostToDevicePinnedGBs, error) &&
+           TimeCopies(pinned.as<void>(), a.as<void>(), bytes / 4, cudaMemcpyDeviceToHost, repeats,
+                      1.0, stream, start, stop, bw.deviceToHostPinnedGBs, error) &&
+           TimeCopies(a.as<void>(), pageable.data(), bytes / 4, cudaMemcpyHostToDevice, repeats,
+                      1.0, stream, start, stop, bw.hostToDevicePageableGBs, error) &&
+           TimeCopies(pageable.data(), a.as<void>(), bytes / 4, cudaMemcpyDeviceToHost, repeats,
+                      1.0, stream, start, stop, bw.deviceToHostPageableGBs, error);
   };
   const bool ok = run();
-  if (start) cudaEventDestroy(start);
-  if (stop) cudaEventDestroy(stop);
-  if (stream) cudaStreamDestroy(stream);
+  if (start)
+    cudaEventDestroy(start);
+  if (stop)
+    cudaEventDestroy(stop);
+  if (stream)
+    cudaStreamDestroy(stream);
   return ok ? Status::Ok() : Status::Error(error);
 }
 
 bool LastAssemblyDetail(const ComputeBackend& backend, AssemblyDetail& detail) {
   const auto* impl = dynamic_cast<const CudaBackendImpl*>(&backend);
-  if (!impl) return false;
+  if (!impl)
+    return false;
   detail = impl->lastDetail();
   return true;
 }
@@ -544,11 +661,13 @@ bool LastFactorAndResponseDetail(const ComputeBackend& backend, FactorAndRespons
 }
 
 void ReleasePatternCache(ComputeBackend& backend) {
-  if (auto* impl = dynamic_cast<CudaBackendImpl*>(&backend)) impl->releaseAll();
+  if (auto* impl = dynamic_cast<CudaBackendImpl*>(&backend))
+    impl->releaseAll();
 }
 
 void SetPinnedTransfers(ComputeBackend& backend, bool on) {
-  if (auto* impl = dynamic_cast<CudaBackendImpl*>(&backend)) impl->setPinnedTransfers(on);
+  if (auto* impl = dynamic_cast<CudaBackendImpl*>(&backend))
+    impl->setPinnedTransfers(on);
 }
 
 } // namespace faceplan::cuda

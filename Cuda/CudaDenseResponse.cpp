@@ -74,6 +74,7 @@ struct SupernodalCholesky::Impl {
     hostNumeric = false;
     downloadMs = 0.0;
     StageClock clock;
+    factor.setSupernodeRelaxation(SupernodeRelaxation::Coarse); // the GPU's per-supernode costs
     const Status status = factor.analyze(upper);
     analyzeMs = clock.lapMs();
     return status;

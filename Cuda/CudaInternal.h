@@ -105,8 +105,9 @@ inline void TouchPagesInParallel(double* data, std::int64_t count) {
               [data](std::int64_t begin, std::int64_t end) { std::fill(data + begin, data + end, 0.0); });
 }
 
-// Large device-to-host copy into pageable memory: through two page-locked buffers, the device
-// copy of one chunk overlapping the parallel host copy of the previous one.
+// Large device-to-host copy into pageable memory: through three page-locked 64 MB buffers (kept
+// for the process), the device copy of one chunk overlapping the host threads' copies of the
+// previous ones. Safe to call from two threads at once (each takes its own buffers).
 bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream, std::string& error);
 
 // kept = response * roi with the response in GPU memory: cuBLAS DGEMV on one stream, pinned

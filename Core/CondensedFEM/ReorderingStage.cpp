@@ -24,6 +24,8 @@ struct OrderingInputs {
   double roiColumns = 0.0; // the response's columns: ROI DOFs, or segment parameters
   bool fewColumns = false; // rigid segments
   bool hasRoi = false;
+  // The backend factors on the GPU (coarse supernodes there: SupernodeRelaxation).
+  bool gpuFactorization = false;
 };
 
 // METIS on the node graph with the ROI-coupled nodes last (FillReducingOrdering.h). That halves a
@@ -32,6 +34,8 @@ struct OrderingInputs {
 // precompute is kept: factorization flops plus one solve per ROI DOF (forward + backward, or
 // backward + the trailing block). CHOLMOD's own choice if neither ordering can be made.
 Status OrderAndAnalyse(const OrderingInputs& in, CholmodFactor& factor, std::string& ordering) {
+  factor.setSupernodeRelaxation(in.gpuFactorization ? SupernodeRelaxation::Coarse
+                                                    : SupernodeRelaxation::Cholmod);
   const double roiColumns = in.roiColumns;
   auto estimatedCost = [roiColumns](double nonzeros, double flops, int trailing) {
     return flops + roiColumns * FactorSolveFlops(nonzeros, trailing);
@@ -67,7 +71,8 @@ Status OrderAndAnalyse(const OrderingInputs& in, CholmodFactor& factor, std::str
     const FillReducingOrdering& used = candidates.front();
     ordering = used.method;
     if (used.leaves > 1)
-      ordering += " (dissection's top split into " + std::to_string(used.leaves) + " parts on threads" +
+      ordering += " (dissection's top split into " + std::to_string(used.leaves) +
+                  " parts on threads" +
                   (MetisRandomIsPerThread() ? ")" : ", METIS calls serialised)");
     if (factor.trailingDofs() > 0)
       ordering += ", ROI-coupled DOFs last";
@@ -95,6 +100,12 @@ void Finish(PrecomputeState& state, const std::string& ordering, double ms) {
 
 } // namespace
 
+// Whether the backend asked for will factor on the GPU (known before the assembly picks it).
+bool GpuFactorization(const PrecomputeState& state) {
+  const auto& backend = state.request.options.backend;
+  return backend && backend->providesFactorAndResponse();
+}
+
 bool StartEarlyOrdering(PrecomputeState& state, std::shared_ptr<const NodeNeighbours> lower) {
   const CondensedSystem& sys = *state.sys;
   // Sliding nodes turn and pin DOFs, and nodal pressure widens the pattern, after the cells'
@@ -105,6 +116,7 @@ bool StartEarlyOrdering(PrecomputeState& state, std::shared_ptr<const NodeNeighb
   const double roiColumns = ResponseColumns(state, segmentColumns);
   const int freeNodes = sys.layout.freeNodes();
   const bool hasRoi = sys.layout.roiDofs() > 0;
+  const bool gpuFactorization = GpuFactorization(state);
   std::shared_ptr<CondensedSystem> system = state.sys;
   const std::atomic<bool>* cancel = state.cancel;
   state.earlyOrdering = std::async(std::launch::async, [=]() {
@@ -120,7 +132,8 @@ bool StartEarlyOrdering(PrecomputeState& state, std::shared_ptr<const NodeNeighb
                         },
                         roiColumns,
                         segmentColumns,
-                        hasRoi};
+                        hasRoi,
+                        gpuFactorization};
       out.coupled = in.coupled;
       if (cancel && cancel->load())
         return Status::Error("cancelled");
@@ -174,7 +187,8 @@ Status ReorderFreeDofs(PrecomputeState& state) {
                     },
                     double(segments ? state.segmentCoupling.cols() : sys.kfr.cols()),
                     segments,
-                    sys.kfr.cols() > 0};
+                    sys.kfr.cols() > 0,
+                    GpuFactorization(state)};
   std::string ordering;
   if (Status s = OrderAndAnalyse(in, sys.factor, ordering); !s)
     return s; // (not into the state's status: that would drop its warnings)

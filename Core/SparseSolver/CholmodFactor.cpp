@@ -1,4 +1,5 @@
 #include "SparseSolver/CholmodFactor.h"
+#include "Common/ParallelFor.h"
 #include "Common/WorkerThreads.h"
 
 #include "SparseSolver/CholmodViews.h"
@@ -38,14 +39,7 @@ struct CholmodFactor::Impl {
 
   Impl() {
     common.supernodal = CHOLMOD_SUPERNODAL;
-    // Coarser relaxed supernodes than CHOLMOD's defaults (4/16/48 columns, 0.8/0.1/0.05 zeros):
-    // fewer, larger BLAS calls (the measured gain is in BENCHMARKS.md).
-    common.nrelax[0] = 16;
-    common.nrelax[1] = 64;
-    common.nrelax[2] = 128;
-    common.zrelax[0] = 0.9;
-    common.zrelax[1] = 0.3;
-    common.zrelax[2] = 0.1;
+    ApplySupernodeRelaxation(common, SupernodeRelaxation::Cholmod);
   }
   ~Impl() {
     cholmod_free_dense(&x, &common);
@@ -60,28 +54,37 @@ void CholmodFactor::Impl::extractTrailingBlock() {
   if (trailing == 0 || !factor || !factor->is_super)
     return;
   const int n = static_cast<int>(factor->n), first = n - trailing;
-  trailingBlock = Eigen::MatrixXd::Zero(trailing, trailing);
+  trailingBlock.resize(trailing, trailing);
   const int* super = static_cast<const int*>(factor->super);
   const int* pi = static_cast<const int*>(factor->pi);
   const int* px = static_cast<const int*>(factor->px);
   const int* s = static_cast<const int*>(factor->s);
   const double* values = static_cast<const double*>(factor->x);
-  for (size_t k = 0; k < factor->nsuper; ++k) {
-    if (super[k + 1] <= first)
-      continue;
-    const int rows = pi[k + 1] - pi[k];
+  std::vector<int> supernodeOf(trailing);
+  for (size_t k = 0; k < factor->nsuper; ++k)
     for (int j = std::max(super[k], first); j < super[k + 1]; ++j)
+      supernodeOf[j - first] = static_cast<int>(k);
+  // Column by column on every core: at 1M cells the block is 7,830 columns (490 MB), 0.4 s on one
+  // core beside the GPU response's download.
+  ParallelFor(trailing, 64, [&](std::int64_t c0, std::int64_t c1) {
+    for (std::int64_t c = c0; c < c1; ++c) {
+      const int j = first + static_cast<int>(c), k = supernodeOf[c];
+      const int rows = pi[k + 1] - pi[k];
+      double* column = trailingBlock.col(c).data();
+      std::fill(column, column + trailing, 0.0); // zero where the pattern has no entry
       for (int r = 0; r < rows; ++r) {
         const int row = s[pi[k] + r];
         if (row >= j)
-          trailingBlock(row - first, j - first) = values[px[k] + (j - super[k]) * rows + r];
+          column[row - first] = values[px[k] + size_t(j - super[k]) * rows + r];
       }
-  }
+    }
+  });
 }
 
 namespace {
 
-void CopyOut(const cholmod_dense* solution, Eigen::Index rows, Eigen::Index cols, Eigen::MatrixXd& x) {
+void CopyOut(const cholmod_dense* solution, Eigen::Index rows, Eigen::Index cols,
+             Eigen::MatrixXd& x) {
   x.resize(rows, cols);
   const double* src = static_cast<const double*>(solution->x);
   for (Eigen::Index c = 0; c < cols; ++c)
@@ -98,6 +101,11 @@ bool CholmodFactorizationForced() {
 CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
 CholmodFactor::~CholmodFactor() = default;
 
+void CholmodFactor::setSupernodeRelaxation(SupernodeRelaxation relaxation) {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  ApplySupernodeRelaxation(impl_->common, relaxation);
+}
+
 Status CholmodFactor::analyze(const SparseMatrix& upper, const FillReducingOrdering* ordering) {
   if (!ordering)
     return analyze(upper, std::vector<FillReducingOrdering>{}, {});
@@ -108,7 +116,8 @@ Status CholmodFactor::analyze(const SparseMatrix& upper,
                               const std::vector<FillReducingOrdering>& candidates,
                               const OrderingCost& cost) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
-  if (!upper.isCompressed()) return Status::Error("internal: matrix not compressed");
+  if (!upper.isCompressed())
+    return Status::Error("internal: matrix not compressed");
   const int n = static_cast<int>(upper.rows());
   for (const FillReducingOrdering& c : candidates)
     if (static_cast<int>(c.permutation.size()) != n)
@@ -181,14 +190,16 @@ Status CholmodFactor::analyze(const SparseMatrix& upper,
 
 Status CholmodFactor::factorize(const SparseMatrix& upper) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
-  if (!impl_->factor) return Status::Error("internal: factorize before analyze");
+  if (!impl_->factor)
+    return Status::Error("internal: factorize before analyze");
   cholmod_sparse view = ViewUpper(upper);
   impl_->numeric = false;
   // Supernodal analyses are factored multifrontally, subtrees on their own threads
   // (MultifrontalCholesky.h). Where that fails (not positive definite) CHOLMOD factors again, so
   // the message names the first failing column as before. FACEPLAN_FACTORIZATION=cholmod keeps
   // CHOLMOD's own (for comparisons).
-  if (impl_->factor->is_super && impl_->factor->itype == CHOLMOD_INT && !CholmodFactorizationForced()) {
+  if (impl_->factor->is_super && impl_->factor->itype == CHOLMOD_INT &&
+      !CholmodFactorizationForced()) {
     Status s = MultifrontalFactorize(upper, impl_->factor, &impl_->common, WorkerThreads(16),
                                      &impl_->multifrontal);
     if (s) {
@@ -217,7 +228,8 @@ Status CholmodFactor::factorize(const SparseMatrix& upper) {
 
 Status CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
-  if (!impl_->factor || !impl_->numeric) return Status::Error("internal: solve before factorize");
+  if (!impl_->factor || !impl_->numeric)
+    return Status::Error("internal: solve before factorize");
   if (static_cast<size_t>(b.rows()) != impl_->factor->n)
     return Status::Error("internal: right-hand side has the wrong size");
   cholmod_dense rhs = ViewDense(b);
@@ -226,21 +238,25 @@ Status CholmodFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const 
   ScopedBlasThreads pinnedBlas(WorkerThreads(8), BlasScope::Pinned);
   const int ok = cholmod_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr,
                                 &impl_->y, &impl_->e, &impl_->common);
-  if (!ok || !impl_->x) return Status::Error("CHOLMOD solve failed (out of memory?)");
+  if (!ok || !impl_->x)
+    return Status::Error("CHOLMOD solve failed (out of memory?)");
   CopyOut(impl_->x, b.rows(), b.cols(), x);
   return Status::Ok();
 }
 
 Status CholmodFactor::solveConcurrently(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
-  if (!impl_->factor || !impl_->numeric) return Status::Error("internal: solve before factorize");
+  if (!impl_->factor || !impl_->numeric)
+    return Status::Error("internal: solve before factorize");
   if (static_cast<size_t>(b.rows()) != impl_->factor->n)
     return Status::Error("internal: right-hand side has the wrong size");
   QuietCholmodCommon local;
   cholmod_dense rhs = ViewDense(b);
   cholmod_dense* solution = cholmod_solve(CHOLMOD_A, impl_->factor, &rhs, &local.common);
   Status status = Status::Ok();
-  if (!solution) status = Status::Error("CHOLMOD solve failed (out of memory?)");
-  else CopyOut(solution, b.rows(), b.cols(), x);
+  if (!solution)
+    status = Status::Error("CHOLMOD solve failed (out of memory?)");
+  else
+    CopyOut(solution, b.rows(), b.cols(), x);
   cholmod_free_dense(&solution, &local.common);
   return status;
 }
@@ -254,7 +270,9 @@ const cholmod_factor* CholmodFactor::numericFactor() const {
   return impl_->numeric ? impl_->factor : nullptr;
 }
 
-const Eigen::MatrixXd& CholmodFactor::trailingFactorBlock() const { return impl_->trailingBlock; }
+const Eigen::MatrixXd& CholmodFactor::trailingFactorBlock() const {
+  return impl_->trailingBlock;
+}
 
 Eigen::MatrixXd
 CholmodFactor::fromEliminationOrder(const Eigen::Ref<const Eigen::MatrixXd>& permuted) const {
@@ -297,8 +315,8 @@ Status CholmodFactor::solveTrailing(const SparseMatrix& b, Eigen::MatrixXd& x) c
   if (!ok || !solution)
     status = Status::Error("CHOLMOD solve failed (out of memory?)");
   else
-    x = fromEliminationOrder(Eigen::Map<const Eigen::MatrixXd>(
-        static_cast<const double*>(solution->x), n, m));
+    x = fromEliminationOrder(
+        Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(solution->x), n, m));
   cholmod_free_dense(&solution, &local.common);
   cholmod_free_dense(&y, &local.common);
   cholmod_free_dense(&e, &local.common);
@@ -315,13 +333,18 @@ bool CholmodFactor::isFactorized() const {
   return impl_->factor && impl_->numeric;
 }
 
-cholmod_factor* CholmodFactor::cholmodFactor() { return impl_->factor; }
-cholmod_common* CholmodFactor::cholmodCommon() { return &impl_->common; }
+cholmod_factor* CholmodFactor::cholmodFactor() {
+  return impl_->factor;
+}
+cholmod_common* CholmodFactor::cholmodCommon() {
+  return &impl_->common;
+}
 
 Status CholmodFactor::markFactorized() {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   const cholmod_factor* L = impl_->factor;
-  if (!L) return Status::Error("internal: markFactorized before analyze");
+  if (!L)
+    return Status::Error("internal: markFactorized before analyze");
   if (L->xtype != CHOLMOD_REAL || !L->x || !L->is_ll || L->minor < L->n)
     return Status::Error("internal: markFactorized on a factor without numeric LL^T values");
   impl_->numeric = true;
@@ -337,7 +360,8 @@ double CholmodFactor::factorNonzeros() const {
 double CholmodFactor::factorBytes() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   const cholmod_factor* L = impl_->factor;
-  if (!L) return 0.0;
+  if (!L)
+    return 0.0;
   const double trailing = double(impl_->trailing);
   const double sparse = L->is_super ? 8.0 * double(L->xsize) + sizeof(int) * double(L->ssize)
                                     : (8.0 + sizeof(int)) * impl_->common.lnz;

@@ -16,12 +16,21 @@ struct cholmod_common_struct;
 
 namespace faceplan {
 
+// How far the symbolic analysis merges columns into relaxed supernodes. CHOLMOD's own settings suit
+// the CPU factorization (multifrontal, MultifrontalCholesky.h) and the response's substitutions;
+// coarser supernodes (fewer, larger blocks, more explicit zeros) suit the GPU, whose factorization
+// and sweeps pay a fixed cost per supernode.
+enum class SupernodeRelaxation { Cholmod, Coarse };
+
 class CholmodFactor {
 public:
   CholmodFactor();
   ~CholmodFactor();
   CholmodFactor(const CholmodFactor&) = delete;
   CholmodFactor& operator=(const CholmodFactor&) = delete;
+
+  // For the next analyze() (CHOLMOD's settings until set).
+  void setSupernodeRelaxation(SupernodeRelaxation relaxation);
 
   // Fill-reducing ordering and symbolic factorization (the "reordering" stage): CHOLMOD's own
   // choice, or the given ordering (see FillReducingOrdering.h), whose trailing DOFs then allow

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstring>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -90,20 +91,57 @@ Status MakePlan(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
   return Status::Ok();
 }
 
-// Adds child's update matrix into supernode t's columns of L (`block`) and its own update
-// matrix, for the child's update columns [b0, b1). A child's update rows are a subset of t's rows;
-// distinct update columns land in distinct target columns, so column ranges may run in parallel.
-void ExtendAdd(const Plan& p, int t, int child, const std::vector<double>& childUpdate,
-               const std::vector<int>& position, double* block, std::vector<double>& update, int b0,
-               int b1) {
+// A supernode's update matrix (off x off, column-major, lower triangle meaningful).
+struct Update {
+  std::unique_ptr<double[]> values;
+  size_t capacity = 0;
+};
+
+// Buffers for the update matrices, reused: at ~100k cells they add up to ~550 MB over one
+// factorization, most in blocks large enough for malloc to map fresh pages for each, which the
+// kernel zero-fills on first touch (page faults were ~8 % of a precompute's CPU time). A released
+// buffer serves a later request of between half its size and its size.
+class UpdatePool {
+public:
+  Update take(size_t size) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      auto it = free_.lower_bound(size);
+      if (it != free_.end() && it->first <= 2 * size + 512) {
+        Update u{std::move(it->second), it->first};
+        free_.erase(it);
+        return u;
+      }
+    }
+    return Update{std::unique_ptr<double[]>(new double[std::max<size_t>(size, 1)]), size};
+  }
+  void give(Update& u) {
+    if (!u.values)
+      return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.emplace(u.capacity, std::move(u.values));
+    u.capacity = 0;
+  }
+
+private:
+  std::mutex mutex_;
+  std::multimap<size_t, std::unique_ptr<double[]>> free_;
+};
+
+// Adds a child's update columns [b0, b1) into supernode t's front: columns that land in t's own
+// columns go into its block of L (`block`), the others into its update matrix. A child's update
+// rows are a subset of t's rows, and distinct update columns land in distinct front columns, so
+// column ranges may run in parallel.
+void ExtendAdd(const Plan& p, int t, int child, const double* childUpdate,
+               const std::vector<int>& position, double* block, double* update, int b0, int b1) {
   const int width = p.columns(t), height = p.rows(t), off = height - width;
   const int childOff = p.rows(child) - p.columns(child);
   const int* childRows = p.s + p.pi[child] + p.columns(child);
   for (int b = b0; b < b1; ++b) {
     const int pb = position[childRows[b]];
-    const double* source = childUpdate.data() + size_t(b) * childOff;
+    const double* source = childUpdate + size_t(b) * childOff;
     double* target =
-        pb < width ? block + size_t(pb) * height : update.data() + size_t(pb - width) * off - width;
+        pb < width ? block + size_t(pb) * height : update + size_t(pb - width) * off - width;
     for (int a = b; a < childOff; ++a)
       target[position[childRows[a]]] += source[a];
   }
@@ -133,52 +171,62 @@ template <class Work> void OverTriangleColumns(int size, int parts, Work&& work)
     th.join();
 }
 
-// Factors supernode t: its columns of L (assembled from the matrix and its children's update
-// matrices), and its own update matrix for its parent (off x off, column-major, lower triangle).
-// `threads` > 1 splits the assembly over threads (the top's large blocks, where it is memory-bound
-// work the size of the block). Returns the failing elimination-order column, or -1.
-int FactorSupernode(const Plan& p, int t, double* x, std::vector<std::vector<double>>& updates,
+// Factors supernode t: its columns of L (the matrix's entries plus its children's update
+// columns that land there), then its own update matrix for its parent (-L_off L_off^T plus the
+// children's other update columns). `threads` > 1 splits the assembly over threads (the top's
+// large fronts, where it is memory-bound work the size of the front). Returns the failing
+// elimination-order column, or -1.
+int FactorSupernode(const Plan& p, int t, double* x, std::vector<Update>& updates, UpdatePool& pool,
                     std::vector<int>& position, int threads) {
   const int width = p.columns(t), height = p.rows(t), off = height - width;
   const int* rows = p.s + p.pi[t];
   for (int k = 0; k < height; ++k)
     position[rows[k]] = k;
   double* block = x + p.px[t];
-  std::vector<double>& update = updates[t];
-  constexpr double kParallelFrom = 1 << 20; // entries of the block
+  constexpr double kParallelFrom = 1 << 20; // entries of the front
   const int parts = double(height) * height >= kParallelFrom ? threads : 1;
-  update.resize(size_t(off) * off);
-  OverTriangleColumns(height, parts, [&](int c0, int c1) {
-    for (int c = c0; c < c1; ++c) { // column c of the front: of L while c < width, else of update
-      if (c < width) {
-        double* column = block + size_t(c) * height;
-        std::memset(column, 0, sizeof(double) * height);
-        const int k = p.super[t] + c;
-        for (int q = p.entryStart[k]; q < p.entryStart[k + 1]; ++q)
-          column[position[p.entryRow[q]]] += p.entryValue[q];
-      } else {
-        std::memset(update.data() + size_t(c - width) * off, 0, sizeof(double) * off);
-      }
+  OverTriangleColumns(width, parts, [&](int c0, int c1) {
+    for (int c = c0; c < c1; ++c) {
+      double* column = block + size_t(c) * height;
+      std::memset(column, 0, sizeof(double) * height);
+      const int k = p.super[t] + c;
+      for (int q = p.entryStart[k]; q < p.entryStart[k + 1]; ++q)
+        column[position[p.entryRow[q]]] += p.entryValue[q];
     }
   });
-  for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q) {
-    const int child = p.children[q];
+  // A child's update columns landing in t's own columns come first (its rows are sorted).
+  auto childSplit = [&](int child) {
     const int childOff = p.rows(child) - p.columns(child);
-    OverTriangleColumns(childOff, double(childOff) * childOff >= kParallelFrom ? parts : 1,
-                        [&](int b0, int b1) {
-                          ExtendAdd(p, t, child, updates[child], position, block, update, b0, b1);
-                        });
-    std::vector<double>().swap(updates[child]);
-  }
+    const int* childRows = p.s + p.pi[child] + p.columns(child);
+    return int(std::lower_bound(childRows, childRows + childOff, p.super[t + 1]) - childRows);
+  };
+  auto extendAdd = [&](int child, int b0, int b1, double* update) {
+    const int childOff = p.rows(child) - p.columns(child);
+    const int ranges = double(childOff) * (b1 - b0) >= kParallelFrom ? parts : 1;
+    OverTriangleColumns(b1 - b0, ranges, [&](int c0, int c1) {
+      ExtendAdd(p, t, child, updates[child].values.get(), position, block, update, b0 + c0,
+                b0 + c1);
+    });
+  };
+  for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q)
+    extendAdd(p.children[q], 0, childSplit(p.children[q]), nullptr);
   int info = 0;
   dpotrf_("L", &width, block, &height, &info);
   if (info != 0)
     return p.super[t] + std::max(info, 1) - 1;
   if (off > 0) {
-    const double one = 1.0, minusOne = -1.0;
+    const double one = 1.0, minusOne = -1.0, zero = 0.0;
     dtrsm_("R", "L", "T", "N", &off, &width, &one, block, &height, block + width, &height);
-    dsyrk_("L", "N", &off, &width, &minusOne, block + width, &height, &one, update.data(), &off);
+    updates[t] = pool.take(size_t(off) * off);
+    double* update = updates[t].values.get();
+    dsyrk_("L", "N", &off, &width, &minusOne, block + width, &height, &zero, update, &off);
+    for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q) {
+      const int child = p.children[q];
+      extendAdd(child, childSplit(child), p.rows(child) - p.columns(child), update);
+    }
   }
+  for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q)
+    pool.give(updates[p.children[q]]);
   return -1;
 }
 
@@ -222,7 +270,8 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
   threads = std::max(1, threads);
   const std::vector<char> top = MarkTop(p, threads);
 
-  std::vector<std::vector<double>> updates(p.nsuper);
+  std::vector<Update> updates(p.nsuper);
+  UpdatePool pool;
   std::atomic<int> failedColumn{-1};
   auto noteFailure = [&](int column) {
     int expected = -1;
@@ -257,7 +306,7 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
         const int t = ready.back();
         ready.pop_back();
         lock.unlock();
-        const int failed = FactorSupernode(p, t, x, updates, position, 1);
+        const int failed = FactorSupernode(p, t, x, updates, pool, position, 1);
         if (failed >= 0)
           noteFailure(failed);
         lock.lock();
@@ -282,7 +331,8 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
     std::vector<int> position(p.n, 0);
     for (int t = 0; t < p.nsuper && failedColumn < 0; ++t)
       if (top[t])
-        if (const int failed = FactorSupernode(p, t, x, updates, position, threads); failed >= 0)
+        if (const int failed = FactorSupernode(p, t, x, updates, pool, position, threads);
+            failed >= 0)
           noteFailure(failed);
   }
   if (report) {

@@ -10,13 +10,28 @@
 
 namespace faceplan {
 
+void ApplySupernodeRelaxation(cholmod_common& common, SupernodeRelaxation relaxation) {
+  // CHOLMOD's defaults (cholmod_defaults), or coarser: at most 16/64/128 columns merged at up to
+  // 90/30/10 % zeros (the setting every factor had before the CPU factorization became
+  // multifrontal; on the 2-core machine CHOLMOD's own then gave the faster ~100k precompute,
+  // BENCHMARKS.md, session 10).
+  const bool coarse = relaxation == SupernodeRelaxation::Coarse;
+  const size_t nrelax[3] = {coarse ? 16u : 4u, coarse ? 64u : 16u, coarse ? 128u : 48u};
+  const double zrelax[3] = {coarse ? 0.9 : 0.8, coarse ? 0.3 : 0.1, coarse ? 0.1 : 0.05};
+  for (int k = 0; k < 3; ++k) {
+    common.nrelax[k] = nrelax[k];
+    common.zrelax[k] = zrelax[k];
+  }
+}
+
 namespace {
 
 // The upper triangle's pattern of A(perm, perm) for a CSC pattern (start, index) of n columns,
 // `inverse` = DOF -> position: a parallel counting sort, each thread counting and placing the
 // entries of its own range of columns (rows unsorted, in the same order on every run).
-void PermutedUpperPattern(int n, const int* start, const int* index, const std::vector<int>& inverse,
-                          std::vector<int>& columnStart, std::vector<int>& rows) {
+void PermutedUpperPattern(int n, const int* start, const int* index,
+                          const std::vector<int>& inverse, std::vector<int>& columnStart,
+                          std::vector<int>& rows) {
   const int threads = std::max(1, std::min(WorkerThreads(16), n / 20000 + 1));
   const int chunk = (n + threads - 1) / threads;
   std::vector<std::vector<int>> count(threads);
@@ -52,7 +67,8 @@ void PermutedUpperPattern(int n, const int* start, const int* index, const std::
   }
   columnStart[n] = next;
   rows.resize(next);
-  inParallel([&](int t) { forEntries(t, [&](int column, int row) { rows[count[t][column]++] = row; }); });
+  inParallel(
+      [&](int t) { forEntries(t, [&](int column, int row) { rows[count[t][column]++] = row; }); });
 }
 
 std::vector<int> Inverse(const std::vector<int>& perm) {
@@ -113,8 +129,9 @@ bool NodeGraphOfBlockedMatrix(const SparseMatrix& upper, std::vector<int>& nodeS
 
 // The DOF-level upper pattern of a node graph's strictly upper pattern (CSC over nodes): column
 // 3c+d holds rows 3r..3r+2 of each node r of column c, then 3c..3c+d.
-void ExpandNodePattern(int nodes, const std::vector<int>& nodeStart, const std::vector<int>& nodeRows,
-                       std::vector<int>& columnStart, std::vector<int>& rows) {
+void ExpandNodePattern(int nodes, const std::vector<int>& nodeStart,
+                       const std::vector<int>& nodeRows, std::vector<int>& columnStart,
+                       std::vector<int>& rows) {
   columnStart.assign(3 * static_cast<size_t>(nodes) + 1, 0);
   for (int c = 0; c < nodes; ++c) {
     const int below = 3 * (nodeStart[c + 1] - nodeStart[c]);
@@ -170,7 +187,8 @@ cholmod_factor* AnalyzeNodeBlocked(const SparseMatrix& upper, const std::vector<
   cholmod_sparse nodeGraph = ViewPattern(nodes, permutedStart, permutedRows, dummyRow);
   std::vector<int> nodeParent(nodes), nodePost(nodes), nodeCount(nodes), first(nodes), level(nodes);
   if (!cholmod_analyze_ordering(&nodeGraph, CHOLMOD_NATURAL, nullptr, nullptr, 0, nodeParent.data(),
-                                nodePost.data(), nodeCount.data(), first.data(), level.data(), &common))
+                                nodePost.data(), nodeCount.data(), first.data(), level.data(),
+                                &common))
     return nullptr;
 
   // Expanded to DOFs (positions in `perm`'s order), then CHOLMOD's weighted postorder.
@@ -200,8 +218,8 @@ cholmod_factor* AnalyzeNodeBlocked(const SparseMatrix& upper, const std::vector<
   const std::vector<int> finalNodeOrder = NodeOrderOf(finalPerm);
   if (finalNodeOrder.empty())
     return nullptr; // cannot happen (see above)
-  PermutedUpperPattern(nodes, nodeStart.data(), nodeRows.data(), Inverse(finalNodeOrder), permutedStart,
-                       permutedRows);
+  PermutedUpperPattern(nodes, nodeStart.data(), nodeRows.data(), Inverse(finalNodeOrder),
+                       permutedStart, permutedRows);
   ExpandNodePattern(nodes, permutedStart, permutedRows, columnStart, rows);
   cholmod_sparse permuted = ViewPattern(n, columnStart, rows, dummyRow);
   cholmod_factor* L = cholmod_allocate_factor(n, &common);
@@ -237,11 +255,13 @@ cholmod_factor* AnalyzeInGivenOrder(const SparseMatrix& upper, const std::vector
     *nodeBlocked = false;
   const int n = static_cast<int>(upper.rows());
   std::vector<int> columnStart, rows, dummyRow(1, 0);
-  PermutedUpperPattern(n, upper.outerIndexPtr(), upper.innerIndexPtr(), Inverse(perm), columnStart, rows);
+  PermutedUpperPattern(n, upper.outerIndexPtr(), upper.innerIndexPtr(), Inverse(perm), columnStart,
+                       rows);
   cholmod_sparse view = ViewPattern(n, columnStart, rows, dummyRow);
   // Only the natural order of the permuted copy, then CHOLMOD's postorder (the caller's choices
   // of methods are put back after).
-  const int methods = common.nmethods, ordering = common.method[0].ordering, postorder = common.postorder;
+  const int methods = common.nmethods, ordering = common.method[0].ordering,
+            postorder = common.postorder;
   common.nmethods = 1;
   common.method[0].ordering = CHOLMOD_NATURAL;
   common.postorder = 1;

@@ -18,11 +18,15 @@
 // Either way the factor equals cholmod_analyze_p's array for array (TestCholmodAnalysis), and
 // common.lnz / common.fl are set as CHOLMOD sets them.
 #include "Element/StiffnessAssembly.h"
+#include "SparseSolver/CholmodFactor.h"
 
 #include <cholmod.h>
 #include <vector>
 
 namespace faceplan {
+
+// Sets common's relaxed-supernode amalgamation (nrelax, zrelax) for `relaxation`.
+void ApplySupernodeRelaxation(cholmod_common& common, SupernodeRelaxation relaxation);
 
 // `upper`: a symmetric matrix's upper triangle; `perm`: position -> DOF. The factor's Perm is in
 // `upper`'s numbering and its ordering CHOLMOD_GIVEN. `nodeBlocked` (optional) tells which path ran.

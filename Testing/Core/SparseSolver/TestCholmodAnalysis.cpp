@@ -25,14 +25,10 @@ std::vector<int> Ints(const void* data, size_t count) {
 }
 
 // CholmodFactor's settings (relaxed supernodes, supernodal).
-void UseCholmodFactorSettings(cholmod_common& common) {
+void UseCholmodFactorSettings(cholmod_common& common,
+                              SupernodeRelaxation relaxation = SupernodeRelaxation::Cholmod) {
   common.supernodal = CHOLMOD_SUPERNODAL;
-  const int nrelax[3] = {16, 64, 128};
-  const double zrelax[3] = {0.9, 0.3, 0.1};
-  for (int k = 0; k < 3; ++k) {
-    common.nrelax[k] = nrelax[k];
-    common.zrelax[k] = zrelax[k];
-  }
+  ApplySupernodeRelaxation(common, relaxation);
 }
 
 void ExpectSameFactor(const cholmod_factor* mine, const cholmod_factor* theirs) {
@@ -57,10 +53,11 @@ void ExpectSameFactor(const cholmod_factor* mine, const cholmod_factor* theirs) 
 
 // AnalyzeInGivenOrder against cholmod_analyze_p for one matrix and order.
 void ExpectAnalysisAsCholmodGives(const SparseMatrix& upper, const std::vector<int>& perm,
-                                  bool expectNodeBlocked) {
+                                  bool expectNodeBlocked,
+                                  SupernodeRelaxation relaxation = SupernodeRelaxation::Cholmod) {
   QuietCholmodCommon mineQuiet, theirsQuiet;
-  UseCholmodFactorSettings(mineQuiet.common);
-  UseCholmodFactorSettings(theirsQuiet.common);
+  UseCholmodFactorSettings(mineQuiet.common, relaxation);
+  UseCholmodFactorSettings(theirsQuiet.common, relaxation);
   cholmod_common& theirsCommon = theirsQuiet.common;
   theirsCommon.nmethods = 1;
   theirsCommon.method[0].ordering = CHOLMOD_GIVEN;
@@ -89,10 +86,13 @@ TEST(CholmodAnalysis, NodeBlockedStiffnessInANodeOrder) {
   const auto system = ShellSystem();
   ASSERT_TRUE(system);
   const int freeNodes = system->layout.freeNodes();
-  for (const std::vector<char>& marks : {NodesCoupledTo(system->kfr, freeNodes, 3), std::vector<char>{}}) {
+  for (const std::vector<char>& marks :
+       {NodesCoupledTo(system->kfr, freeNodes, 3), std::vector<char>{}}) {
     FillReducingOrdering ordering;
     ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, marks, ordering).ok);
-    ExpectAnalysisAsCholmodGives(system->kff, ordering.permutation, true);
+    for (SupernodeRelaxation relaxation :
+         {SupernodeRelaxation::Cholmod, SupernodeRelaxation::Coarse})
+      ExpectAnalysisAsCholmodGives(system->kff, ordering.permutation, true, relaxation);
   }
 }
 
@@ -125,14 +125,23 @@ TEST(CholmodAnalysis, CholmodFactorUsesIt) {
   ASSERT_TRUE(system);
   FillReducingOrdering ordering;
   ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, {}, ordering).ok);
-  CholmodFactor factor;
-  ASSERT_TRUE(factor.analyze(system->kff, &ordering).ok);
-  QuietCholmodCommon quiet;
-  UseCholmodFactorSettings(quiet.common);
-  cholmod_factor* direct = AnalyzeInGivenOrder(system->kff, ordering.permutation, quiet.common);
-  ExpectSameFactor(factor.cholmodFactor(), direct);
-  EXPECT_EQ(factor.factorNonzeros(), quiet.common.lnz);
-  cholmod_free_factor(&direct, &quiet.common);
+  size_t supernodes[2] = {0, 0};
+  int k = 0;
+  for (SupernodeRelaxation relaxation :
+       {SupernodeRelaxation::Cholmod, SupernodeRelaxation::Coarse}) {
+    CholmodFactor factor;
+    if (relaxation != SupernodeRelaxation::Cholmod) // CHOLMOD's settings are the default
+      factor.setSupernodeRelaxation(relaxation);
+    ASSERT_TRUE(factor.analyze(system->kff, &ordering).ok);
+    QuietCholmodCommon quiet;
+    UseCholmodFactorSettings(quiet.common, relaxation);
+    cholmod_factor* direct = AnalyzeInGivenOrder(system->kff, ordering.permutation, quiet.common);
+    ExpectSameFactor(factor.cholmodFactor(), direct);
+    EXPECT_EQ(factor.factorNonzeros(), quiet.common.lnz);
+    supernodes[k++] = direct->nsuper;
+    cholmod_free_factor(&direct, &quiet.common);
+  }
+  EXPECT_LT(supernodes[1], supernodes[0]); // coarse: fewer, larger supernodes
 }
 
 } // namespace

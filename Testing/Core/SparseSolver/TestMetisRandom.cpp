@@ -22,14 +22,17 @@ namespace {
 // Debian's METIS calls its generator through its PLT, and Core's definitions come first in the
 // lookup order of this test program, as in the plugin: if this fails, every METIS call takes
 // MetisMutex and the dissection runs one call at a time (correct, slower).
-TEST(MetisRandom, LibmetisDrawsFromThePerThreadGenerator) { EXPECT_TRUE(MetisRandomIsPerThread()); }
+TEST(MetisRandom, LibmetisDrawsFromThePerThreadGenerator) {
+  EXPECT_TRUE(MetisRandomIsPerThread());
+}
 
 TEST(MetisRandom, GivesTheSequenceOfRandAfterTheSameSeed) {
   for (unsigned int seed : {1u, 4321u, 123456789u}) {
     std::srand(seed);
     gk_randinit(seed);
     for (int k = 0; k < 1000; ++k)
-      ASSERT_EQ(gk_randint32(), static_cast<uint32_t>(std::rand())) << "seed " << seed << " draw " << k;
+      ASSERT_EQ(gk_randint32(), static_cast<uint32_t>(std::rand()))
+          << "seed " << seed << " draw " << k;
     const uint64_t high = static_cast<uint32_t>(std::rand());
     const uint64_t low = static_cast<uint32_t>(std::rand());
     EXPECT_EQ(gk_randint64(), (high << 32) | low);

@@ -29,16 +29,12 @@ std::shared_ptr<const CondensedSystem> ShellSystem() {
 }
 
 // A supernodal analysis of `upper` in METIS's order with the ROI-coupled nodes last (as the
-// precompute makes it), relaxed supernodes as CholmodFactor sets them.
+// precompute makes it), relaxed supernodes as CholmodFactor sets them for the CPU or the GPU.
 cholmod_factor* Analysed(const CondensedSystem& system, const SparseMatrix& upper,
-                         cholmod_common& common) {
+                         cholmod_common& common,
+                         SupernodeRelaxation relaxation = SupernodeRelaxation::Cholmod) {
   common.supernodal = CHOLMOD_SUPERNODAL;
-  const int nrelax[3] = {16, 64, 128};
-  const double zrelax[3] = {0.9, 0.3, 0.1};
-  for (int k = 0; k < 3; ++k) {
-    common.nrelax[k] = nrelax[k];
-    common.zrelax[k] = zrelax[k];
-  }
+  ApplySupernodeRelaxation(common, relaxation);
   FillReducingOrdering ordering;
   EXPECT_TRUE(OrderNodesWithTrailing(
                   upper, 3, NodesCoupledTo(system.kfr, system.layout.freeNodes(), 3), ordering)
@@ -51,12 +47,12 @@ std::vector<double> Values(const cholmod_factor* L) {
   return std::vector<double>(x, x + L->xsize);
 }
 
-TEST(MultifrontalCholesky, IsCholmodsFactorUpToRoundOff) {
+void ExpectCholmodsFactor(SupernodeRelaxation relaxation) {
   const auto system = ShellSystem();
   ASSERT_TRUE(system);
   QuietCholmodCommon mineQuiet, theirsQuiet;
-  cholmod_factor* mine = Analysed(*system, system->kff, mineQuiet.common);
-  cholmod_factor* theirs = Analysed(*system, system->kff, theirsQuiet.common);
+  cholmod_factor* mine = Analysed(*system, system->kff, mineQuiet.common, relaxation);
+  cholmod_factor* theirs = Analysed(*system, system->kff, theirsQuiet.common, relaxation);
   ASSERT_TRUE(mine && theirs);
   ASSERT_GT(mine->nsuper, 20u); // a tree with subtrees to run in parallel
   MultifrontalReport report;
@@ -80,6 +76,11 @@ TEST(MultifrontalCholesky, IsCholmodsFactorUpToRoundOff) {
   EXPECT_LT(difference, 1e-12 * largest);
   cholmod_free_factor(&mine, &mineQuiet.common);
   cholmod_free_factor(&theirs, &theirsQuiet.common);
+}
+
+TEST(MultifrontalCholesky, IsCholmodsFactorUpToRoundOff) {
+  ExpectCholmodsFactor(SupernodeRelaxation::Cholmod);
+  ExpectCholmodsFactor(SupernodeRelaxation::Coarse);
 }
 
 // Subtrees run on whichever thread is free, but each supernode adds its children in a fixed

@@ -32,8 +32,7 @@ void FactorShell(FactoredShell& out) {
   PrecomputeRequest request = ShellRequest(5, 3);
   ASSERT_TRUE(Precompute(request, out.system).ok);
   const CondensedSystem& sys = *out.system;
-  ASSERT_TRUE(OrderNodesWithTrailing(sys.kff, 3,
-                                     NodesCoupledTo(sys.kfr, sys.layout.freeNodes(), 3),
+  ASSERT_TRUE(OrderNodesWithTrailing(sys.kff, 3, NodesCoupledTo(sys.kfr, sys.layout.freeNodes(), 3),
                                      out.ordering)
                   .ok);
   ASSERT_TRUE(out.factor.analyze(sys.kff, &out.ordering).ok);
