@@ -215,11 +215,22 @@ int FactorSupernode(const Plan& p, int t, double* x, std::vector<Update>& update
   if (info != 0)
     return p.super[t] + std::max(info, 1) - 1;
   if (off > 0) {
-    const double one = 1.0, minusOne = -1.0, zero = 0.0;
+    const double one = 1.0, minusOne = -1.0;
     dtrsm_("R", "L", "T", "N", &off, &width, &one, block, &height, block + width, &height);
     updates[t] = pool.take(size_t(off) * off);
     double* update = updates[t].values.get();
-    dsyrk_("L", "N", &off, &width, &minusOne, block + width, &height, &zero, update, &off);
+    // Single-threaded BLAS clears the update itself (beta = 0). With threaded BLAS (the top) it is
+    // cleared here, on the same threads as the assembly: OpenBLAS's own threads would clear it
+    // behind synchronisation that ThreadSanitizer cannot see, and it then reports every entry
+    // the extend-add reads (suppressed as OpenBLAS's, but slowly enough to stall the TSan run).
+    double beta = 0.0;
+    if (threads > 1) {
+      OverTriangleColumns(off, parts, [&](int c0, int c1) {
+        std::memset(update + size_t(c0) * off, 0, sizeof(double) * size_t(c1 - c0) * off);
+      });
+      beta = 1.0;
+    }
+    dsyrk_("L", "N", &off, &width, &minusOne, block + width, &height, &beta, update, &off);
     for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q) {
       const int child = p.children[q];
       extendAdd(child, childSplit(child), p.rows(child) - p.columns(child), update);
