@@ -6,6 +6,7 @@
 //   factorization_benchmark [--subdivisions 18] [--layers 5] [--repeats 7]
 // 18/5 is faceplan_benchmark's ~100k scene.
 #include "CondensedFEM/PrecomputeStages.h"
+#include "SceneArguments.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "Support/FEMTestScenes.h"
 
@@ -13,7 +14,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <vector>
 
 using namespace faceplan;
@@ -33,21 +33,11 @@ int Fail(const Status& s) {
 } // namespace
 
 int main(int argc, char** argv) {
-  int subdivisions = 18, layers = 5, repeats = 7;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--subdivisions"))
-      subdivisions = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--layers"))
-      layers = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--repeats"))
-      repeats = std::max(1, std::atoi(argv[i + 1]));
-    else {
-      std::fprintf(stderr, "usage: %s [--subdivisions S] [--layers L] [--repeats R]\n", argv[0]);
-      return 2;
-    }
-  }
-  PrecomputeRequest request = testing::ShellRequest(subdivisions, layers);
-  request.options.method = SolveMethod::DenseResponse;
+  benchmarks::SceneArguments args{18, 5, 7};
+  if (!benchmarks::ParseSceneArguments(argc, argv, args))
+    return 2;
+  const int subdivisions = args.subdivisions, layers = args.layers, repeats = args.repeats;
+  const PrecomputeRequest request = benchmarks::DenseResponseScene(args);
   PrecomputeState state(request, nullptr, ProgressCallback());
   for (auto stage : {ValidatePrecomputeRequest, FinishMeshChecks, SeparateNodes, AssembleStiffness,
                      SeparateBlocks, ReorderFreeDofs})

@@ -8,6 +8,7 @@
 #include "CondensedFEM/PrecomputeStages.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/FillReducingOrdering.h"
+#include "SceneArguments.h"
 #include "Support/FEMTestScenes.h"
 
 #include <cholmod.h>
@@ -38,18 +39,11 @@ double MedianMs(int repeats, const std::function<void()>& work) {
 } // namespace
 
 int main(int argc, char** argv) {
-  int subdivisions = 50, layers = 7, repeats = 3;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--subdivisions")) subdivisions = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--layers")) layers = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--repeats")) repeats = std::max(1, std::atoi(argv[i + 1]));
-    else {
-      std::fprintf(stderr, "usage: %s [--subdivisions S] [--layers L] [--repeats R]\n", argv[0]);
-      return 2;
-    }
-  }
-  PrecomputeRequest request = testing::ShellRequest(subdivisions, layers);
-  request.options.method = SolveMethod::DenseResponse;
+  benchmarks::SceneArguments args{50, 7, 3};
+  if (!benchmarks::ParseSceneArguments(argc, argv, args))
+    return 2;
+  const int subdivisions = args.subdivisions, layers = args.layers, repeats = args.repeats;
+  const PrecomputeRequest request = benchmarks::DenseResponseScene(args);
   PrecomputeState state(request, nullptr, ProgressCallback());
   // The validation starts the mesh checks on a thread: wait for them so nothing runs beside the
   // timed calls.
