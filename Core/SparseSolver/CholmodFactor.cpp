@@ -33,7 +33,6 @@ struct CholmodFactor::Impl {
   int trailing = 0;
   std::vector<int> position;
   Eigen::MatrixXd trailingBlock;
-  MultifrontalReport multifrontal; // of the last multifrontal factorization
 
   void extractTrailingBlock();
 
@@ -195,13 +194,12 @@ Status CholmodFactor::factorize(const SparseMatrix& upper) {
   cholmod_sparse view = ViewUpper(upper);
   impl_->numeric = false;
   // Supernodal analyses are factored multifrontally, subtrees on their own threads
-  // (MultifrontalCholesky.h). Where that fails (not positive definite) CHOLMOD factors again, so
-  // the message names the first failing column as before. FACEPLAN_FACTORIZATION=cholmod keeps
-  // CHOLMOD's own (for comparisons).
+  // (MultifrontalCholesky.h). Where that fails (not positive definite, out of memory) CHOLMOD
+  // factors again, so the message is CHOLMOD's as before (the first failing column).
+  // FACEPLAN_FACTORIZATION=cholmod keeps CHOLMOD's own (for comparisons).
   if (impl_->factor->is_super && impl_->factor->itype == CHOLMOD_INT &&
       !CholmodFactorizationForced()) {
-    Status s = MultifrontalFactorize(upper, impl_->factor, &impl_->common, WorkerThreads(16),
-                                     &impl_->multifrontal);
+    Status s = MultifrontalFactorize(upper, impl_->factor, &impl_->common, WorkerThreads(16));
     if (s) {
       impl_->numeric = true;
       impl_->extractTrailingBlock();

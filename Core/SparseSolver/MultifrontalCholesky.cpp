@@ -163,8 +163,13 @@ template <class Work> void OverTriangleColumns(int size, int parts, Work&& work)
     while (b < size && entries < goal)
       entries += size - b++;
     const int end = part + 1 == parts ? size : b;
-    if (begin < end)
-      pool.emplace_back([&work, begin, end] { work(begin, end); });
+    if (begin < end) {
+      try {
+        pool.emplace_back([&work, begin, end] { work(begin, end); });
+      } catch (...) { // no thread to be had: this range here
+        work(begin, end);
+      }
+    }
     begin = end;
   }
   for (std::thread& th : pool)
@@ -284,6 +289,7 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
   std::vector<Update> updates(p.nsuper);
   UpdatePool pool;
   std::atomic<int> failedColumn{-1};
+  bool outOfMemory = false; // under the tasks' mutex while they run
   auto noteFailure = [&](int column) {
     int expected = -1;
     failedColumn.compare_exchange_strong(expected, column);
@@ -307,34 +313,51 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
     std::reverse(ready.begin(), ready.end()); // lowest-numbered leaves first
     std::mutex mutex;
     std::condition_variable wake;
+    // A failed allocation in a task stops every worker (an exception must not leave a thread);
+    // the caller then gets an error and CholmodFactor tries CHOLMOD.
     auto worker = [&] {
-      std::vector<int> position(p.n, 0); // each row's place in the supernode being factored
-      std::unique_lock<std::mutex> lock(mutex);
-      while (true) {
-        wake.wait(lock, [&] { return !ready.empty() || remaining == 0 || failedColumn >= 0; });
-        if (remaining == 0 || failedColumn >= 0)
-          return;
-        const int t = ready.back();
-        ready.pop_back();
-        lock.unlock();
-        const int failed = FactorSupernode(p, t, x, updates, pool, position, 1);
-        if (failed >= 0)
-          noteFailure(failed);
-        lock.lock();
-        --remaining;
-        const int parent = p.parent[t];
-        if (parent >= 0 && --pending[parent] == 0 && !top[parent])
-          ready.push_back(parent);
+      try {
+        std::vector<int> position(p.n, 0); // each row's place in the supernode being factored
+        std::unique_lock<std::mutex> lock(mutex);
+        while (true) {
+          wake.wait(lock, [&] {
+            return !ready.empty() || remaining == 0 || failedColumn >= 0 || outOfMemory;
+          });
+          if (remaining == 0 || failedColumn >= 0 || outOfMemory)
+            return;
+          const int t = ready.back();
+          ready.pop_back();
+          lock.unlock();
+          const int failed = FactorSupernode(p, t, x, updates, pool, position, 1);
+          if (failed >= 0)
+            noteFailure(failed);
+          lock.lock();
+          --remaining;
+          const int parent = p.parent[t];
+          if (parent >= 0 && --pending[parent] == 0 && !top[parent])
+            ready.push_back(parent);
+          wake.notify_all();
+        }
+      } catch (...) {
+        std::lock_guard<std::mutex> guard(mutex);
+        outOfMemory = true;
         wake.notify_all();
       }
     };
-    std::vector<std::thread> pool;
-    for (int k = 1; k < threads; ++k)
-      pool.emplace_back(worker);
+    std::vector<std::thread> threadsStarted;
+    for (int k = 1; k < threads; ++k) {
+      try {
+        threadsStarted.emplace_back(worker);
+      } catch (...) { // no more threads: the ones started (and this one) do the work
+        break;
+      }
+    }
     worker();
-    for (std::thread& th : pool)
+    for (std::thread& th : threadsStarted)
       th.join();
   }
+  if (outOfMemory)
+    return Status::Error("out of memory in the multifrontal factorization");
   if (failedColumn < 0) {
     // At most 8 BLAS threads, as CholmodFactor::factorize had for CHOLMOD: on the 16-core GPU
     // machine OpenBLAS with 16 threads was many times slower on these blocks.

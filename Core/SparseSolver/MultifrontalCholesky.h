@@ -31,9 +31,10 @@ struct MultifrontalReport {
 // L: a supernodal symbolic (or numeric) factor of `upper`'s matrix with 32-bit indices, as
 // CholmodFactor's analysis makes it; `upper`: the matrix's upper triangle in the original order
 // (compressed). Fills L's values (allocating them through `common`) and marks L numeric LL^T.
-// Fails, leaving L's values undefined, when the matrix is not positive definite; then
-// `failedColumn` is the elimination-order column where a pivot failed (not necessarily the first
-// such column: subtrees run in parallel) — callers that report it should refactor with CHOLMOD.
+// Fails, leaving L's values undefined, when the matrix is not positive definite (then L->minor is
+// the elimination-order column where a pivot failed, not necessarily the first such column:
+// subtrees run in parallel) or memory runs out in a task; callers that report the failing column
+// should factor again with CHOLMOD, as CholmodFactor does.
 Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
                              int threads, MultifrontalReport* report = nullptr);
 
