@@ -98,13 +98,13 @@ void Finish(PrecomputeState& state, const std::string& ordering, double ms) {
   state.report(0.25, "reordering");
 }
 
-} // namespace
-
 // Whether the backend asked for will factor on the GPU (known before the assembly picks it).
 bool GpuFactorization(const PrecomputeState& state) {
   const auto& backend = state.request.options.backend;
   return backend && backend->providesFactorAndResponse();
 }
+
+} // namespace
 
 bool StartEarlyOrdering(PrecomputeState& state, std::shared_ptr<const NodeNeighbours> lower) {
   const CondensedSystem& sys = *state.sys;

@@ -1,6 +1,7 @@
 #include "SparseSolver/MultifrontalCholesky.h"
 #include "Common/BlasThreads.h"
 #include "SparseSolver/Blas.h"
+#include "SparseSolver/SupernodalTree.h"
 
 #include <algorithm>
 #include <atomic>
@@ -40,20 +41,17 @@ Status MakePlan(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
   const int* perm = static_cast<const int*>(L.Perm);
   if (!p.super || !p.pi || !p.px || !p.s || !perm)
     return Status::Error("internal: the factor has no supernodal analysis");
-  std::vector<int> pinv(p.n), supernodeOf(p.n);
+  std::vector<int> pinv(p.n);
   for (int k = 0; k < p.n; ++k)
     pinv[perm[k]] = k;
-  for (int t = 0; t < p.nsuper; ++t)
-    for (int k = p.super[t]; k < p.super[t + 1]; ++k)
-      supernodeOf[k] = t;
-  p.parent.assign(p.nsuper, -1);
+  const SupernodalStructure tree{p.n, p.nsuper, p.super, p.pi, p.s};
+  p.parent = SupernodeParents(tree, SupernodeOfColumns(tree));
   p.flops.resize(p.nsuper);
   std::vector<int> childCount(p.nsuper + 1, 0);
   for (int t = 0; t < p.nsuper; ++t) {
     const double w = p.columns(t), off = p.rows(t) - p.columns(t);
     p.flops[t] = w * w * w / 3.0 + w * w * off + w * off * off;
-    if (off > 0) {
-      p.parent[t] = supernodeOf[p.s[p.pi[t] + p.columns(t)]];
+    if (p.parent[t] >= 0) {
       if (p.parent[t] <= t)
         return Status::Error("internal: the supernodal tree is not postordered");
       ++childCount[p.parent[t]];
