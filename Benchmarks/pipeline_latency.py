@@ -1,4 +1,4 @@
-"""Edit latency through the ParaView pipeline (pvpython, CPU backend).
+"""Edit latency through the ParaView pipeline (pvpython; CPU backend unless --backend CUDA).
 
 Three scenes: the Badin face (ROIExtract -> BezierCut -> CondensedFEMDeform, scripts/faceplan_pipeline),
 its BSSO (Osteotomy -> Append Geometry -> CondensedFEMDeform, scripts/osteotomy_scenes; the edits
@@ -10,7 +10,7 @@ process's CPU time, which a busy shared machine inflates less) and reads SolveTi
 CondensedFEMDeform's output (overhead = update wall time - SolveTimeMs). Prints medians and writes them as JSON.
 
   pvpython Benchmarks/pipeline_latency.py --plugin FacePlan.so --data Data \
-      --shell-scene shell.vtk [--edits 30] [--json out.json]
+      --shell-scene shell.vtk [--edits 30] [--json out.json] [--backend CPU|CUDA] [--shell-only]
 """
 import argparse
 import json
@@ -26,10 +26,20 @@ from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter, vtkGeometryFi
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
 
 
+BACKEND = "CPU"  # --backend: the CondensedFEMDeform Backend every scene uses
+
+
 def field(proxy, name):
     out = proxy.GetClientSideObject().GetOutputDataObject(0)
     array = out.GetFieldData().GetArray(name)
     return array.GetValue(0) if array is not None else float("nan")
+
+
+def backend_used(fem):
+    """The filter's own record of the backend that ran (it falls back to the CPU, with a note, when
+    CUDA is not available): a CUDA figure must come from the CUDA backend."""
+    array = fem.GetClientSideObject().GetOutputDataObject(0).GetFieldData().GetAbstractArray("Backend")
+    return array.GetValue(0) if array is not None else ""
 
 
 def precompute_count(fem):
@@ -48,6 +58,9 @@ def run_edits(name, bone_filters, fem, edit, edits, bone_label="BezierCut"):
     first_ms = 1e3 * (time.perf_counter() - start)
     if fem.GetClientSideObject().GetOutputDataObject(0).GetNumberOfPoints() == 0:
         raise RuntimeError(name + ": CondensedFEMDeform produced no output")
+    used = backend_used(fem)
+    if BACKEND == "CUDA" and "CUDA" not in used:
+        raise RuntimeError("%s: asked for the CUDA backend, the filter ran on %r" % (name, used))
     precomputes = precompute_count(fem)
     cut_ms, fem_ms, solve_ms, fem_cpu_ms = [], [], [], []
     for k in range(1, edits + 1):
@@ -69,6 +82,8 @@ def run_edits(name, bone_filters, fem, edit, edits, bone_label="BezierCut"):
     med = statistics.median
     result = {
         "scene": name,
+        "backend": BACKEND,
+        "backend_used": used,
         "tissue_cells": fem.GetClientSideObject().GetInputDataObject(0, 0).GetNumberOfCells(),
         "output_points": fem.GetClientSideObject().GetOutputDataObject(0).GetNumberOfPoints(),
         "first_update_ms": first_ms,
@@ -82,10 +97,10 @@ def run_edits(name, bone_filters, fem, edit, edits, bone_label="BezierCut"):
         "bone_update_ms_median": med(cut_ms),
         "whole_edit_ms_median": med(whole),
     }
-    print("%-28s tets %7d  first %8.1f ms | per edit (median of %d): CondensedFEMDeform %6.2f ms "
+    print("[%s] %-28s tets %7d  first %8.1f ms | per edit (median of %d): CondensedFEMDeform %6.2f ms "
           "(p90 %6.2f, CPU %6.2f), SolveTimeMs %6.2f, overhead %5.2f; %s %6.2f; whole edit "
           "%6.2f ms"
-          % (name, result["tissue_cells"], first_ms, edits, result["fem_update_ms_median"],
+          % (used, name, result["tissue_cells"], first_ms, edits, result["fem_update_ms_median"],
              result["fem_update_ms_p90"], result["fem_update_cpu_ms_median"], result["solve_ms_median"],
              result["overhead_ms_median"], bone_label, result["bone_update_ms_median"],
              result["whole_edit_ms_median"]))
@@ -95,7 +110,7 @@ def run_edits(name, bone_filters, fem, edit, edits, bone_label="BezierCut"):
 def face_scene(data, edits, output_mode):
     import faceplan_pipeline as fp
     tissue, mandible, roi, cut, fem = fp.build(data)
-    fem.Backend = "CPU"
+    fem.Backend = BACKEND
     fem.OutputMode = output_mode
 
     def edit(k):
@@ -115,7 +130,7 @@ def osteotomy_scene(data, edits, output_mode):
     Geometry that joins the fixed bones."""
     import osteotomy_scenes as scenes
     tissue, bone, osteotomy, skeleton, fem = scenes.build(data, "bsso")
-    fem.Backend = "CPU"
+    fem.Backend = BACKEND
     fem.OutputMode = output_mode
 
     def edit(k):
@@ -153,7 +168,7 @@ def shell_scene(path, edits, output_mode):
     roi.Region.Radius = 50.0
     cut = simple.BezierCut(Input=roi)
     fem = simple.CondensedFEMDeform(Input=tissue, Bone=cut)
-    fem.Backend = "CPU"
+    fem.Backend = BACKEND
     fem.OutputMode = output_mode
     fem.ContactDistance = 0.5
 
@@ -177,7 +192,10 @@ def main():
     parser.add_argument("--json")
     parser.add_argument("--shell-only", action="store_true",
                         help="only the shell scene (to compare with Benchmarks/FilterLatency's driver)")
+    parser.add_argument("--backend", choices=["CPU", "CUDA"], default="CPU")
     args = parser.parse_args()
+    global BACKEND
+    BACKEND = args.backend
     simple.LoadPlugin(args.plugin)  # into paraview.simple, where faceplan_pipeline finds the filters
     results = []
     if not args.shell_only:
