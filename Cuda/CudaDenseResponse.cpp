@@ -5,6 +5,7 @@
 #include "CudaCheck.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
+#include "Common/InversePermutation.h"
 #include "Common/ParallelFor.h"
 #include "Common/StageTimings.h"
 
@@ -163,8 +164,8 @@ bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_c
   const int* pi = static_cast<const int*>(L->pi);
   const int* px = static_cast<const int*>(L->px);
   const int* perm = static_cast<const int*>(L->Perm);
-  std::vector<int> pinv(n), colSuper(n);
-  for (int k = 0; k < n; ++k) pinv[perm[k]] = k;
+  const std::vector<int> pinv = InversePermutation(perm, n);
+  std::vector<int> colSuper(n);
   std::vector<std::int64_t> px64(nsuper + 1);
   int maxCol = 1, maxRow = 1;
   long long maxUpdate = 1;
@@ -402,12 +403,6 @@ bool Elapsed(cudaEvent_t a, cudaEvent_t b, double& accumulate, std::string& erro
   return true;
 }
 
-// The inverse permutation of a factor's ordering.
-std::vector<int> InversePermutation(const int* perm, int n) {
-  std::vector<int> pinv(n);
-  for (int k = 0; k < n; ++k) pinv[perm[k]] = k;
-  return pinv;
-}
 
 // `prepared`: K_perm already made (FactorAndBuildResponse makes it while the GPU factorizes), or
 // null to make it here.

@@ -1,4 +1,5 @@
 #include "Comparison/ReverseCuthillMcKee.h"
+#include "Common/InversePermutation.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -89,8 +90,7 @@ std::vector<int> ReverseCuthillMcKee(const std::vector<int>& start, const std::v
 
 int GraphBandwidth(const std::vector<int>& start, const std::vector<int>& adjacent, const std::vector<int>& order) {
   const int n = static_cast<int>(start.size()) - 1;
-  std::vector<int> position(n);
-  for (int k = 0; k < n; ++k) position[order[k]] = k;
+  const std::vector<int> position = InversePermutation(order.data(), n);
   int band = 0;
   for (int v = 0; v < n; ++v)
     for (int k = start[v]; k < start[v + 1]; ++k) band = std::max(band, std::abs(position[v] - position[adjacent[k]]));

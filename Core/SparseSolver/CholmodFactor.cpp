@@ -1,4 +1,5 @@
 #include "SparseSolver/CholmodFactor.h"
+#include "Common/InversePermutation.h"
 #include "Common/ParallelFor.h"
 #include "Common/WorkerThreads.h"
 
@@ -133,9 +134,7 @@ Status CholmodFactor::analyze(const SparseMatrix& upper,
   auto keptTrailing = [n](const cholmod_factor* L, const FillReducingOrdering& c,
                           std::vector<int>& position) {
     const int* perm = static_cast<const int*>(L->Perm);
-    position.assign(n, 0);
-    for (int p = 0; p < n; ++p)
-      position[perm[p]] = p;
+    position = InversePermutation(perm, n);
     if (c.trailingDofs == 0 || !L->is_super)
       return 0;
     int first = n;

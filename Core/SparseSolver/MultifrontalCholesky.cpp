@@ -1,5 +1,6 @@
 #include "SparseSolver/MultifrontalCholesky.h"
 #include "Common/BlasThreads.h"
+#include "Common/InversePermutation.h"
 #include "SparseSolver/Blas.h"
 #include "SparseSolver/SupernodalTree.h"
 
@@ -41,9 +42,7 @@ Status MakePlan(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
   const int* perm = static_cast<const int*>(L.Perm);
   if (!p.super || !p.pi || !p.px || !p.s || !perm)
     return Status::Error("internal: the factor has no supernodal analysis");
-  std::vector<int> pinv(p.n);
-  for (int k = 0; k < p.n; ++k)
-    pinv[perm[k]] = k;
+  const std::vector<int> pinv = InversePermutation(perm, p.n);
   const SupernodalStructure tree{p.n, p.nsuper, p.super, p.pi, p.s};
   p.parent = SupernodeParents(tree, SupernodeOfColumns(tree));
   p.flops.resize(p.nsuper);

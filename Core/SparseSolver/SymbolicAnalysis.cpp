@@ -2,6 +2,7 @@
 
 #include "SparseSolver/CholmodViews.h"
 
+#include "Common/InversePermutation.h"
 #include "Common/ParallelFor.h"
 #include "Common/WorkerThreads.h"
 
@@ -69,13 +70,6 @@ void PermutedUpperPattern(int n, const int* start, const int* index,
   rows.resize(next);
   inParallel(
       [&](int t) { forEntries(t, [&](int column, int row) { rows[count[t][column]++] = row; }); });
-}
-
-std::vector<int> Inverse(const std::vector<int>& perm) {
-  std::vector<int> inverse(perm.size());
-  for (size_t k = 0; k < perm.size(); ++k)
-    inverse[perm[k]] = static_cast<int>(k);
-  return inverse;
 }
 
 // The node graph's strictly upper pattern (CSC over nodes) when `upper` is node-blocked: column
@@ -182,7 +176,7 @@ cholmod_factor* AnalyzeNodeBlocked(const SparseMatrix& upper, const std::vector<
 
   // Elimination tree and column counts of the node graph in the node order.
   std::vector<int> permutedStart, permutedRows, dummyRow(1, 0);
-  PermutedUpperPattern(nodes, nodeStart.data(), nodeRows.data(), Inverse(nodeOrder), permutedStart,
+  PermutedUpperPattern(nodes, nodeStart.data(), nodeRows.data(), InversePermutation(nodeOrder), permutedStart,
                        permutedRows);
   cholmod_sparse nodeGraph = ViewPattern(nodes, permutedStart, permutedRows, dummyRow);
   std::vector<int> nodeParent(nodes), nodePost(nodes), nodeCount(nodes), first(nodes), level(nodes);
@@ -218,7 +212,7 @@ cholmod_factor* AnalyzeNodeBlocked(const SparseMatrix& upper, const std::vector<
   const std::vector<int> finalNodeOrder = NodeOrderOf(finalPerm);
   if (finalNodeOrder.empty())
     return nullptr; // cannot happen (see above)
-  PermutedUpperPattern(nodes, nodeStart.data(), nodeRows.data(), Inverse(finalNodeOrder),
+  PermutedUpperPattern(nodes, nodeStart.data(), nodeRows.data(), InversePermutation(finalNodeOrder),
                        permutedStart, permutedRows);
   ExpandNodePattern(nodes, permutedStart, permutedRows, columnStart, rows);
   cholmod_sparse permuted = ViewPattern(n, columnStart, rows, dummyRow);
@@ -255,7 +249,7 @@ cholmod_factor* AnalyzeInGivenOrder(const SparseMatrix& upper, const std::vector
     *nodeBlocked = false;
   const int n = static_cast<int>(upper.rows());
   std::vector<int> columnStart, rows, dummyRow(1, 0);
-  PermutedUpperPattern(n, upper.outerIndexPtr(), upper.innerIndexPtr(), Inverse(perm), columnStart,
+  PermutedUpperPattern(n, upper.outerIndexPtr(), upper.innerIndexPtr(), InversePermutation(perm), columnStart,
                        rows);
   cholmod_sparse view = ViewPattern(n, columnStart, rows, dummyRow);
   // Only the natural order of the permuted copy, then CHOLMOD's postorder (the caller's choices

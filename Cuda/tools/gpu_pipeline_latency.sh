@@ -15,7 +15,7 @@
 # CUDA run did not run on CUDA (pipeline_latency.py checks the filter's Backend field).
 set -uo pipefail
 cd "$(dirname "$0")/../.."
-PART_BYTES=$((56 * 1024 * 1024))
+PART_BYTES=$((40 * 1024 * 1024)) # with the working tree under the 64 MiB a call carries
 ROOT=/tmp/pvroot
 
 pack() {
@@ -30,10 +30,11 @@ pack() {
   strace -f -e trace=openat,open -o /tmp/pvpython.trace pvpython --no-mpi Benchmarks/pipeline_latency.py \
     --plugin "$plugin" --data "$PWD/Data" --shell-scene out/pipeline_latency/shell100k.vtk --edits 2 \
     --shell-only >/dev/null 2>&1 || { echo "the traced pvpython run failed"; return 1; }
-  rm -rf "$stage" && mkdir -p "$stage/lib" "$stage/usr/bin"
-  grep -v ENOENT /tmp/pvpython.trace | grep -oE '"/[^"]+"' | tr -d '"' | sort -u |
+  rm -rf "$stage" && mkdir -p "$stage/usr/lib/x86_64-linux-gnu" "$stage/usr/bin"
+  # realpath -s: /usr/bin/../lib/x.so (pvpython's RUNPATH) becomes /usr/lib/x.so, links kept.
+  grep -v ENOENT /tmp/pvpython.trace | grep -oE '"/[^"]+"' | tr -d '"' | xargs realpath -s | sort -u |
     grep -vE '^/(work|tmp|proc|sys|dev|etc|usr/local/cuda)/' |
-    grep -vE '/(libc|libm|libpthread|libdl|librt|libresolv|libstdc\+\+|libgcc_s)\.so|/ld-linux|/libnss_|nvidia|/libcuda\.' |
+    grep -vE '/(libc|libm|libpthread|libdl|librt|libresolv|libstdc\+\+|libgcc_s)\.so|/ld-linux|/libnss_|nvidia|/libcuda\.|-nspkg\.pth$' |
     while read -r f; do
       [ -f "$f" ] || continue
       case "$f" in
@@ -46,7 +47,9 @@ pack() {
         */python3*/*|/usr/bin/*) # kept in place: Python finds modules by path
           mkdir -p "$stage/usr$(dirname "${f#/usr}")"
           cp -L --preserve=timestamps "$f" "$stage/usr${f#/usr}" ;;
-        *.so|*.so.*) cp -L "$f" "$stage/lib/$(basename "$f")" ;; # by the name the loader asked for
+        *.so|*.so.*) # by the name the loader asked for, where Debian keeps it (VTK finds its
+          # Python packages relative to its libraries)
+          cp -L "$f" "$stage/usr/lib/x86_64-linux-gnu/$(basename "$f")" ;;
         *) mkdir -p "$stage/usr$(dirname "${f#/usr}")" && cp -L "$f" "$stage/usr${f#/usr}" ;;
       esac
     done
@@ -71,7 +74,7 @@ run() {
   mkdir -p "$out"
   rm -rf "$ROOT" && mkdir -p "$ROOT"
   xz -dc /tmp/pvpython.tar.xz | tar -xf - -C "$ROOT" || { echo "the pvpython pack is incomplete"; return 1; }
-  export LD_LIBRARY_PATH=$ROOT/lib:$PWD/.pvcarry/plugin:/usr/local/cuda/lib64:/usr/local/cuda/lib:${LD_LIBRARY_PATH:-}
+  export LD_LIBRARY_PATH=$ROOT/usr/lib/x86_64-linux-gnu:$PWD/.pvcarry/plugin:/usr/local/cuda/lib64:/usr/local/cuda/lib:${LD_LIBRARY_PATH:-}
   export PYTHONHOME=$ROOT/usr OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-8}
   if ldd "$ROOT/usr/bin/pvpython" .pvcarry/plugin/*.so | grep "not found"; then
     echo "missing libraries"
