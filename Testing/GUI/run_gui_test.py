@@ -175,9 +175,12 @@ def main():
         stop(proc)
         log.close()
 
-    if not os.path.exists(result_path):
+    def print_gui_log():  # what ParaView itself said: the first clue to a failure
         with open(log_path) as f:
-            print(f.read()[-4000:])
+            print("--- the GUI's output (last 4000 characters) ---\n" + f.read()[-4000:])
+
+    if not os.path.exists(result_path):
+        print_gui_log()
         return 1
     with open(result_path) as f:
         result = json.load(f)
@@ -186,9 +189,11 @@ def main():
     print("info:", json.dumps(result["info"]))
     if result["error"]:
         print("FAIL: the GUI script raised:\n" + result["error"])
+        print_gui_log()
         return 1
     if result["failures"] or not result["checks"]:
         print("%s: %d check(s) failed" % (name, len(result["failures"])))
+        print_gui_log()
         return 1
     print("%s: all %d checks passed" % (name, len(result["checks"])))
     return 0
