@@ -201,17 +201,7 @@ Status ValidateBone(vtkPointSet* bone) {
   if (!hasSurfaceCell)
     return Error(
         "the Bone input has no surface cells (triangles or polygons) to make contact with");
-  const vtkIdType bad = FirstNonFinitePoint(bone);
-  if (bad >= 0)
-    return Error("the bone's point ", bad,
-                 " has a NaN or infinite coordinate (or one beyond 1e30)");
-  vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
-  if (!displacement)
-    return Error("the Bone input needs a 3-component point array named Displacement "
-                 "(connect the output of BezierCut or Osteotomy)");
-  Status s = CheckArray(displacement, "Displacement", "point", n, 3);
-  if (s)
-    s = CheckUndeformedBone(bone, displacement);
+  Status s = ValidateBoneValues(bone); // coordinates and Displacement, as an edit checks them
   if (!s)
     return s;
   for (const char* name : {"ROIMask", "SegmentId", "Sliding", "Released"})
