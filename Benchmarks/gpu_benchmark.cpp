@@ -18,6 +18,7 @@
 #include "Common/StageTimings.h"
 #include "Element/StiffnessAssembly.h"
 #include "VtuReader.h"
+#include "BoundaryNodes.h"
 #if FACEPLAN_HAS_CUDA
 #include "CudaBackend.h"
 #include "CudaDenseResponse.h"
@@ -67,29 +68,6 @@ struct BenchScene {
   std::string source;
 };
 
-// Boundary nodes: nodes of faces used by a single tetrahedron.
-std::vector<char> BoundaryNodes(const TetMesh& mesh) {
-  std::vector<std::array<int, 3>> faces;
-  faces.reserve(4 * static_cast<size_t>(mesh.numTets()));
-  static const int f[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-  for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
-    for (const auto& face : f) {
-      std::array<int, 3> key = {mesh.tets(e, face[0]), mesh.tets(e, face[1]), mesh.tets(e, face[2])};
-      std::sort(key.begin(), key.end());
-      faces.push_back(key);
-    }
-  std::sort(faces.begin(), faces.end());
-  std::vector<char> boundary(mesh.numPoints(), 0);
-  for (size_t i = 0; i < faces.size();) {
-    size_t k = i + 1;
-    while (k < faces.size() && faces[k] == faces[i]) ++k;
-    if (k - i == 1)
-      for (int v : faces[i]) boundary[v] = 1;
-    i = k;
-  }
-  return boundary;
-}
-
 // An organ mesh of Data/ with the node sets of faceplan_report's organ scenes: BoneContact nodes
 // fixed, the 30 % of them nearest the contact centre moved (the ROI), boundary nodes not in
 // contact kept; E = 3 kPa, nu = 0.45.
@@ -101,7 +79,7 @@ bool OrganScene(const std::string& path, BenchScene& out, std::string& error) {
   out.mesh = vtu.mesh;
   out.materials = Materials::Uniform(3.0e3, 0.45);
   const Eigen::Index n = out.mesh.numPoints();
-  const std::vector<char> boundary = BoundaryNodes(out.mesh);
+  const std::vector<char> boundary = bench::BoundaryNodes(out.mesh);
   for (Eigen::Index i = 0; i < n; ++i) {
     if (contact->second[i] > 0.5) out.constrained.push_back(static_cast<int>(i));
     else if (boundary[i]) out.kept.push_back(static_cast<int>(i));

@@ -6,6 +6,7 @@
 //                           [--edits N] [--json FILE]
 #include "CondensedFEM/CondensedFEM.h"
 #include "VtuReader.h"
+#include "BoundaryNodes.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -25,25 +26,6 @@ double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n == 0 ? 0.0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
-}
-
-// Nodes of faces used by a single tetrahedron.
-std::vector<char> BoundaryNodes(const TetMesh& mesh) {
-  std::map<std::array<int, 3>, int> faces;
-  static const int f[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-  for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
-    for (const auto& face : f) {
-      std::array<int, 3> key = {mesh.tets(e, face[0]), mesh.tets(e, face[1]),
-                                mesh.tets(e, face[2])};
-      std::sort(key.begin(), key.end());
-      ++faces[key];
-    }
-  std::vector<char> boundary(mesh.numPoints(), 0);
-  for (const auto& [key, count] : faces)
-    if (count == 1)
-      for (int v : key)
-        boundary[v] = 1;
-  return boundary;
 }
 
 // A Le Fort I-like move: advancement along +y-ish of 3-6 mm, a few degrees of rotation about the
@@ -131,7 +113,7 @@ int main(int argc, char** argv) {
   PrecomputeRequest rigid;
   rigid.mesh = vtu.mesh;
   rigid.materials = Materials::Uniform(3.0e3, 0.45);
-  const std::vector<char> boundary = BoundaryNodes(rigid.mesh);
+  const std::vector<char> boundary = bench::BoundaryNodes(rigid.mesh);
   Eigen::Vector3d pivot = Eigen::Vector3d::Zero();
   for (Eigen::Index i = 0; i < rigid.mesh.numPoints(); ++i) {
     const int node = static_cast<int>(i);

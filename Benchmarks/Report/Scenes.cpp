@@ -1,6 +1,7 @@
 #include "Report/Scenes.h"
 
 #include "Support/ShellMeshGenerator.h"
+#include "BoundaryNodes.h"
 #include "VtuReader.h"
 
 #include <algorithm>
@@ -35,24 +36,6 @@ RowVectors3d ShellEdit(const PrecomputeRequest& r) {
         2.0 + 0.5 * std::sin(0.03 * (p(0) + p(1)));
   }
   return u;
-}
-
-std::vector<char> BoundaryNodes(const TetMesh& mesh) {
-  std::map<std::array<int, 3>, int> faces;
-  static const int f[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-  for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
-    for (const auto& face : f) {
-      std::array<int, 3> key = {mesh.tets(e, face[0]), mesh.tets(e, face[1]),
-                                mesh.tets(e, face[2])};
-      std::sort(key.begin(), key.end());
-      ++faces[key];
-    }
-  std::vector<char> boundary(mesh.numPoints(), 0);
-  for (const auto& [key, count] : faces)
-    if (count == 1)
-      for (int v : key)
-        boundary[v] = 1;
-  return boundary;
 }
 
 // Organ / face scenes from Data/: BoneContact nodes fixed, an ROI patch of them moved smoothly,
@@ -112,7 +95,7 @@ bool DataScene(const std::string& name, const std::string& path, bool face, Scen
     return error = path + " has no BoneContact array", false;
   const TetMesh& mesh = vtu.mesh;
   const Eigen::Index n = mesh.numPoints();
-  const std::vector<char> boundary = BoundaryNodes(mesh);
+  const std::vector<char> boundary = bench::BoundaryNodes(mesh);
   s.name = name;
   s.family = face ? "face" : "organ";
   s.request.mesh = mesh;
