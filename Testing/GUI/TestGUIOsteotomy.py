@@ -11,26 +11,12 @@ What it does, in the GUI's own session:
     first plan and redo the moved one;
  4. leaves Osteotomy selected, so the Properties panel shows it for the wrapper's screenshot.
 """
-import json
 import os
 import sys
 import traceback
 
-result = {"checks": [], "failures": [], "error": None, "info": {}}
-
-
-def check(cond, what):
-    result["checks"].append(what)
-    if not cond:
-        result["failures"].append(what)
-    return bool(cond)
-
-
-def write_result():
-    path = os.environ.get("FACEPLAN_GUI_RESULT", "faceplan_gui_result.json")
-    with open(path + ".tmp", "w") as f:
-        json.dump(result, f, indent=1)
-    os.replace(path + ".tmp", path)
+sys.path.insert(0, os.environ["FACEPLAN_GUI_TESTS"])  # Testing/GUI, set by run_gui_test.py
+from gui_result import check, result, write_result  # noqa: E402
 
 
 try:

@@ -20,28 +20,13 @@ What it does, in the GUI's own session:
 
 The GUI's exit code does not reflect Python errors, hence the result file.
 """
-import json
 import os
 import sys
 import time
 import traceback
 
-result = {"checks": [], "failures": [], "error": None, "info": {}}
-
-
-def check(cond, what):
-    result["checks"].append(what)
-    if not cond:
-        result["failures"].append(what)
-    return bool(cond)
-
-
-def write_result():
-    path = os.environ.get("FACEPLAN_GUI_RESULT", "faceplan_gui_result.json")
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
-        json.dump(result, f, indent=1)
-    os.replace(tmp, path)  # the wrapper polls for the file: never let it see half of it
+sys.path.insert(0, os.environ["FACEPLAN_GUI_TESTS"])  # Testing/GUI, set by run_gui_test.py
+from gui_result import check, result, write_result  # noqa: E402
 
 
 try:

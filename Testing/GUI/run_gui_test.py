@@ -148,6 +148,7 @@ def main():
     env.update(FACEPLAN_GUI_PLUGIN=os.path.abspath(a.plugin),
                FACEPLAN_GUI_DATA=os.path.join(a.source_dir, "Data"),
                FACEPLAN_GUI_SCRIPTS=os.path.join(a.source_dir, "scripts"),
+               FACEPLAN_GUI_TESTS=os.path.join(a.source_dir, "Testing", "GUI"),
                FACEPLAN_GUI_RESULT=result_path,
                # a fresh settings folder: the default layout (pipeline browser + properties
                # panel) whatever the user's own ParaView settings are
