@@ -50,6 +50,18 @@ Materials RandomMaterials(Eigen::Index cells, unsigned seed) {
   return materials;
 }
 
+// The face-like shell's precompute request: random per-cell materials, the scene's node sets.
+PrecomputeRequest ShellRequest(const FaceLikeScene& scene, unsigned materialSeed, SolveMethod method) {
+  PrecomputeRequest request;
+  request.mesh = scene.shell.mesh;
+  request.materials = RandomMaterials(request.mesh.numTets(), materialSeed);
+  request.sets.constrained = scene.constrained;
+  request.sets.movable = scene.movable;
+  request.sets.kept = scene.kept;
+  request.options.method = method;
+  return request;
+}
+
 // dofNode: a random permutation of the nodes, with every `dropEvery`-th node dropped (-1).
 std::vector<int> RandomNumbering(Eigen::Index nodes, unsigned seed, int dropEvery, int& numDofNodes) {
   std::vector<int> order(nodes);
@@ -221,13 +233,7 @@ TEST(CudaBackend, EmptyResponse) {
 // The whole precompute/solve with the CUDA backend against the CPU backend.
 void CompareFullPipeline(SolveMethod method) {
   const FaceLikeScene scene = MakeFaceLikeScene(6, 3, 0.15);
-  PrecomputeRequest request;
-  request.mesh = scene.shell.mesh;
-  request.materials = RandomMaterials(request.mesh.numTets(), 9);
-  request.sets.constrained = scene.constrained;
-  request.sets.movable = scene.movable;
-  request.sets.kept = scene.kept;
-  request.options.method = method;
+  PrecomputeRequest request = ShellRequest(scene, 9, method);
 
   std::mt19937 rng(4);
   std::normal_distribution<double> normal(0.0, 0.01);
@@ -284,14 +290,8 @@ TEST(CudaBackend, PrecomputeAndSolveCachedFactorMatchCpu) {
 TEST(CudaBackend, PrecomputeUsesGpuFactorizationAndResponse) {
   REQUIRE_GPU_OR_SKIP();
   const FaceLikeScene scene = MakeFaceLikeScene(7, 4, 0.12);
-  PrecomputeRequest request;
-  request.mesh = scene.shell.mesh;
-  request.materials = RandomMaterials(request.mesh.numTets(), 31);
+  PrecomputeRequest request = ShellRequest(scene, 31, SolveMethod::DenseResponse);
   request.materials.density = Eigen::VectorXd::Constant(request.mesh.numTets(), 1000.0);
-  request.sets.constrained = scene.constrained;
-  request.sets.movable = scene.movable;
-  request.sets.kept = scene.kept;
-  request.options.method = SolveMethod::DenseResponse;
 
   std::shared_ptr<const CondensedSystem> cpuSystem, gpuSystem;
   request.options.backend = MakeCpuBackend();
@@ -357,13 +357,7 @@ TEST(CudaBackend, PrecomputeUsesGpuFactorizationAndResponse) {
 TEST(CudaBackend, DenseResponseOnGpuMatchesCoreResponse) {
   REQUIRE_GPU_OR_SKIP();
   const FaceLikeScene scene = MakeFaceLikeScene(6, 3, 0.15);
-  PrecomputeRequest request;
-  request.mesh = scene.shell.mesh;
-  request.materials = RandomMaterials(request.mesh.numTets(), 12);
-  request.sets.constrained = scene.constrained;
-  request.sets.movable = scene.movable;
-  request.sets.kept = scene.kept;
-  request.options.method = SolveMethod::DenseResponse;
+  PrecomputeRequest request = ShellRequest(scene, 12, SolveMethod::DenseResponse);
   std::shared_ptr<const CondensedSystem> system;
   const Status pre = Precompute(request, system);
   ASSERT_TRUE(pre.ok) << pre.message;
@@ -409,13 +403,7 @@ TEST(CudaBackend, DenseResponseOnGpuMatchesCoreResponse) {
 TEST(CudaBackend, GpuFactorizationMatchesCholmod) {
   REQUIRE_GPU_OR_SKIP();
   const FaceLikeScene scene = MakeFaceLikeScene(7, 4, 0.12);
-  PrecomputeRequest request;
-  request.mesh = scene.shell.mesh;
-  request.materials = RandomMaterials(request.mesh.numTets(), 21);
-  request.sets.constrained = scene.constrained;
-  request.sets.movable = scene.movable;
-  request.sets.kept = scene.kept;
-  request.options.method = SolveMethod::DenseResponse;
+  PrecomputeRequest request = ShellRequest(scene, 21, SolveMethod::DenseResponse);
   std::shared_ptr<const CondensedSystem> system;
   const Status pre = Precompute(request, system);
   ASSERT_TRUE(pre.ok) << pre.message;
