@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Issue 14 §1 with Backend = CUDA, measured through ParaView: Benchmarks/pipeline_latency.py run by
 # Debian's pvpython on the lent GPU machine, which has no ParaView. The files pvpython opens for that
-# run (found with strace here, less the C runtime the GPU machine has) travel with it: ~150 MB
+# run (found with strace here, less the C runtime the GPU machine has) travel with it: ~140 MB
 # compressed, more than one call may carry (64 MiB), so they go in parts over successive calls while
 # the machine is warm (30 s), each part appended to /tmp/pvpython.tar.xz there.
 #
