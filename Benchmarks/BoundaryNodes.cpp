@@ -12,7 +12,8 @@ std::vector<char> BoundaryNodes(const TetMesh& mesh) {
   static const int f[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
     for (const auto& face : f) {
-      std::array<int, 3> key = {mesh.tets(e, face[0]), mesh.tets(e, face[1]), mesh.tets(e, face[2])};
+      std::array<int, 3> key = {mesh.tets(e, face[0]), mesh.tets(e, face[1]),
+                                mesh.tets(e, face[2])};
       std::sort(key.begin(), key.end());
       faces.push_back(key);
     }

@@ -403,7 +403,6 @@ bool Elapsed(cudaEvent_t a, cudaEvent_t b, double& accumulate, std::string& erro
   return true;
 }
 
-
 // `prepared`: K_perm already made (FactorAndBuildResponse makes it while the GPU factorizes), or
 // null to make it here.
 bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseMatrix& kfr, Eigen::Index keptRowsIn,

@@ -1,7 +1,7 @@
 #include "Report/Scenes.h"
 
-#include "Support/ShellMeshGenerator.h"
 #include "BoundaryNodes.h"
+#include "Support/ShellMeshGenerator.h"
 #include "VtuReader.h"
 
 #include <algorithm>

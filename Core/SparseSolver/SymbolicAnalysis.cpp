@@ -176,8 +176,8 @@ cholmod_factor* AnalyzeNodeBlocked(const SparseMatrix& upper, const std::vector<
 
   // Elimination tree and column counts of the node graph in the node order.
   std::vector<int> permutedStart, permutedRows, dummyRow(1, 0);
-  PermutedUpperPattern(nodes, nodeStart.data(), nodeRows.data(), InversePermutation(nodeOrder), permutedStart,
-                       permutedRows);
+  PermutedUpperPattern(nodes, nodeStart.data(), nodeRows.data(), InversePermutation(nodeOrder),
+                       permutedStart, permutedRows);
   cholmod_sparse nodeGraph = ViewPattern(nodes, permutedStart, permutedRows, dummyRow);
   std::vector<int> nodeParent(nodes), nodePost(nodes), nodeCount(nodes), first(nodes), level(nodes);
   if (!cholmod_analyze_ordering(&nodeGraph, CHOLMOD_NATURAL, nullptr, nullptr, 0, nodeParent.data(),
@@ -249,8 +249,8 @@ cholmod_factor* AnalyzeInGivenOrder(const SparseMatrix& upper, const std::vector
     *nodeBlocked = false;
   const int n = static_cast<int>(upper.rows());
   std::vector<int> columnStart, rows, dummyRow(1, 0);
-  PermutedUpperPattern(n, upper.outerIndexPtr(), upper.innerIndexPtr(), InversePermutation(perm), columnStart,
-                       rows);
+  PermutedUpperPattern(n, upper.outerIndexPtr(), upper.innerIndexPtr(), InversePermutation(perm),
+                       columnStart, rows);
   cholmod_sparse view = ViewPattern(n, columnStart, rows, dummyRow);
   // Only the natural order of the permuted copy, then CHOLMOD's postorder (the caller's choices
   // of methods are put back after).

@@ -146,8 +146,8 @@ ContractReport CheckContract(const SurfaceMesh& m, const BezierCutResult& r, con
   return ::testing::AssertionFailure()
          << "unmoved vertices changed " << c.unmovedChanged << ", flipped " << c.flipped
          << ", degenerate " << c.degenerate << ", intersecting " << c.intersecting
-         << ", largest distance off the surface " << c.maxOffSurface << " (limit "
-         << maxOffSurface << ")";
+         << ", largest distance off the surface " << c.maxOffSurface << " (limit " << maxOffSurface
+         << ")";
 }
 
 ROIResult RoiWhere(const SurfaceMesh& m, const std::function<bool(const Vector3d&)>& pred) {
