@@ -17,6 +17,7 @@
 #include <memory>
 #include <mutex>
 #include <sstream>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -475,6 +476,13 @@ bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream
   size_t queued = 0;                   // chunks whose copy (and event) are queued
   int slicesDone[kStageBuffers] = {0}; // of the chunk now in each buffer
   bool failed = false;
+  std::string why;                           // the first failure, under `mutex`
+  auto fail = [&](const std::string& what) { // with `mutex` held
+    if (!failed)
+      why = what;
+    failed = true;
+    changed.notify_all();
+  };
   auto worker = [&](int t) {
     for (size_t k = 0; k < chunks; ++k) {
       {
@@ -486,8 +494,7 @@ bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream
       const int b = static_cast<int>(k % kStageBuffers);
       if (cudaEventSynchronize(set->copied[b]) != cudaSuccess) {
         std::lock_guard<std::mutex> lock(mutex);
-        failed = true;
-        changed.notify_all();
+        fail("staged device-to-host copy: waiting for a chunk failed");
         return;
       }
       const size_t off = k * kStageBytes, len = std::min(kStageBytes, bytes - off);
@@ -502,38 +509,46 @@ bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream
     }
   };
   std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t)
-    pool.emplace_back(worker, t);
-  bool ok = true;
-  for (size_t k = 0; k < chunks && ok; ++k) {
+  for (int t = 0; t < threads; ++t) {
+    try {
+      pool.emplace_back(worker, t);
+    } catch (const std::system_error&) { // every slice needs its thread: stop the started ones
+      std::lock_guard<std::mutex> lock(mutex);
+      fail("staged device-to-host copy: could not start a copy thread");
+      break;
+    }
+  }
+  for (size_t k = 0; k < chunks; ++k) {
     const int b = static_cast<int>(k % kStageBuffers);
-    if (k >= kStageBuffers) { // the buffer's previous chunk must be copied out first
+    {
+      // Before reusing a buffer, its previous chunk must be copied out.
       std::unique_lock<std::mutex> lock(mutex);
-      changed.wait(lock, [&] { return slicesDone[b] == threads || failed; });
+      changed.wait(lock, [&] { return k < kStageBuffers || slicesDone[b] == threads || failed; });
       if (failed)
         break;
     }
     const size_t off = k * kStageBytes, len = std::min(kStageBytes, bytes - off);
-    ok = cudaMemcpyAsync(set->buffer[b].as<void>(), static_cast<const char*>(src) + off, len,
-                         cudaMemcpyDeviceToHost, stream) == cudaSuccess &&
-         cudaEventRecord(set->copied[b], stream) == cudaSuccess;
+    const bool queuedOk =
+        cudaMemcpyAsync(set->buffer[b].as<void>(), static_cast<const char*>(src) + off, len,
+                        cudaMemcpyDeviceToHost, stream) == cudaSuccess &&
+        cudaEventRecord(set->copied[b], stream) == cudaSuccess;
     std::lock_guard<std::mutex> lock(mutex);
-    if (!ok) {
-      failed = true;
-      error = std::string("staged device-to-host copy: ") + cudaGetErrorString(cudaGetLastError());
-    } else {
-      slicesDone[b] = 0;
-      ++queued;
+    if (!queuedOk) {
+      fail(std::string("staged device-to-host copy: ") + cudaGetErrorString(cudaGetLastError()));
+      break;
     }
+    slicesDone[b] = 0;
+    ++queued;
     changed.notify_all();
   }
   for (std::thread& th : pool)
     th.join();
-  if (failed && ok)
-    error = "staged device-to-host copy: waiting for a chunk failed";
-  if (!failed)
-    GiveStaging(std::move(set)); // a set whose copy failed is dropped
-  return !failed;
+  if (failed) { // a set whose copy failed is dropped
+    error = why;
+    return false;
+  }
+  GiveStaging(std::move(set));
+  return true;
 }
 
 } // namespace detail
