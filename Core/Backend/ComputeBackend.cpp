@@ -42,10 +42,10 @@ public:
   Status assembleStiffness(const TetMesh& mesh, const Materials& materials,
                            AssemblyPattern& pattern, AssemblyTimings& timings) override {
     StageClock clock;
-    std::vector<double> packed;
+    PackedElementMatrices packed;
     ComputePackedElementStiffness(mesh, materials, packed);
     timings.elementStiffnessMs = clock.lapMs();
-    AssembleFromPacked(packed, pattern);
+    AssembleFromPacked(packed.data(), pattern);
     timings.assemblyMs = clock.lapMs();
     return Status::Ok();
   }

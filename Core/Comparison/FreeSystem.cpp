@@ -43,10 +43,10 @@ Status BuildFreeSystem(const PrecomputeRequest& request, FreeSystem& s) {
     if (!status)
       return status;
     const double patternMs = clock.lapMs();
-    std::vector<double> packed;
+    PackedElementMatrices packed;
     ComputePackedElementStiffness(request.mesh, request.materials, packed);
     s.elementStiffnessMs = clock.lapMs();
-    AssembleFromPacked(packed, pattern);
+    AssembleFromPacked(packed.data(), pattern);
     const int f = s.freeDofs();
     const SparseMatrix& upper = pattern.upper;
     s.kff = Eigen::Map<const SparseMatrix>(f, f, upper.outerIndexPtr()[f], upper.outerIndexPtr(),

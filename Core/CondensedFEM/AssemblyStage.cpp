@@ -40,7 +40,7 @@ Status AssembleStiffness(PrecomputeState& state) {
   ComputeBackend::AssemblyTimings at;
   if (state.quadratic) {
     // The backends implement 4-node cells; 10-node cells are computed and assembled on the CPU.
-    std::vector<double> packed;
+    PackedElementMatrices packed;
     std::vector<long long> invalid;
     ComputePackedTet10Stiffness(qmesh, stiffnessMaterials, packed, invalid,
                                 options.quadraticMeanDilatation);
@@ -52,7 +52,7 @@ Status AssembleStiffness(PrecomputeState& state) {
       return Status::Error(msg.str());
     }
     at.elementStiffnessMs = clock.lapMs();
-    AssembleFromPacked(packed, pattern);
+    AssembleFromPacked(packed.data(), pattern);
     at.assemblyMs = clock.lapMs();
   } else if (const Status assembled =
                  state.backend->assembleStiffness(mesh, request.materials, pattern, at);

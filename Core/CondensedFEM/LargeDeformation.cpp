@@ -338,7 +338,7 @@ private:
     const bool ok = Evaluate(pb_, u, ev, withTangent ? &packed_ : nullptr);
     timings_[Stage::ElementStiffness].ms += clock.lapMs();
     if (ok && withTangent) {
-      AssembleFromPacked(packed_, pb_.pattern);
+      AssembleFromPacked(packed_.data(), pb_.pattern);
       timings_[Stage::Assembly].ms += clock.lapMs();
     }
     return ok;
@@ -474,7 +474,7 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     Evaluation rest;
     std::vector<double> packed;
     Evaluate(pb, state.u, rest, &packed);
-    AssembleFromPacked(packed, pb.pattern);
+    AssembleFromPacked(packed.data(), pb.pattern);
     pb.linearForce = (pb.pattern.upper.selfadjointView<Eigen::Upper>() * pb.target).norm();
     Eigen::VectorXd positions(3 * pb.n);
     for (Eigen::Index i = 0; i < pb.n; ++i)

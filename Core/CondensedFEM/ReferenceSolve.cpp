@@ -50,10 +50,10 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
   const Status patternBuilt = BuildAssemblyPattern(mesh, freeIndex, numFree, pattern);
   if (!patternBuilt)
     return patternBuilt;
-  std::vector<double> packed;
+  PackedElementMatrices packed;
   ComputePackedElementStiffness(mesh, request.materials, packed);
   result.timings[Stage::ElementStiffness].ms = clock.lapMs();
-  AssembleFromPacked(packed, pattern);
+  AssembleFromPacked(packed.data(), pattern);
   result.timings[Stage::Assembly].ms = clock.lapMs();
 
   // Right-hand side: loads minus the prescribed displacements' element forces.

@@ -41,7 +41,7 @@ ElementMatrix TetStiffness(const TetCorners& c, double E, double nu) {
 }
 
 void ComputePackedElementStiffness(const TetMesh& mesh, const Materials& materials,
-                                   std::vector<double>& packed) {
+                                   PackedElementMatrices& packed) {
   const Eigen::Index m = mesh.numTets();
   packed.resize(static_cast<size_t>(m) * kPackedElementSize);
   ParallelFor(m, 20000, [&](std::int64_t begin, std::int64_t end) {

@@ -1,5 +1,6 @@
 #pragma once
 // Linear 4-node tetrahedron, isotropic linear elasticity: Ke = B^T D B V.
+#include "Common/UninitializedVector.h"
 #include "Mesh/TetGeometry.h"
 #include "Mesh/TetMesh.h"
 
@@ -20,8 +21,10 @@ ElementMatrix TetStiffness(const TetCorners& corners, double E, double nu);
 constexpr int kPackedElementSize = 78;
 
 // All element matrices, packed upper triangles (m x 78, row-major), computed in parallel.
-// This is the step the CUDA backend also implements.
+// This is the step the CUDA backend also implements. Uninitialized storage: every entry is
+// written by the parallel loop, which then also takes the buffer's page faults.
+using PackedElementMatrices = UninitializedVector<double>;
 void ComputePackedElementStiffness(const TetMesh& mesh, const Materials& materials,
-                                   std::vector<double>& packed);
+                                   PackedElementMatrices& packed);
 
 } // namespace faceplan

@@ -167,7 +167,7 @@ Eigen::Matrix<double, 10, 1> Tet10ShapeIntegrals(const Tet10Nodes& x) {
 }
 
 void ComputePackedTet10Stiffness(const QuadraticMesh& mesh, const Materials& materials,
-                                 std::vector<double>& packed, std::vector<long long>& invalidCells,
+                                 PackedElementMatrices& packed, std::vector<long long>& invalidCells,
                                  bool meanDilatation) {
   const Eigen::Index m = mesh.cells.rows();
   packed.resize(static_cast<size_t>(m) * kPackedTet10Size);

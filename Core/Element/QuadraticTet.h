@@ -7,6 +7,7 @@
 // Node order in a cell (VTK's): corners 0..3, then mid-edge nodes of edges
 // (0,1), (1,2), (0,2), (0,3), (1,3), (2,3).
 #include "Common/Status.h"
+#include "Element/ElementStiffness.h"
 #include "Element/StiffnessAssembly.h"
 #include "Mesh/TetMesh.h"
 
@@ -65,7 +66,7 @@ constexpr int kPackedTet10Size = 30 * 31 / 2; // 465
 // Packed upper triangles of every cell (m x 465, row-major). Cells whose Jacobian is not positive
 // somewhere are listed in `invalidCells`.
 void ComputePackedTet10Stiffness(const QuadraticMesh& mesh, const Materials& materials,
-                                 std::vector<double>& packed, std::vector<long long>& invalidCells,
+                                 PackedElementMatrices& packed, std::vector<long long>& invalidCells,
                                  bool meanDilatation = false);
 
 } // namespace faceplan

@@ -165,7 +165,7 @@ Status BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode
                                   pattern);
 }
 
-void AssembleFromPacked(const std::vector<double>& packed, AssemblyPattern& pattern) {
+void AssembleFromPacked(const double* packed, AssemblyPattern& pattern) {
   const int nnz = static_cast<int>(pattern.upper.nonZeros());
   double* values = pattern.upper.valuePtr();
   ParallelFor(nnz, 200000, [&](std::int64_t begin, std::int64_t end) {

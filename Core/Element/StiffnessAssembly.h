@@ -62,6 +62,6 @@ Status BuildAssemblyPattern(const TetMesh& mesh, const std::vector<int>& dofNode
                             AssemblyPattern& pattern);
 
 // upper.valuePtr()[k] = sum of packed[packedIndex[...]] over its gather range.
-void AssembleFromPacked(const std::vector<double>& packed, AssemblyPattern& pattern);
+void AssembleFromPacked(const double* packed, AssemblyPattern& pattern);
 
 } // namespace faceplan

@@ -2,6 +2,7 @@
 #include "Common/WorkerThreads.h"
 
 #include "Common/BlasThreads.h"
+#include "Common/UninitializedVector.h"
 #include "SparseSolver/Blas.h"
 #include "SparseSolver/PrunedBackSubstitution.h"
 #include "SparseSolver/PrunedForwardSubstitution.h"
@@ -122,7 +123,11 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   };
   constexpr Eigen::Index kRowTile = 32; // rows copied out per tile: column writes stay contiguous
   auto worker = [&] {
-    std::vector<double> x, scratch;
+    // x need not start as zero: the forward substitution sets the rows the backward one reads
+    // as data and the backward one clears or overwrites the others (x is reused block to block).
+    // Left uninitialized, its pages are first touched by the substitutions themselves.
+    UninitializedVector<double> x;
+    std::vector<double> scratch;
     for (Eigen::Index task = nextTask++; task <= blocks; task = nextTask++) {
       if (cancel && cancel->load())
         break;

@@ -19,9 +19,9 @@ TEST(Assembly, GatherEqualsDenseElementSum) {
   AssemblyPattern pattern;
 
   ASSERT_TRUE(BuildAssemblyPattern(mesh, identity, static_cast<int>(mesh.numPoints()), pattern));
-  std::vector<double> packed;
+  PackedElementMatrices packed;
   ComputePackedElementStiffness(mesh, mat, packed);
-  AssembleFromPacked(packed, pattern);
+  AssembleFromPacked(packed.data(), pattern);
 
   const Eigen::Index n = 3 * mesh.numPoints();
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
