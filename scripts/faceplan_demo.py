@@ -17,6 +17,7 @@ from paraview.simple import *
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import faceplan_pipeline
+from faceplan_views import screenshot, white_render_view
 
 plugin, data_dir, out_dir = sys.argv[1], sys.argv[2], sys.argv[3]
 os.makedirs(out_dir, exist_ok=True)
@@ -30,14 +31,8 @@ start = time.time()
 fem.UpdatePipeline()
 first = time.time() - start
 
-view = CreateRenderView()
-view.ViewSize = [900, 700]
-view.OrientationAxesVisibility = 0
-view.Background = [1, 1, 1]
-try:
-    view.UseColorPaletteForBackground = 0
-except AttributeError:
-    pass
+SIZE = [900, 700]
+view = white_render_view(SIZE)
 
 
 def camera(focal, position, up=(0, 0, 1)):
@@ -47,9 +42,7 @@ def camera(focal, position, up=(0, 0, 1)):
 
 
 def shoot(name):
-    path = os.path.join(out_dir, name)
-    SaveScreenshot(path, view, ImageResolution=[900, 700])
-    return path
+    return screenshot(view, out_dir, name, SIZE)
 
 
 images = []

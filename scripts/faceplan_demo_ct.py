@@ -12,6 +12,7 @@ from paraview.simple import *
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import faceplan_ct_pipeline
 import faceplan_pipeline
+from faceplan_views import screenshot, white_render_view
 
 plugin, data_dir, out_dir = sys.argv[1], sys.argv[2], sys.argv[3]
 cell_size = float(sys.argv[4]) if len(sys.argv) > 4 else 10.0
@@ -29,14 +30,8 @@ fem.UpdatePipeline()
 first = time.time() - start
 tissue = servermanager.Fetch(model)
 
-view = CreateRenderView()
-view.ViewSize = [900, 800]
-view.OrientationAxesVisibility = 0
-view.Background = [1, 1, 1]
-try:
-    view.UseColorPaletteForBackground = 0
-except AttributeError:
-    pass
+SIZE = [900, 800]
+view = white_render_view(SIZE)
 
 
 def camera(position, focal=(102, 102, 75), up=(0, 0, -1)):
@@ -46,9 +41,7 @@ def camera(position, focal=(102, 102, 75), up=(0, 0, -1)):
 
 
 def shoot(name):
-    path = os.path.join(out_dir, name)
-    SaveScreenshot(path, view, ImageResolution=[900, 800])
-    return path
+    return screenshot(view, out_dir, name, SIZE)
 
 
 images = []

@@ -12,6 +12,7 @@ from paraview.simple import *
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import faceplan_pipeline
+from faceplan_views import white_render_view
 
 plugin, data_dir, out_png = sys.argv[1], sys.argv[2], sys.argv[3]
 LoadPlugin(plugin)
@@ -21,20 +22,9 @@ fem.UpdatePipeline()
 lut = faceplan_pipeline.displacement_colors()
 
 
-def make_view():
-    v = CreateRenderView()
-    v.OrientationAxesVisibility = 0
-    try:
-        v.UseColorPaletteForBackground = 0
-    except AttributeError:
-        pass
-    v.Background = [1.0, 1.0, 1.0]
-    return v
-
-
 layout = CreateLayout("FacePlan overview")
-bone_view = make_view()
-face_view = make_view()
+bone_view = white_render_view()
+face_view = white_render_view()
 AssignViewToLayout(view=bone_view, layout=layout, hint=0)
 AssignViewToLayout(view=face_view, layout=layout, hint=0)
 layout.SetSize(1600, 700)

@@ -14,6 +14,7 @@ from paraview.simple import *
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import osteotomy_scenes
+from faceplan_views import screenshot, white_render_view
 
 plugin, data_dir, out_root, scene = sys.argv[1:5]
 if scene not in osteotomy_scenes.SCENES:
@@ -30,14 +31,8 @@ seconds = time.time() - start
 fd = fem.GetClientSideObject().GetOutputDataObject(0).GetFieldData()
 move = math.sqrt(math.fsum(c * c for c in osteotomy_scenes.SCENES[scene][2]))  # the colour range, mm
 
-view = CreateRenderView()
-view.ViewSize = [900, 700]
-view.OrientationAxesVisibility = 0
-view.Background = [1, 1, 1]
-try:
-    view.UseColorPaletteForBackground = 0
-except AttributeError:
-    pass
+SIZE = [900, 700]
+view = white_render_view(SIZE)
 # Lateral-oblique view from the front left: an advancement moves towards the viewer's left.
 view.CameraFocalPoint = [85, 0, 100]
 view.CameraPosition = [-150, -330, 130]
@@ -56,9 +51,7 @@ bar.Visibility = 0  # shown with the "after" images only
 
 
 def shoot(name):
-    path = os.path.join(out_dir, name)
-    SaveScreenshot(path, view, ImageResolution=[900, 700])
-    return path
+    return screenshot(view, out_dir, name, SIZE)
 
 
 def colour(display):

@@ -80,18 +80,6 @@ def displacement_lut():
     return lut
 
 
-def make_view():
-    view = CreateRenderView()
-    view.ViewSize = IMAGE_SIZE
-    view.OrientationAxesVisibility = 0
-    try:
-        view.UseColorPaletteForBackground = 0
-    except AttributeError:
-        pass
-    view.Background = [1.0, 1.0, 1.0]
-    return view
-
-
 def set_camera(view, cam, shift):
     pos = list(cam["position"])
     pos[1] += shift  # sideways: a visibly different picture
@@ -154,11 +142,12 @@ def main():
     o = parse(sys.argv)
     sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
     import faceplan_pipeline
+    from faceplan_views import white_render_view
 
     LoadPlugin(o["plugin"])  # into paraview.simple, where faceplan_pipeline finds the filters
     tissue, mandible, roi, cut, fem = faceplan_pipeline.build(o["data"])
     fem.UpdatePipeline()
-    view = make_view()
+    view = white_render_view(IMAGE_SIZE)
     render_case(o["case"], cut, fem, view)
     Render(view)  # paraview.simple resets the camera on a view's first render: set ours after it
     set_camera(view, CASES[o["case"]], o["shift"])
