@@ -46,7 +46,8 @@ RowVectors3d RandomEdit(const PrecomputeRequest& r, std::mt19937& rng) {
   RowVectors3d u(static_cast<Eigen::Index>(r.sets.movable.size()), 3);
   for (size_t k = 0; k < r.sets.movable.size(); ++k) {
     const Eigen::RowVector3d p = r.mesh.points.row(r.sets.movable[k]);
-    u.row(k) << ax * std::sin(f * p(0)), ay * std::cos(f * p(1)), az * (1 + std::sin(f * (p(0) + p(1))));
+    u.row(k) << ax * std::sin(f * p(0)), ay * std::cos(f * p(1)),
+        az * (1 + std::sin(f * (p(0) + p(1))));
   }
   return u;
 }
@@ -60,17 +61,26 @@ int main(int argc, char** argv) {
   int ccxRepeats = 1; // CalculiX runs, median wall time (the machine is noisy, as for our repeats)
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i], value = argv[i + 1];
-    if (key == "--subdivisions") subdivisions = std::stoi(value);
-    else if (key == "--layers") layers = std::stoi(value);
-    else if (key == "--edits") edits = std::stoi(value);
-    else if (key == "--precompute-repeats") precomputeRepeats = std::stoi(value);
-    else if (key == "--reference-repeats") referenceRepeats = std::stoi(value);
-    else if (key == "--method") method = value;
-    else if (key == "--ccx") ccxDir = value;
+    if (key == "--subdivisions")
+      subdivisions = std::stoi(value);
+    else if (key == "--layers")
+      layers = std::stoi(value);
+    else if (key == "--edits")
+      edits = std::stoi(value);
+    else if (key == "--precompute-repeats")
+      precomputeRepeats = std::stoi(value);
+    else if (key == "--reference-repeats")
+      referenceRepeats = std::stoi(value);
+    else if (key == "--method")
+      method = value;
+    else if (key == "--ccx")
+      ccxDir = value;
     else if (key == "--ccx-repeats")
       ccxRepeats = std::max(1, std::stoi(value));
-    else if (key == "--json") jsonPath = value;
-    else if (key == "--response-block-columns") responseBlockColumns = std::max(1, std::stoi(value));
+    else if (key == "--json")
+      jsonPath = value;
+    else if (key == "--response-block-columns")
+      responseBlockColumns = std::max(1, std::stoi(value));
     else {
       std::fprintf(stderr, "unknown option %s\n", key.c_str());
       return 2;
@@ -81,9 +91,12 @@ int main(int argc, char** argv) {
   request.mesh = scene.shell.mesh;
   request.materials = Materials::Uniform(3.0e3, 0.45); // facial soft tissue, Pa and mm
   request.sets = {scene.constrained, scene.movable, scene.kept};
-  if (method == "DenseResponse") request.options.method = SolveMethod::DenseResponse;
-  else if (method == "CachedFactor") request.options.method = SolveMethod::CachedFactor;
-  if (responseBlockColumns > 0) request.options.responseBlockColumns = responseBlockColumns;
+  if (method == "DenseResponse")
+    request.options.method = SolveMethod::DenseResponse;
+  else if (method == "CachedFactor")
+    request.options.method = SolveMethod::CachedFactor;
+  if (responseBlockColumns > 0)
+    request.options.responseBlockColumns = responseBlockColumns;
 
   // Precompute (median of repeats, stage by stage).
   std::shared_ptr<const CondensedSystem> system;
@@ -96,14 +109,16 @@ int main(int argc, char** argv) {
       return 1;
     }
     const SystemInfo info = Describe(*system);
-    for (int k = 0; k < kNumStages; ++k) stageMs[k].push_back(info.precomputeTimings.stages[k].ms);
+    for (int k = 0; k < kNumStages; ++k)
+      stageMs[k].push_back(info.precomputeTimings.stages[k].ms);
   }
   const SystemInfo info = Describe(*system);
 
   // Per-edit updates: new ROI displacements -> kept displacements.
   std::mt19937 rng(42);
   std::vector<RowVectors3d> editInputs;
-  for (int e = 0; e < std::min(edits, 16); ++e) editInputs.push_back(RandomEdit(request, rng));
+  for (int e = 0; e < std::min(edits, 16); ++e)
+    editInputs.push_back(RandomEdit(request, rng));
   std::vector<double> editMs;
   SolveResult result;
   SolveInput input;
@@ -152,19 +167,26 @@ int main(int argc, char** argv) {
       ccx.wallMs = Median(ccxMs);
     if (ccx.ok)
       diffCcx = RelativeMaxDifference(condensedKept, ccx.keptDisplacement);
-    else std::fprintf(stderr, "CalculiX: %s\n", ccx.error.c_str());
+    else
+      std::fprintf(stderr, "CalculiX: %s\n", ccx.error.c_str());
   }
 
   const double precomputeMs = Median(stageMs[static_cast<int>(Stage::Total)]);
   const double editMedian = Median(editMs), referenceMedian = Median(referenceMs);
-  std::printf("tets %lld  nodes %lld  free DOFs %lld  kept DOFs %lld  ROI DOFs %lld  method %s (%s)\n",
-              static_cast<long long>(request.mesh.numTets()), static_cast<long long>(request.mesh.numPoints()),
-              info.freeDofs, info.keptDofs, info.roiDofs, MethodName(info.method), info.choiceReason.c_str());
-  std::printf("precompute %.1f ms (median of %d)  per-edit %.3f ms (median of %d, p10 %.3f, p90 %.3f)\n",
-              precomputeMs, precomputeRepeats, editMedian, edits, Quantile(editMs, 0.1), Quantile(editMs, 0.9));
-  std::printf("reference full solve %.1f ms  ratio reference/edit %.0f  peak RSS (condensed) %.0f MB, (all) %.0f MB\n",
+  std::printf(
+      "tets %lld  nodes %lld  free DOFs %lld  kept DOFs %lld  ROI DOFs %lld  method %s (%s)\n",
+      static_cast<long long>(request.mesh.numTets()),
+      static_cast<long long>(request.mesh.numPoints()), info.freeDofs, info.keptDofs, info.roiDofs,
+      MethodName(info.method), info.choiceReason.c_str());
+  std::printf(
+      "precompute %.1f ms (median of %d)  per-edit %.3f ms (median of %d, p10 %.3f, p90 %.3f)\n",
+      precomputeMs, precomputeRepeats, editMedian, edits, Quantile(editMs, 0.1),
+      Quantile(editMs, 0.9));
+  std::printf("reference full solve %.1f ms  ratio reference/edit %.0f  peak RSS (condensed) %.0f "
+              "MB, (all) %.0f MB\n",
               referenceMedian, referenceMedian / editMedian, peakCondensedMB, PeakRssMB());
-  std::printf("max rel. difference to reference %.2e, worst residual %.2e\n", diffReference, worstResidual);
+  std::printf("max rel. difference to reference %.2e, worst residual %.2e\n", diffReference,
+              worstResidual);
   std::printf("ordering: %s; response: %s\n", info.ordering.c_str(), info.responsePath.c_str());
   // The stage rows hold the waits for these threads (last precompute's figures).
   std::printf("beside the stages: ordering thread %.1f ms (%s), mesh-check thread %.1f ms\n",
@@ -180,14 +202,16 @@ int main(int argc, char** argv) {
   if (!jsonPath.empty()) {
     std::ofstream out(jsonPath);
     out.precision(6);
-    out << "{\n  \"tets\": " << request.mesh.numTets() << ", \"nodes\": " << request.mesh.numPoints()
-        << ", \"subdivisions\": " << subdivisions << ", \"layers\": " << layers
-        << ",\n  \"free_dofs\": " << info.freeDofs << ", \"kept_dofs\": " << info.keptDofs
-        << ", \"roi_dofs\": " << info.roiDofs << ", \"factor_nonzeros\": " << info.factorNonzeros
-        << ",\n  \"method\": \"" << MethodName(info.method) << "\", \"choice_reason\": \"" << info.choiceReason
+    out << "{\n  \"tets\": " << request.mesh.numTets()
+        << ", \"nodes\": " << request.mesh.numPoints() << ", \"subdivisions\": " << subdivisions
+        << ", \"layers\": " << layers << ",\n  \"free_dofs\": " << info.freeDofs
+        << ", \"kept_dofs\": " << info.keptDofs << ", \"roi_dofs\": " << info.roiDofs
+        << ", \"factor_nonzeros\": " << info.factorNonzeros << ",\n  \"method\": \""
+        << MethodName(info.method) << "\", \"choice_reason\": \"" << info.choiceReason
         << "\",\n  \"precompute_repeats\": " << precomputeRepeats << ", \"precompute_stage_ms\": {";
     for (int k = 0; k < kNumStages; ++k)
-      out << (k ? ", " : "") << "\"" << StageName(static_cast<Stage>(k)) << "\": " << Median(stageMs[k]);
+      out << (k ? ", " : "") << "\"" << StageName(static_cast<Stage>(k))
+          << "\": " << Median(stageMs[k]);
     out << "},\n  \"edits\": " << edits << ", \"edit_ms_median\": " << editMedian
         << ", \"edit_ms_p10\": " << Quantile(editMs, 0.1)
         << ", \"edit_ms_p90\": " << Quantile(editMs, 0.9)

@@ -11,20 +11,24 @@
 
 namespace faceplan::cuda::detail {
 
-inline std::string DescribeCudaError(cudaError_t code, const char* call, const char* file, int line) {
+inline std::string DescribeCudaError(cudaError_t code, const char* call, const char* file,
+                                     int line) {
   std::string where = std::string(file);
   const auto slash = where.find_last_of('/');
-  if (slash != std::string::npos) where = where.substr(slash + 1);
+  if (slash != std::string::npos)
+    where = where.substr(slash + 1);
   return std::string("CUDA error ") + cudaGetErrorName(code) + " (" + cudaGetErrorString(code) +
          ") in " + call + " at " + where + ":" + std::to_string(line);
 }
 
-inline std::string DescribeCublasError(cublasStatus_t code, const char* call, const char* file, int line) {
+inline std::string DescribeCublasError(cublasStatus_t code, const char* call, const char* file,
+                                       int line) {
   std::string where = std::string(file);
   const auto slash = where.find_last_of('/');
-  if (slash != std::string::npos) where = where.substr(slash + 1);
-  return std::string("cuBLAS error ") + cublasGetStatusName(code) + " (" + cublasGetStatusString(code) +
-         ") in " + call + " at " + where + ":" + std::to_string(line);
+  if (slash != std::string::npos)
+    where = where.substr(slash + 1);
+  return std::string("cuBLAS error ") + cublasGetStatusName(code) + " (" +
+         cublasGetStatusString(code) + ") in " + call + " at " + where + ":" + std::to_string(line);
 }
 
 } // namespace faceplan::cuda::detail
@@ -33,7 +37,8 @@ inline std::string DescribeCublasError(cublasStatus_t code, const char* call, co
   do {                                                                                             \
     const cudaError_t fpCudaStatus_ = (expr);                                                      \
     if (fpCudaStatus_ != cudaSuccess) {                                                            \
-      error = ::faceplan::cuda::detail::DescribeCudaError(fpCudaStatus_, #expr, __FILE__, __LINE__); \
+      error =                                                                                      \
+          ::faceplan::cuda::detail::DescribeCudaError(fpCudaStatus_, #expr, __FILE__, __LINE__);   \
       return false;                                                                                \
     }                                                                                              \
   } while (0)
@@ -42,7 +47,8 @@ inline std::string DescribeCublasError(cublasStatus_t code, const char* call, co
   do {                                                                                             \
     const cublasStatus_t fpCublasStatus_ = (expr);                                                 \
     if (fpCublasStatus_ != CUBLAS_STATUS_SUCCESS) {                                                \
-      error = ::faceplan::cuda::detail::DescribeCublasError(fpCublasStatus_, #expr, __FILE__, __LINE__); \
+      error = ::faceplan::cuda::detail::DescribeCublasError(fpCublasStatus_, #expr, __FILE__,      \
+                                                            __LINE__);                             \
       return false;                                                                                \
     }                                                                                              \
   } while (0)

@@ -1,19 +1,19 @@
 #include "CudaDenseResponse.h"
 
-#include "SparseSolver/CholmodViews.h"
-#include "SparseSolver/SupernodalTree.h"
-#include "CudaCheck.h"
-#include "CudaInternal.h"
-#include "CudaKernels.h"
 #include "Common/InversePermutation.h"
 #include "Common/ParallelFor.h"
 #include "Common/StageTimings.h"
+#include "CudaCheck.h"
+#include "CudaInternal.h"
+#include "CudaKernels.h"
+#include "SparseSolver/CholmodViews.h"
+#include "SparseSolver/SupernodalTree.h"
 
 #include <cholmod.h>
-#include <future>
-#include <utility>
 #include <cusolverDn.h>
 #include <cusparse.h>
+#include <future>
+#include <utility>
 
 #include <algorithm>
 #include <cmath>
@@ -25,7 +25,7 @@
   do {                                                                                             \
     const cusparseStatus_t fpSparseStatus_ = (expr);                                               \
     if (fpSparseStatus_ != CUSPARSE_STATUS_SUCCESS) {                                              \
-      error = std::string("cuSPARSE error ") + cusparseGetErrorName(fpSparseStatus_) + " (" +       \
+      error = std::string("cuSPARSE error ") + cusparseGetErrorName(fpSparseStatus_) + " (" +      \
               cusparseGetErrorString(fpSparseStatus_) + ") in " #expr;                             \
       return false;                                                                                \
     }                                                                                              \
@@ -51,9 +51,13 @@ SupernodalFactorView ViewOfFactor(const cholmod_factor* L) {
   v.perm = static_cast<const int*>(L->Perm);
   return v;
 }
-template <class T> bool Upload(DeviceArray& dst, const T* src, size_t count, cudaStream_t stream, std::string& error) {
-  if (!dst.ensure(sizeof(T) * std::max<size_t>(count, 1), error)) return false;
-  if (count > 0) FP_CUDA_TRY(cudaMemcpyAsync(dst.as<T>(), src, sizeof(T) * count, cudaMemcpyHostToDevice, stream));
+template <class T>
+bool Upload(DeviceArray& dst, const T* src, size_t count, cudaStream_t stream, std::string& error) {
+  if (!dst.ensure(sizeof(T) * std::max<size_t>(count, 1), error))
+    return false;
+  if (count > 0)
+    FP_CUDA_TRY(
+        cudaMemcpyAsync(dst.as<T>(), src, sizeof(T) * count, cudaMemcpyHostToDevice, stream));
   return true;
 }
 } // namespace
@@ -105,7 +109,8 @@ Status SupernodalCholesky::factor(const SparseMatrix& upper) {
   do {                                                                                             \
     const cusolverStatus_t fpSolverStatus_ = (expr);                                               \
     if (fpSolverStatus_ != CUSOLVER_STATUS_SUCCESS) {                                              \
-      error = "cuSOLVER error " + std::to_string(static_cast<int>(fpSolverStatus_)) + " in " #expr; \
+      error =                                                                                      \
+          "cuSOLVER error " + std::to_string(static_cast<int>(fpSolverStatus_)) + " in " #expr;    \
       return false;                                                                                \
     }                                                                                              \
   } while (0)
@@ -116,9 +121,12 @@ struct FactorResources {
   cublasHandle_t blas = nullptr;
   cusolverDnHandle_t solver = nullptr;
   ~FactorResources() {
-    if (solver) cusolverDnDestroy(solver);
-    if (blas) cublasDestroy(blas);
-    if (stream) cudaStreamDestroy(stream);
+    if (solver)
+      cusolverDnDestroy(solver);
+    if (blas)
+      cublasDestroy(blas);
+    if (stream)
+      cudaStreamDestroy(stream);
   }
 };
 } // namespace
@@ -145,15 +153,17 @@ Status SupernodalCholesky::factorOnGpu(const SparseMatrix& upper, bool hostCopy)
 
 namespace detail {
 
-bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common, DeviceArray& deviceX,
-                         bool hostCopy, double& factorizeMs, double& downloadMs, std::string& error) {
+bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
+                         DeviceArray& deviceX, bool hostCopy, double& factorizeMs,
+                         double& downloadMs, std::string& error) {
   factorizeMs = downloadMs = 0.0;
   if (!upper.isCompressed() || upper.rows() != upper.cols() || !L || !common ||
       L->n != static_cast<size_t>(upper.rows())) {
     error = "GPU factorization: the matrix must be square, compressed and match the analysis";
     return false;
   }
-  if (!InitDevice(error)) return false;
+  if (!InitDevice(error))
+    return false;
   StageClock clock;
   if (!L->is_super || L->itype != CHOLMOD_INT) {
     error = "CHOLMOD's analysis is not supernodal with 32-bit indices";
@@ -170,13 +180,15 @@ bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_c
   int maxCol = 1, maxRow = 1;
   long long maxUpdate = 1;
   for (int t = 0; t < nsuper; ++t) {
-    for (int k = super[t]; k < super[t + 1]; ++k) colSuper[k] = t;
+    for (int k = super[t]; k < super[t + 1]; ++k)
+      colSuper[k] = t;
     const int nscol = super[t + 1] - super[t], nsrow = pi[t + 1] - pi[t];
     maxCol = std::max(maxCol, nscol);
     maxRow = std::max(maxRow, nsrow);
     maxUpdate = std::max(maxUpdate, static_cast<long long>(nsrow - nscol) * (nsrow - nscol));
   }
-  for (int t = 0; t <= nsuper; ++t) px64[t] = px[t];
+  for (int t = 0; t <= nsuper; ++t)
+    px64[t] = px[t];
   const size_t xsize = static_cast<size_t>(px[nsuper]);
 
   FactorResources r;
@@ -186,13 +198,16 @@ bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_c
   FP_CUSOLVER_TRY(cusolverDnCreate(&r.solver));
   FP_CUSOLVER_TRY(cusolverDnSetStream(r.solver, r.stream));
   DeviceArray dSuper, dPi, dPx, dS, dColSuper, dPinv, dStart, dRow, dVal, dC, dWork, dInfo;
-  if (!Upload(dSuper, super, nsuper + 1, r.stream, error) || !Upload(dPi, pi, nsuper + 1, r.stream, error) ||
+  if (!Upload(dSuper, super, nsuper + 1, r.stream, error) ||
+      !Upload(dPi, pi, nsuper + 1, r.stream, error) ||
       !Upload(dPx, px64.data(), px64.size(), r.stream, error) ||
-      !Upload(dS, static_cast<const int*>(L->s), static_cast<size_t>(pi[nsuper]), r.stream, error) ||
+      !Upload(dS, static_cast<const int*>(L->s), static_cast<size_t>(pi[nsuper]), r.stream,
+              error) ||
       !Upload(dColSuper, colSuper.data(), colSuper.size(), r.stream, error) ||
       !Upload(dPinv, pinv.data(), pinv.size(), r.stream, error) ||
       !Upload(dStart, upper.outerIndexPtr(), static_cast<size_t>(n) + 1, r.stream, error) ||
-      !Upload(dRow, upper.innerIndexPtr(), static_cast<size_t>(upper.nonZeros()), r.stream, error) ||
+      !Upload(dRow, upper.innerIndexPtr(), static_cast<size_t>(upper.nonZeros()), r.stream,
+              error) ||
       !Upload(dVal, upper.valuePtr(), static_cast<size_t>(upper.nonZeros()), r.stream, error))
     return false;
   if (!deviceX.ensure(sizeof(double) * std::max<size_t>(xsize, 1), error) ||
@@ -200,9 +215,10 @@ bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_c
       !dInfo.ensure(sizeof(int) * std::max(nsuper, 1), error))
     return false;
   int lwork = 0;
-  FP_CUSOLVER_TRY(cusolverDnDpotrf_bufferSize(r.solver, CUBLAS_FILL_MODE_LOWER, maxCol, deviceX.as<double>(),
-                                              maxRow, &lwork));
-  if (!dWork.ensure(sizeof(double) * (2 * static_cast<size_t>(std::max(lwork, 1)) + 256), error)) return false;
+  FP_CUSOLVER_TRY(cusolverDnDpotrf_bufferSize(r.solver, CUBLAS_FILL_MODE_LOWER, maxCol,
+                                              deviceX.as<double>(), maxRow, &lwork));
+  if (!dWork.ensure(sizeof(double) * (2 * static_cast<size_t>(std::max(lwork, 1)) + 256), error))
+    return false;
   double* Lx = deviceX.as<double>();
   FP_CUDA_TRY(cudaMemsetAsync(Lx, 0, sizeof(double) * xsize, r.stream));
   FP_CUDA_TRY(cudaMemsetAsync(dInfo.as<int>(), 0, sizeof(int) * std::max(nsuper, 1), r.stream));
@@ -212,25 +228,28 @@ bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_c
   st.px = dPx.as<std::int64_t>();
   st.s = dS.as<int>();
   st.colSuper = dColSuper.as<int>();
-  FP_CUDA_TRY(LaunchAssembleSupernodal(dStart.as<int>(), dRow.as<int>(), dVal.as<double>(), n, dPinv.as<int>(), st,
-                                       Lx, r.stream));
+  FP_CUDA_TRY(LaunchAssembleSupernodal(dStart.as<int>(), dRow.as<int>(), dVal.as<double>(), n,
+                                       dPinv.as<int>(), st, Lx, r.stream));
   const double one = 1.0, zero = 0.0;
   for (int t = 0; t < nsuper; ++t) {
     const int nscol = super[t + 1] - super[t], nsrow = pi[t + 1] - pi[t], off = nsrow - nscol;
     double* block = Lx + px64[t];
-    FP_CUSOLVER_TRY(cusolverDnDpotrf(r.solver, CUBLAS_FILL_MODE_LOWER, nscol, block, nsrow, dWork.as<double>(),
-                                     2 * std::max(lwork, 1), dInfo.as<int>() + t));
+    FP_CUSOLVER_TRY(cusolverDnDpotrf(r.solver, CUBLAS_FILL_MODE_LOWER, nscol, block, nsrow,
+                                     dWork.as<double>(), 2 * std::max(lwork, 1),
+                                     dInfo.as<int>() + t));
     if (off > 0) {
-      FP_CUBLAS_TRY(cublasDtrsm(r.blas, CUBLAS_SIDE_RIGHT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_T, CUBLAS_DIAG_NON_UNIT,
-                                off, nscol, &one, block, nsrow, block + nscol, nsrow));
-      FP_CUBLAS_TRY(cublasDsyrk(r.blas, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N, off, nscol, &one, block + nscol, nsrow,
-                                &zero, dC.as<double>(), off));
-      FP_CUDA_TRY(LaunchScatterUpdate(dC.as<double>(), off, dS.as<int>() + pi[t] + nscol, st, Lx, r.stream));
+      FP_CUBLAS_TRY(cublasDtrsm(r.blas, CUBLAS_SIDE_RIGHT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_T,
+                                CUBLAS_DIAG_NON_UNIT, off, nscol, &one, block, nsrow, block + nscol,
+                                nsrow));
+      FP_CUBLAS_TRY(cublasDsyrk(r.blas, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N, off, nscol, &one,
+                                block + nscol, nsrow, &zero, dC.as<double>(), off));
+      FP_CUDA_TRY(LaunchScatterUpdate(dC.as<double>(), off, dS.as<int>() + pi[t] + nscol, st, Lx,
+                                      r.stream));
     }
   }
   std::vector<int> info(std::max(nsuper, 1));
-  FP_CUDA_TRY(cudaMemcpyAsync(info.data(), dInfo.as<int>(), sizeof(int) * info.size(), cudaMemcpyDeviceToHost,
-                              r.stream));
+  FP_CUDA_TRY(cudaMemcpyAsync(info.data(), dInfo.as<int>(), sizeof(int) * info.size(),
+                              cudaMemcpyDeviceToHost, r.stream));
   FP_CUDA_TRY(cudaStreamSynchronize(r.stream));
   factorizeMs = clock.lapMs();
   for (int t = 0; t < nsuper; ++t)
@@ -241,7 +260,8 @@ bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor* L, cholmod_c
       return false;
     }
   if (hostCopy) {
-    if (!AllocateHostFactor(L, common, error) || !DownloadFactor(L, deviceX, r.stream, error)) return false;
+    if (!AllocateHostFactor(L, common, error) || !DownloadFactor(L, deviceX, r.stream, error))
+      return false;
     downloadMs = clock.lapMs();
   }
   return true;
@@ -256,20 +276,24 @@ bool AllocateHostFactor(cholmod_factor* L, cholmod_common* common, std::string& 
   return true;
 }
 
-bool DownloadFactor(cholmod_factor* L, const DeviceArray& deviceX, cudaStream_t stream, std::string& error) {
+bool DownloadFactor(cholmod_factor* L, const DeviceArray& deviceX, cudaStream_t stream,
+                    std::string& error) {
   const size_t xsize = static_cast<size_t>(static_cast<const int*>(L->px)[L->nsuper]);
   if (!L->x || L->xsize != xsize) {
     error = "internal: the host factor is not allocated";
     return false;
   }
-  if (!DownloadLarge(L->x, deviceX.as<double>(), sizeof(double) * xsize, stream, error)) return false;
+  if (!DownloadLarge(L->x, deviceX.as<double>(), sizeof(double) * xsize, stream, error))
+    return false;
   L->minor = L->n;
   return true;
 }
 
 } // namespace detail
 
-void SupernodalCholesky::releaseDevice() { impl_->deviceX.release(); }
+void SupernodalCholesky::releaseDevice() {
+  impl_->deviceX.release();
+}
 
 Status SupernodalCholesky::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
   if (!impl_->hostNumeric)
@@ -279,16 +303,24 @@ Status SupernodalCholesky::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) c
 
 SupernodalFactorView SupernodalCholesky::view() const {
   const cholmod_factor* L = impl_->factor.cholmodFactor();
-  if (!L || !L->is_super) return SupernodalFactorView();
+  if (!L || !L->is_super)
+    return SupernodalFactorView();
   SupernodalFactorView v = ViewOfFactor(L);
-  if (!impl_->hostNumeric) v.x = nullptr;
+  if (!impl_->hostNumeric)
+    v.x = nullptr;
   v.deviceX = impl_->deviceX.capacity() > 0 ? impl_->deviceX.as<double>() : nullptr;
   return v;
 }
 
-double SupernodalCholesky::analyzeMs() const { return impl_->analyzeMs; }
-double SupernodalCholesky::factorizeMs() const { return impl_->factorizeMs; }
-double SupernodalCholesky::downloadMs() const { return impl_->downloadMs; }
+double SupernodalCholesky::analyzeMs() const {
+  return impl_->analyzeMs;
+}
+double SupernodalCholesky::factorizeMs() const {
+  return impl_->factorizeMs;
+}
+double SupernodalCholesky::downloadMs() const {
+  return impl_->downloadMs;
+}
 double SupernodalCholesky::factorNonzeros() const {
   return impl_->factor.factorNonzeros();
 }
@@ -317,13 +349,17 @@ struct SweepStreams {
   std::vector<cudaEvent_t> streamDone; // per extra stream, at the end of a sweep
   ~SweepStreams() {
     for (cublasHandle_t h : blas)
-      if (h) cublasDestroy(h);
+      if (h)
+        cublasDestroy(h);
     for (cudaEvent_t e : done)
-      if (e) cudaEventDestroy(e);
+      if (e)
+        cudaEventDestroy(e);
     for (cudaEvent_t e : streamDone)
-      if (e) cudaEventDestroy(e);
+      if (e)
+        cudaEventDestroy(e);
     for (cudaStream_t q : stream)
-      if (q) cudaStreamDestroy(q);
+      if (q)
+        cudaStreamDestroy(q);
   }
 };
 
@@ -335,13 +371,19 @@ struct Resources {
   cusparseSpMatDescr_t K = nullptr;
   cudaEvent_t ev[8] = {};
   ~Resources() {
-    if (K) cusparseDestroySpMat(K);
-    if (sparse) cusparseDestroy(sparse);
-    if (blas) cublasDestroy(blas);
+    if (K)
+      cusparseDestroySpMat(K);
+    if (sparse)
+      cusparseDestroy(sparse);
+    if (blas)
+      cublasDestroy(blas);
     for (cudaEvent_t& e : ev)
-      if (e) cudaEventDestroy(e);
-    if (stream) cudaStreamDestroy(stream);
-    if (download) cudaStreamDestroy(download);
+      if (e)
+        cudaEventDestroy(e);
+    if (stream)
+      cudaStreamDestroy(stream);
+    if (download)
+      cudaStreamDestroy(download);
   }
 };
 
@@ -365,9 +407,11 @@ void PermutedFullCsr(const SparseMatrix& upper, const std::vector<int>& pinv, Pe
     for (int p = outer[j]; p < outer[j + 1]; ++p) {
       const int i = inner[p];
       ++rowStart[pinv[i] + 1];
-      if (i != j) ++rowStart[pinv[j] + 1];
+      if (i != j)
+        ++rowStart[pinv[j] + 1];
     }
-  for (int r = 0; r < n; ++r) rowStart[r + 1] += rowStart[r];
+  for (int r = 0; r < n; ++r)
+    rowStart[r + 1] += rowStart[r];
   col.resize(rowStart[n]);
   val.resize(rowStart[n]);
   std::vector<int> fill(rowStart.begin(), rowStart.end() - 1);
@@ -386,8 +430,10 @@ void PermutedFullCsr(const SparseMatrix& upper, const std::vector<int>& pinv, Pe
     for (std::int64_t r = begin; r < end; ++r) {
       const int s = rowStart[r], e = rowStart[r + 1];
       row.clear();
-      for (int k = s; k < e; ++k) row.emplace_back(col[k], val[k]);
-      std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (int k = s; k < e; ++k)
+        row.emplace_back(col[k], val[k]);
+      std::sort(row.begin(), row.end(),
+                [](const auto& x, const auto& y) { return x.first < y.first; });
       for (int k = s; k < e; ++k) {
         col[k] = row[k - s].first;
         val[k] = row[k - s].second;
@@ -405,9 +451,10 @@ bool Elapsed(cudaEvent_t a, cudaEvent_t b, double& accumulate, std::string& erro
 
 // `prepared`: K_perm already made (FactorAndBuildResponse makes it while the GPU factorizes), or
 // null to make it here.
-bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseMatrix& kfr, Eigen::Index keptRowsIn,
-           Eigen::MatrixXd* responseHost, std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail,
-           std::string& error, int maxColumnsPerPass, PermutedCsr* prepared) {
+bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseMatrix& kfr,
+           Eigen::Index keptRowsIn, Eigen::MatrixXd* responseHost,
+           std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail, std::string& error,
+           int maxColumnsPerPass, PermutedCsr* prepared) {
   StageClock hostClock;
   const int n = L.n;
   if (n <= 0 || !L.super || !L.pi || !L.px || !L.s || !(L.x || L.deviceX) || !L.perm) {
@@ -421,27 +468,32 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   }
   const int keptRows = static_cast<int>(keptRowsIn);
   const int roi = static_cast<int>(kfr.cols());
-  if (!detail::InitDevice(error)) return false;
+  if (!detail::InitDevice(error))
+    return false;
 
-  if (responseHost) responseHost->resize(keptRows, roi);
+  if (responseHost)
+    responseHost->resize(keptRows, roi);
   auto finishEmpty = [&]() -> bool {
-    if (responseHost) responseHost->setZero();
+    if (responseHost)
+      responseHost->setZero();
     if (op) {
       auto cudaOp = std::make_unique<CudaResponse>();
-      if (!cudaOp->init(Eigen::MatrixXd::Zero(keptRows, roi), error)) return false;
+      if (!cudaOp->init(Eigen::MatrixXd::Zero(keptRows, roi), error))
+        return false;
       *op = std::move(cudaOp);
     }
     return true;
   };
-  if (keptRows == 0 || roi == 0) return finishEmpty();
+  if (keptRows == 0 || roi == 0)
+    return finishEmpty();
   // The host response's pages are first touched here, on every core, while the GPU sweeps run:
   // faulted in by the download itself, 4.6 GB at 1M cells made the copy run at a third of the
   // link's rate. The future waits in its destructor, so no exit path leaves it running.
   std::shared_future<void> hostPagesTouched;
   if (responseHost)
     hostPagesTouched = std::async(std::launch::async, [responseHost]() {
-                         detail::TouchPagesInParallel(responseHost->data(),
-                                                      static_cast<std::int64_t>(responseHost->size()));
+                         detail::TouchPagesInParallel(
+                             responseHost->data(), static_cast<std::int64_t>(responseHost->size()));
                        }).share();
 
   // Host-side structure: inverse permutation, largest off-diagonal block, flops.
@@ -453,7 +505,8 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   // trailing block alone.
   const SupernodalStructure tree{n, L.nsuper, L.super, L.pi, L.s};
   std::vector<int> coupledRows(kfr.innerIndexPtr(), kfr.innerIndexPtr() + kfr.nonZeros());
-  for (int& row : coupledRows) row = pinv[row];
+  for (int& row : coupledRows)
+    row = pinv[row];
   std::vector<char> reached;
   if (const Status marked = MarkSupernodesAbove(tree, coupledRows, reached); !marked) {
     error = marked.message;
@@ -470,7 +523,8 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   Resources r;
   FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.stream, cudaStreamNonBlocking));
   FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.download, cudaStreamNonBlocking));
-  for (cudaEvent_t& e : r.ev) FP_CUDA_TRY(cudaEventCreate(&e));
+  for (cudaEvent_t& e : r.ev)
+    FP_CUDA_TRY(cudaEventCreate(&e));
   FP_CUBLAS_TRY(cublasCreate(&r.blas));
   FP_CUBLAS_TRY(cublasSetStream(r.blas, r.stream));
   FP_CUBLAS_TRY(cublasSetPointerMode(r.blas, CUBLAS_POINTER_MODE_HOST));
@@ -497,7 +551,8 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       }
       if (p >= 0) {
         parentHasChild[p] = 1;
-        if (sweepStream[s] != sweepStream[p]) needsEvent[p] = 1;
+        if (sweepStream[s] != sweepStream[p])
+          needsEvent[p] = 1;
       }
     }
   }
@@ -514,17 +569,20 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
     FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.streamDone[q], cudaEventDisableTiming));
   }
   for (int s = 0; s < L.nsuper; ++s)
-    if (needsEvent[s]) FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.done[s], cudaEventDisableTiming));
+    if (needsEvent[s])
+      FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.done[s], cudaEventDisableTiming));
   auto streamFor = [&](int q) { return q == 0 ? r.stream : sweep.stream[q]; };
   auto blasFor = [&](int q) { return q == 0 ? r.blas : sweep.blas[q]; };
 
   // Fixed device data: factor, permutation, K_FR, K_perm (for the residual), the response.
-  DeviceArray dLx, dLs, dPinv, dFrStart, dFrRow, dFrVal, dKStart, dKCol, dKVal, dResponse, dY, dT, dR, dSums, dSpmmBuffer;
+  DeviceArray dLx, dLs, dPinv, dFrStart, dFrRow, dFrVal, dKStart, dKCol, dKVal, dResponse, dY, dT,
+      dR, dSums, dSpmmBuffer;
   const size_t lxCount = static_cast<size_t>(L.px[L.nsuper]);
   const size_t lsCount = static_cast<size_t>(L.pi[L.nsuper]);
   PermutedCsr madeHere;
   PermutedCsr& kPerm = prepared ? *prepared : madeHere;
-  if (kff && !prepared) PermutedFullCsr(*kff, pinv, madeHere);
+  if (kff && !prepared)
+    PermutedFullCsr(*kff, pinv, madeHere);
   if (kff && kPerm.rowStart.size() != static_cast<size_t>(n) + 1) {
     error = "internal: the prepared K_perm does not match the factor";
     return false;
@@ -535,7 +593,8 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   detail.hostPrepareMs = hostClock.lapMs();
 
   FP_CUDA_TRY(cudaEventRecord(r.ev[0], r.stream));
-  if ((!L.deviceX && !Upload(dLx, L.x, lxCount, r.stream, error)) || !Upload(dLs, L.s, lsCount, r.stream, error) ||
+  if ((!L.deviceX && !Upload(dLx, L.x, lxCount, r.stream, error)) ||
+      !Upload(dLs, L.s, lsCount, r.stream, error) ||
       !Upload(dPinv, pinv.data(), pinv.size(), r.stream, error) ||
       !Upload(dFrStart, kfr.outerIndexPtr(), static_cast<size_t>(roi) + 1, r.stream, error) ||
       !Upload(dFrRow, kfr.innerIndexPtr(), static_cast<size_t>(kfr.nonZeros()), r.stream, error) ||
@@ -547,7 +606,8 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
     return false;
   FP_CUDA_TRY(cudaEventRecord(r.ev[1], r.stream));
   hostClock.lapMs();
-  if (!dResponse.ensure(sizeof(double) * static_cast<size_t>(keptRows) * roi, error)) return false;
+  if (!dResponse.ensure(sizeof(double) * static_cast<size_t>(keptRows) * roi, error))
+    return false;
 
   // Columns per pass: Y (n x nb) and T (maxOff x nb per sweep stream); R is fixed (n x 512).
   size_t freeBytes = 0, totalBytes = 0;
@@ -567,19 +627,25 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
     return false;
   }
   int nbMax = static_cast<int>(std::min<long long>(roi, fit));
-  if (maxColumnsPerPass > 0) nbMax = std::min(nbMax, maxColumnsPerPass);
+  if (maxColumnsPerPass > 0)
+    nbMax = std::min(nbMax, maxColumnsPerPass);
   detail.columnsPerBlock = nbMax;
   const size_t yCount = static_cast<size_t>(n) * nbMax;
   if (!dY.ensure(sizeof(double) * yCount, error) ||
-      !dT.ensure(sizeof(double) * std::max<size_t>(static_cast<size_t>(streamCount) * maxOff * nbMax, 1), error) ||
+      !dT.ensure(sizeof(double) *
+                     std::max<size_t>(static_cast<size_t>(streamCount) * maxOff * nbMax, 1),
+                 error) ||
       !dSums.ensure(sizeof(double) * nbMax, error))
     return false;
   if (kff) {
-    if (!dR.ensure(sizeof(double) * static_cast<size_t>(n) * std::min(residualColumns, nbMax), error)) return false;
+    if (!dR.ensure(sizeof(double) * static_cast<size_t>(n) * std::min(residualColumns, nbMax),
+                   error))
+      return false;
     FP_CUSPARSE_TRY(cusparseCreate(&r.sparse));
     FP_CUSPARSE_TRY(cusparseSetStream(r.sparse, r.stream));
-    FP_CUSPARSE_TRY(cusparseCreateCsr(&r.K, n, n, static_cast<int64_t>(kCol.size()), dKStart.as<int>(),
-                                      dKCol.as<int>(), dKVal.as<double>(), CUSPARSE_INDEX_32I, CUSPARSE_INDEX_32I,
+    FP_CUSPARSE_TRY(cusparseCreateCsr(&r.K, n, n, static_cast<int64_t>(kCol.size()),
+                                      dKStart.as<int>(), dKCol.as<int>(), dKVal.as<double>(),
+                                      CUSPARSE_INDEX_32I, CUSPARSE_INDEX_32I,
                                       CUSPARSE_INDEX_BASE_ZERO, CUDA_R_64F));
   }
 
@@ -610,8 +676,9 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       StageClock own;
       hostPagesTouched.wait();
       hostTouchWaitMs += own.lapMs();
-      const bool ok = detail::DownloadLarge(responseHost->data() + offset, dResponse.as<double>() + offset, bytes,
-                                            r.download, downloadError);
+      const bool ok =
+          detail::DownloadLarge(responseHost->data() + offset, dResponse.as<double>() + offset,
+                                bytes, r.download, downloadError);
       downloadOwnMs += own.lapMs();
       return ok;
     });
@@ -626,7 +693,8 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
     FP_CUDA_TRY(cudaEventRecord(r.ev[2], r.stream));
     // Forward: L Z = Y. Rows of a supernode are columns of the cuBLAS view (nb x n, ld nb).
     for (int s = 0; s < L.nsuper; ++s) {
-      if (!reached[s]) continue; // Y stays zero there
+      if (!reached[s])
+        continue; // Y stays zero there
       const int k1 = L.super[s], nscol = L.super[s + 1] - k1, nsrow = L.pi[s + 1] - L.pi[s];
       const int off = nsrow - nscol;
       const double* block = Lx + L.px[s];
@@ -636,12 +704,14 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       if (off > 0) {
         FP_CUBLAS_TRY(cublasDgemm(r.blas, CUBLAS_OP_N, CUBLAS_OP_T, nb, off, nscol, &one, Y1, nb,
                                   block + nscol, nsrow, &zero, T, nb));
-        FP_CUDA_TRY(detail::LaunchScatterSubtractRows(Y, T, Ls + L.pi[s] + nscol, off, nb, r.stream));
+        FP_CUDA_TRY(
+            detail::LaunchScatterSubtractRows(Y, T, Ls + L.pi[s] + nscol, off, nb, r.stream));
       }
     }
     FP_CUDA_TRY(cudaEventRecord(r.ev[3], r.stream));
     // Backward: L^T X = Z, the subtrees on their streams (SweepStreams).
-    for (int q = 1; q < streamCount; ++q) FP_CUDA_TRY(cudaStreamWaitEvent(sweep.stream[q], r.ev[3], 0));
+    for (int q = 1; q < streamCount; ++q)
+      FP_CUDA_TRY(cudaStreamWaitEvent(sweep.stream[q], r.ev[3], 0));
     for (int s = L.nsuper - 1; s >= 0; --s) {
       const int k1 = L.super[s], nscol = L.super[s + 1] - k1, nsrow = L.pi[s + 1] - L.pi[s];
       const int off = nsrow - nscol;
@@ -660,15 +730,16 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       }
       FP_CUBLAS_TRY(cublasDtrsm(blas, CUBLAS_SIDE_RIGHT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N,
                                 CUBLAS_DIAG_NON_UNIT, nb, nscol, &one, block, nsrow, X1, nb));
-      if (needsEvent[s]) FP_CUDA_TRY(cudaEventRecord(sweep.done[s], stream));
+      if (needsEvent[s])
+        FP_CUDA_TRY(cudaEventRecord(sweep.done[s], stream));
     }
     for (int q = 1; q < streamCount; ++q) {
       FP_CUDA_TRY(cudaEventRecord(sweep.streamDone[q], sweep.stream[q]));
       FP_CUDA_TRY(cudaStreamWaitEvent(r.stream, sweep.streamDone[q], 0));
     }
     FP_CUDA_TRY(cudaEventRecord(r.ev[4], r.stream));
-    FP_CUDA_TRY(detail::LaunchExtractResponse(Y, dPinv.as<int>(), keptRows, nb, c0, dResponse.as<double>(),
-                                              keptRows, r.stream));
+    FP_CUDA_TRY(detail::LaunchExtractResponse(Y, dPinv.as<int>(), keptRows, nb, c0,
+                                              dResponse.as<double>(), keptRows, r.stream));
     FP_CUDA_TRY(cudaEventRecord(r.ev[5], r.stream));
     if (responseHost) {
       if (download.valid() && !download.get()) {
@@ -685,41 +756,54 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
         const int cols = std::min(residualColumns, nb - j0);
         // Columns j0.. of the row-major Y (leading dimension nb) into R (n x cols, row-major).
         cusparseDnMatDescr_t dnY = nullptr, dnR = nullptr;
-        FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnY, n, cols, nb, Y + j0, CUDA_R_64F, CUSPARSE_ORDER_ROW));
-        FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnR, n, cols, cols, dR.as<double>(), CUDA_R_64F, CUSPARSE_ORDER_ROW));
+        FP_CUSPARSE_TRY(
+            cusparseCreateDnMat(&dnY, n, cols, nb, Y + j0, CUDA_R_64F, CUSPARSE_ORDER_ROW));
+        FP_CUSPARSE_TRY(cusparseCreateDnMat(&dnR, n, cols, cols, dR.as<double>(), CUDA_R_64F,
+                                            CUSPARSE_ORDER_ROW));
         size_t bufferBytes = 0;
-        bool ok = cusparseSpMM_bufferSize(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE, CUSPARSE_OPERATION_NON_TRANSPOSE,
-                                          &one, r.K, dnY, &zero, dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT,
+        bool ok = cusparseSpMM_bufferSize(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE,
+                                          CUSPARSE_OPERATION_NON_TRANSPOSE, &one, r.K, dnY, &zero,
+                                          dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT,
                                           &bufferBytes) == CUSPARSE_STATUS_SUCCESS;
         ok = ok && dSpmmBuffer.ensure(std::max<size_t>(bufferBytes, 8), error);
         const cusparseStatus_t st =
-            ok ? cusparseSpMM(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE, CUSPARSE_OPERATION_NON_TRANSPOSE, &one,
-                              r.K, dnY, &zero, dnR, CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT, dSpmmBuffer.as<void>())
+            ok ? cusparseSpMM(r.sparse, CUSPARSE_OPERATION_NON_TRANSPOSE,
+                              CUSPARSE_OPERATION_NON_TRANSPOSE, &one, r.K, dnY, &zero, dnR,
+                              CUDA_R_64F, CUSPARSE_SPMM_ALG_DEFAULT, dSpmmBuffer.as<void>())
                : CUSPARSE_STATUS_INTERNAL_ERROR;
         cusparseDestroyDnMat(dnY);
         cusparseDestroyDnMat(dnR);
         if (st != CUSPARSE_STATUS_SUCCESS) {
-          if (error.empty()) error = std::string("cuSPARSE SpMM failed: ") + cusparseGetErrorString(st);
+          if (error.empty())
+            error = std::string("cuSPARSE SpMM failed: ") + cusparseGetErrorString(st);
           return false;
         }
-        FP_CUDA_TRY(detail::LaunchScatterCsc(dFrStart.as<int>(), dFrRow.as<int>(), dFrVal.as<double>(),
-                                             dPinv.as<int>(), c0 + j0, cols, -1.0, dR.as<double>(), r.stream));
-        FP_CUDA_TRY(detail::LaunchColumnSquaredNorms(dR.as<double>(), n, cols, dSums.as<double>() + j0, r.stream));
+        FP_CUDA_TRY(detail::LaunchScatterCsc(dFrStart.as<int>(), dFrRow.as<int>(),
+                                             dFrVal.as<double>(), dPinv.as<int>(), c0 + j0, cols,
+                                             -1.0, dR.as<double>(), r.stream));
+        FP_CUDA_TRY(detail::LaunchColumnSquaredNorms(dR.as<double>(), n, cols,
+                                                     dSums.as<double>() + j0, r.stream));
       }
-      FP_CUDA_TRY(cudaMemcpyAsync(sums.data(), dSums.as<double>(), sizeof(double) * nb, cudaMemcpyDeviceToHost,
-                                  r.stream));
+      FP_CUDA_TRY(cudaMemcpyAsync(sums.data(), dSums.as<double>(), sizeof(double) * nb,
+                                  cudaMemcpyDeviceToHost, r.stream));
     }
     FP_CUDA_TRY(cudaEventRecord(r.ev[6], r.stream));
     FP_CUDA_TRY(cudaStreamSynchronize(r.stream));
-    if (c0 == 0 && !Elapsed(r.ev[0], r.ev[1], detail.uploadMs, error)) return false;
-    if (!Elapsed(r.ev[2], r.ev[3], detail.forwardMs, error) || !Elapsed(r.ev[3], r.ev[4], detail.backwardMs, error) ||
-        !Elapsed(r.ev[4], r.ev[5], detail.extractMs, error) || !Elapsed(r.ev[5], r.ev[6], detail.residualMs, error))
+    if (c0 == 0 && !Elapsed(r.ev[0], r.ev[1], detail.uploadMs, error))
+      return false;
+    if (!Elapsed(r.ev[2], r.ev[3], detail.forwardMs, error) ||
+        !Elapsed(r.ev[3], r.ev[4], detail.backwardMs, error) ||
+        !Elapsed(r.ev[4], r.ev[5], detail.extractMs, error) ||
+        !Elapsed(r.ev[5], r.ev[6], detail.residualMs, error))
       return false;
     if (kff)
       for (int c = 0; c < nb; ++c) {
         const double b = std::sqrt(rhsNorm[c0 + c]);
-        if (b > 0.0) detail.worstRelativeResidual = std::max(detail.worstRelativeResidual, std::sqrt(sums[c]) / b);
-        if (!std::isfinite(sums[c])) detail.worstRelativeResidual = INFINITY;
+        if (b > 0.0)
+          detail.worstRelativeResidual =
+              std::max(detail.worstRelativeResidual, std::sqrt(sums[c]) / b);
+        if (!std::isfinite(sums[c]))
+          detail.worstRelativeResidual = INFINITY;
       }
   }
   detail.flops = flopsPerColumn * roi;
@@ -746,7 +830,8 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
   dLx.release();
   if (op) {
     auto cudaOp = std::make_unique<CudaResponse>();
-    if (!cudaOp->adopt(keptRows, roi, std::move(dResponse), error)) return false;
+    if (!cudaOp->adopt(keptRows, roi, std::move(dResponse), error))
+      return false;
     *op = std::move(cudaOp);
   }
   return true;
@@ -761,8 +846,8 @@ Status BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix
   detail = DenseResponseDetail{};
   StageClock clock;
   std::string error;
-  const bool ok =
-      Build(factor, kffUpper, kfr, keptRows, responseHost, op, detail, error, maxColumnsPerPass, nullptr);
+  const bool ok = Build(factor, kffUpper, kfr, keptRows, responseHost, op, detail, error,
+                        maxColumnsPerPass, nullptr);
   detail.wallMs = clock.elapsedMs();
   return ok ? Status::Ok() : Status::Error(error);
 }
@@ -780,11 +865,12 @@ Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& 
   // K_perm for the response's residual check depends only on K_FF and the ordering: made on the
   // host while the GPU factorizes (0.2-0.3 s at 1M cells).
   const int n = static_cast<int>(L->n);
-  std::future<PermutedCsr> kPermMade =
-      std::async(std::launch::async, [&kffUpper, pinv = InversePermutation(static_cast<const int*>(L->Perm), n)]() {
+  std::future<PermutedCsr> kPermMade = std::async(
+      std::launch::async,
+      [&kffUpper, pinv = InversePermutation(static_cast<const int*>(L->Perm), n)]() {
         PermutedCsr k; // left empty for a matrix of another size: Build refuses it with a message
-        if (kffUpper.rows() == static_cast<Eigen::Index>(pinv.size()) && kffUpper.cols() == kffUpper.rows() &&
-            kffUpper.isCompressed())
+        if (kffUpper.rows() == static_cast<Eigen::Index>(pinv.size()) &&
+            kffUpper.cols() == kffUpper.rows() && kffUpper.isCompressed())
           PermutedFullCsr(kffUpper, pinv, k);
         return k;
       });
@@ -794,12 +880,13 @@ Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& 
   // The host factor is allocated first and its pages touched on every core while the GPU
   // factorizes (which reads only the factor's structure): faulted in by the copy below, 4.2 GB at
   // 1M cells made that copy take 1-2 s and crowd the response's own download.
-  if (!detail::AllocateHostFactor(L, factor.cholmodCommon(), error)) return Status::Error(error);
+  if (!detail::AllocateHostFactor(L, factor.cholmodCommon(), error))
+    return Status::Error(error);
   std::future<void> hostFactorTouched = std::async(std::launch::async, [L]() {
     detail::TouchPagesInParallel(static_cast<double*>(L->x), static_cast<std::int64_t>(L->xsize));
   });
-  if (!detail::FactorAnalysedOnGpu(kffUpper, L, factor.cholmodCommon(), deviceX, false, detail.factorizeMs,
-                                   unused, error))
+  if (!detail::FactorAnalysedOnGpu(kffUpper, L, factor.cholmodCommon(), deviceX, false,
+                                   detail.factorizeMs, unused, error))
     return Status::Error(error);
   hostFactorTouched.get();
   // The factor's copy into CHOLMOD (for CPU solves) runs beside the response, on its own stream
@@ -812,11 +899,14 @@ Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& 
     std::string copyError;
     cudaStream_t stream = nullptr;
     bool ok = cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking) == cudaSuccess;
-    if (!ok) copyError = "could not create a stream for the factor's copy";
+    if (!ok)
+      copyError = "could not create a stream for the factor's copy";
     ok = ok && detail::DownloadFactor(L, deviceX, stream, copyError);
-    if (stream) cudaStreamDestroy(stream);
+    if (stream)
+      cudaStreamDestroy(stream);
     detail.factorDownloadMs = copyClock.lapMs();
-    if (!ok) return Status::Error("copying the GPU factor into CHOLMOD: " + copyError);
+    if (!ok)
+      return Status::Error("copying the GPU factor into CHOLMOD: " + copyError);
     const Status marked = factor.markFactorized();
     detail.markFactorizedMs = copyClock.lapMs();
     return marked;

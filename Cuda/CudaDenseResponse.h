@@ -35,7 +35,8 @@ struct SupernodalFactorView {
   const int* s = nullptr;     // row indices
   const double* x = nullptr;  // column-major nsrow x nscol blocks
   const int* perm = nullptr;  // n
-  const double* deviceX = nullptr; // x already in GPU memory (SupernodalCholesky::factorOnGpu), or null
+  const double* deviceX =
+      nullptr; // x already in GPU memory (SupernodalCholesky::factorOnGpu), or null
 };
 
 // Core's CholmodFactor (ordering, symbolic analysis, CPU factorization and solves) of a symmetric
@@ -53,7 +54,8 @@ public:
   // CHOLMOD ordering and symbolic analysis on the CPU, numeric factorization on the GPU
   // (right-looking supernodal: cuSOLVER DPOTRF, cuBLAS DTRSM and DSYRK per supernode, updates
   // scattered into the ancestors). The factor stays in GPU memory (view().deviceX); with
-  // `hostCopy` it is also copied into the CHOLMOD factor, so that CPU solves work as after factor().
+  // `hostCopy` it is also copied into the CHOLMOD factor, so that CPU solves work as after
+  // factor().
   Status factorOnGpu(const SparseMatrix& upper, bool hostCopy = true);
   // Frees the GPU copy (the host factor, if any, stays).
   void releaseDevice();
@@ -61,8 +63,8 @@ public:
   // x = A^-1 b on the CPU (needs the host factor).
   Status solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const;
   double analyzeMs() const;
-  double factorizeMs() const;   // numeric factorization (GPU: including uploads)
-  double downloadMs() const;    // GPU factor to the CHOLMOD factor (factorOnGpu with hostCopy)
+  double factorizeMs() const; // numeric factorization (GPU: including uploads)
+  double downloadMs() const;  // GPU factor to the CHOLMOD factor (factorOnGpu with hostCopy)
   double factorNonzeros() const;
 
 private:
@@ -72,20 +74,23 @@ private:
 
 struct DenseResponseDetail {
   int supernodes = 0;
-  int blocks = 0;            // passes over the ROI columns (1 when all fit in GPU memory)
+  int blocks = 0; // passes over the ROI columns (1 when all fit in GPU memory)
   int columnsPerBlock = 0;
-  double flops = 0.0;        // of the two triangular sweeps
-  double hostPrepareMs = 0.0; // host work before the uploads (permutation, reach, K_perm when made here)
-  double allocateMs = 0.0;    // device buffers for the right-hand sides and the residual
-  double uploadMs = 0.0;     // factor, K_FF and K_FR to the device
-  double forwardMs = 0.0;    // device time of the forward sweeps
-  double backwardMs = 0.0;   // device time of the backward sweeps
-  double residualMs = 0.0;   // device time of the residual check
-  double extractMs = 0.0;    // device time of the kept-row extraction
-  double downloadMs = 0.0;   // response to the host (when asked for), on its own thread beside the residual
+  double flops = 0.0; // of the two triangular sweeps
+  double hostPrepareMs =
+      0.0; // host work before the uploads (permutation, reach, K_perm when made here)
+  double allocateMs = 0.0; // device buffers for the right-hand sides and the residual
+  double uploadMs = 0.0;   // factor, K_FF and K_FR to the device
+  double forwardMs = 0.0;  // device time of the forward sweeps
+  double backwardMs = 0.0; // device time of the backward sweeps
+  double residualMs = 0.0; // device time of the residual check
+  double extractMs = 0.0;  // device time of the kept-row extraction
+  double downloadMs =
+      0.0; // response to the host (when asked for), on its own thread beside the residual
   double downloadWaitMs = 0.0; // of that copy, left after the last pass's residual check
-  double hostTouchWaitMs = 0.0; // the copy waiting for the host response's pages, touched beside the sweeps
-  double wallMs = 0.0;       // the whole call on the host clock
+  double hostTouchWaitMs =
+      0.0;             // the copy waiting for the host response's pages, touched beside the sweeps
+  double wallMs = 0.0; // the whole call on the host clock
   double worstRelativeResidual = 0.0; // max over columns of ||K_FF x - b|| / ||b||
 };
 
@@ -106,12 +111,14 @@ Status BuildDenseResponse(const SupernodalFactorView& factor, const SparseMatrix
 // still on the GPU, with the residual check, the response copied to the host and kept on the GPU
 // as `op`. The device copy of the factor is freed before returning.
 struct FactorAndResponseDetail {
-  double factorizeMs = 0.0;      // GPU numeric factorization (uploads of the structure and K_FF included)
+  double factorizeMs =
+      0.0; // GPU numeric factorization (uploads of the structure and K_FF included)
   double factorDownloadMs = 0.0; // the factor copied into the CHOLMOD factor (beside the response)
   double factorDownloadWaitMs = 0.0; // of the copy and marking, left after the response was built
-  double markFactorizedMs = 0.0; // CholmodFactor::markFactorized after the copy (beside the response)
+  double markFactorizedMs =
+      0.0; // CholmodFactor::markFactorized after the copy (beside the response)
   DenseResponseDetail response;
-  double wallMs = 0.0;           // the whole call
+  double wallMs = 0.0; // the whole call
   double factorNonzeros = 0.0;
   bool succeeded = false;
   long long call = 0; // the backend's count of factorAndBuildResponse calls, this one included

@@ -1,8 +1,8 @@
 #pragma once
 // Internal pieces shared by the CUDA backend's translation units (not installed, not public).
 #include "Backend/ComputeBackend.h"
-#include "CudaCheck.h"
 #include "Common/ParallelFor.h"
+#include "CudaCheck.h"
 
 #include <cuda_runtime_api.h>
 
@@ -39,7 +39,8 @@ public:
   }
   ~DeviceArray() { release(); }
   bool ensure(size_t bytes, std::string& error) {
-    if (bytes <= capacity_) return true;
+    if (bytes <= capacity_)
+      return true;
     release();
     void* p = nullptr;
     FP_CUDA_TRY(cudaMalloc(&p, bytes));
@@ -48,7 +49,8 @@ public:
     return true;
   }
   void release() {
-    if (ptr_) cudaFree(ptr_);
+    if (ptr_)
+      cudaFree(ptr_);
     ptr_ = nullptr;
     capacity_ = 0;
   }
@@ -67,11 +69,14 @@ public:
   PinnedArray(const PinnedArray&) = delete;
   PinnedArray& operator=(const PinnedArray&) = delete;
   ~PinnedArray() {
-    if (ptr_) cudaFreeHost(ptr_);
+    if (ptr_)
+      cudaFreeHost(ptr_);
   }
   bool ensure(size_t bytes, std::string& error) {
-    if (bytes <= capacity_) return true;
-    if (ptr_) cudaFreeHost(ptr_);
+    if (bytes <= capacity_)
+      return true;
+    if (ptr_)
+      cudaFreeHost(ptr_);
     ptr_ = nullptr;
     capacity_ = 0;
     void* p = nullptr;
@@ -93,35 +98,42 @@ inline void ParallelCopy(void* dst, const void* src, size_t bytes) {
   constexpr size_t chunk = size_t(2) << 20;
   const std::int64_t chunks = static_cast<std::int64_t>((bytes + chunk - 1) / chunk);
   ParallelFor(chunks, 4, [&](std::int64_t begin, std::int64_t end) {
-    const size_t from = static_cast<size_t>(begin) * chunk, to = std::min(bytes, static_cast<size_t>(end) * chunk);
-    if (to > from) std::memcpy(static_cast<char*>(dst) + from, static_cast<const char*>(src) + from, to - from);
+    const size_t from = static_cast<size_t>(begin) * chunk,
+                 to = std::min(bytes, static_cast<size_t>(end) * chunk);
+    if (to > from)
+      std::memcpy(static_cast<char*>(dst) + from, static_cast<const char*>(src) + from, to - from);
   });
 }
 
 // Writes zeros over `count` doubles on every core: the first touch of freshly allocated host
 // memory (its page faults), done beside GPU work so that a later copy into it is a plain copy.
 inline void TouchPagesInParallel(double* data, std::int64_t count) {
-  ParallelFor(count, std::int64_t(1) << 20,
-              [data](std::int64_t begin, std::int64_t end) { std::fill(data + begin, data + end, 0.0); });
+  ParallelFor(count, std::int64_t(1) << 20, [data](std::int64_t begin, std::int64_t end) {
+    std::fill(data + begin, data + end, 0.0);
+  });
 }
 
 // Large device-to-host copy into pageable memory: through three page-locked 64 MB buffers (kept
 // for the process), the device copy of one chunk overlapping the host threads' copies of the
 // previous ones. Safe to call from two threads at once (each takes its own buffers).
-bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream, std::string& error);
+bool DownloadLarge(void* dst, const void* src, size_t bytes, cudaStream_t stream,
+                   std::string& error);
 
 // kept = response * roi with the response in GPU memory: cuBLAS DGEMV on one stream, pinned
 // host buffers for the two small vectors, one mutex (apply may be called from several threads).
 class CudaResponse final : public ResponseOperator {
 public:
   ~CudaResponse() override {
-    if (handle_) cublasDestroy(handle_);
-    if (stream_) cudaStreamDestroy(stream_);
+    if (handle_)
+      cublasDestroy(handle_);
+    if (stream_)
+      cudaStreamDestroy(stream_);
   }
 
   // Uploads a host response.
   bool init(const Eigen::MatrixXd& response, std::string& error) {
-    if (!checkDims(response.rows(), response.cols(), error)) return false;
+    if (!checkDims(response.rows(), response.cols(), error))
+      return false;
     const size_t bytes = matrixBytes();
     size_t freeBytes = 0, totalBytes = 0;
     FP_CUDA_TRY(cudaSetDevice(0));
@@ -133,9 +145,11 @@ public:
       error = why.str();
       return false;
     }
-    if (!setUp(error) || !matrix_.ensure(std::max<size_t>(bytes, 8), error)) return false;
+    if (!setUp(error) || !matrix_.ensure(std::max<size_t>(bytes, 8), error))
+      return false;
     if (bytes > 0) {
-      FP_CUDA_TRY(cudaMemcpyAsync(matrix_.as<double>(), response.data(), bytes, cudaMemcpyHostToDevice, stream_));
+      FP_CUDA_TRY(cudaMemcpyAsync(matrix_.as<double>(), response.data(), bytes,
+                                  cudaMemcpyHostToDevice, stream_));
       FP_CUDA_TRY(cudaStreamSynchronize(stream_));
     }
     return true;
@@ -143,7 +157,8 @@ public:
 
   // Takes over a response already in device memory (column-major, rows x cols).
   bool adopt(Eigen::Index rows, Eigen::Index cols, DeviceArray&& matrix, std::string& error) {
-    if (!checkDims(rows, cols, error)) return false;
+    if (!checkDims(rows, cols, error))
+      return false;
     FP_CUDA_TRY(cudaSetDevice(0));
     if (matrix.capacity() < matrixBytes()) {
       error = "internal: adopted response buffer too small";
@@ -164,7 +179,8 @@ public:
 private:
   bool applyOnDevice(const Eigen::VectorXd& roi, Eigen::VectorXd& kept, std::string& error) {
     kept.resize(rows_);
-    if (rows_ == 0) return true;
+    if (rows_ == 0)
+      return true;
     if (cols_ == 0) {
       kept.setZero();
       return true;
@@ -183,7 +199,9 @@ private:
     return true;
   }
 
-  size_t matrixBytes() const { return sizeof(double) * static_cast<size_t>(rows_) * static_cast<size_t>(cols_); }
+  size_t matrixBytes() const {
+    return sizeof(double) * static_cast<size_t>(rows_) * static_cast<size_t>(cols_);
+  }
 
   bool checkDims(Eigen::Index rows, Eigen::Index cols, std::string& error) {
     if (rows > std::numeric_limits<int>::max() || cols > std::numeric_limits<int>::max()) {
@@ -223,15 +241,17 @@ bool InitDevice(std::string& error);
 // `deviceX` (CHOLMOD's supernodal layout); with `hostCopy` they are also written into L (made
 // numeric with cholmod_change_factor), so CPU solves work as after cholmod_factorize.
 // Defined in CudaDenseResponse.cpp.
-bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor_struct* L, cholmod_common_struct* common,
-                         DeviceArray& deviceX, bool hostCopy, double& factorizeMs, double& downloadMs,
-                         std::string& error);
+bool FactorAnalysedOnGpu(const SparseMatrix& upper, cholmod_factor_struct* L,
+                         cholmod_common_struct* common, DeviceArray& deviceX, bool hostCopy,
+                         double& factorizeMs, double& downloadMs, std::string& error);
 
 // The host copy of FactorAnalysedOnGpu's factor, in two steps so that the copy can run beside
 // other GPU work: AllocateHostFactor makes L numeric (cholmod_change_factor; not to be run
 // concurrently with other uses of L), DownloadFactor then copies deviceX into L->x on `stream`
 // (it touches only L->x's memory and sets L->minor, so L's structure may be read meanwhile).
-bool AllocateHostFactor(cholmod_factor_struct* L, cholmod_common_struct* common, std::string& error);
-bool DownloadFactor(cholmod_factor_struct* L, const DeviceArray& deviceX, cudaStream_t stream, std::string& error);
+bool AllocateHostFactor(cholmod_factor_struct* L, cholmod_common_struct* common,
+                        std::string& error);
+bool DownloadFactor(cholmod_factor_struct* L, const DeviceArray& deviceX, cudaStream_t stream,
+                    std::string& error);
 
 } // namespace faceplan::cuda::detail

@@ -25,11 +25,12 @@ cudaError_t LaunchGather(const int* gatherStart, const int* packedIndex, const d
 
 // Y[pinv[row], c] += sign * value for every nonzero of columns [c0, c0 + nb) of a CSC matrix.
 cudaError_t LaunchScatterCsc(const int* colStart, const int* rowIndex, const double* values,
-                             const int* pinv, int c0, int nb, double sign, double* Y, cudaStream_t stream);
+                             const int* pinv, int c0, int nb, double sign, double* Y,
+                             cudaStream_t stream);
 
 // Y[rows[i], :] -= T[i, :] for i < count (rows distinct).
-cudaError_t LaunchScatterSubtractRows(double* Y, const double* T, const int* rows, int count, int nb,
-                                      cudaStream_t stream);
+cudaError_t LaunchScatterSubtractRows(double* Y, const double* T, const int* rows, int count,
+                                      int nb, cudaStream_t stream);
 
 // T[i, :] = Y[rows[i], :] for i < count.
 cudaError_t LaunchGatherRows(const double* Y, double* T, const int* rows, int count, int nb,
@@ -54,13 +55,14 @@ struct SupernodalStructure {
 };
 
 // Lx[...] = A(perm, perm) lower entries, from the upper triangle of A in CSC (Lx zeroed first).
-cudaError_t LaunchAssembleSupernodal(const int* colStart, const int* rowIndex, const double* values, int n,
-                                     const int* pinv, SupernodalStructure st, double* Lx, cudaStream_t stream);
+cudaError_t LaunchAssembleSupernodal(const int* colStart, const int* rowIndex, const double* values,
+                                     int n, const int* pinv, SupernodalStructure st, double* Lx,
+                                     cudaStream_t stream);
 
 // Subtracts the lower triangle of the update C (count x count, column-major) of a supernode whose
 // off-diagonal rows are `rows` from the ancestors' blocks.
-cudaError_t LaunchScatterUpdate(const double* C, int count, const int* rows, SupernodalStructure st, double* Lx,
-                                cudaStream_t stream);
+cudaError_t LaunchScatterUpdate(const double* C, int count, const int* rows, SupernodalStructure st,
+                                double* Lx, cudaStream_t stream);
 
 // Whether the kernels in this library can run on the current device (an sm_90 build on an
 // older GPU cannot). cudaSuccess when they can.

@@ -36,8 +36,8 @@ void AddString(vtkFieldData* fd, const char* name, const std::string& value) {
 } // namespace
 
 void BuildDeformedTissue(vtkUnstructuredGrid* tissue, const TissueBoundary& boundary,
-                         const RowVectors3d& restPoints, const SolveOutcome& outcome, OutputMode mode,
-                         vtkUnstructuredGrid* output) {
+                         const RowVectors3d& restPoints, const SolveOutcome& outcome,
+                         OutputMode mode, vtkUnstructuredGrid* output) {
   // The structure (cells, passed arrays) is shared with the tissue or with the cached boundary, so
   // an update writes only the new points and Displacement.
   const SolveResult& result = outcome.result;
@@ -85,7 +85,7 @@ void AddFieldData(const SolveOutcome& outcome, const Settings& settings,
   AddScalar(fd, "PrecomputeTimeMs", outcome.precomputeMs);
   AddScalar(fd, "PrecomputeReused",
             outcome.freshPrecompute || settings.fullReference() || outcome.largeDeformation ? 0.0
-                                                                                           : 1.0);
+                                                                                            : 1.0);
   AddString(fd, "Method",
             outcome.largeDeformation ? "LargeDeformation" : MethodName(result.method));
   AddString(fd, "Model", outcome.largeDeformation ? "NeoHookean" : "LinearElastic");

@@ -13,8 +13,8 @@ namespace fem_filter {
 // Volume: the tissue's cells with moved points. Surface: the boundary triangles. The cells are
 // shared with the tissue or the cached boundary; only points and Displacement are new.
 void BuildDeformedTissue(vtkUnstructuredGrid* tissue, const TissueBoundary& boundary,
-                         const RowVectors3d& restPoints, const SolveOutcome& outcome, OutputMode mode,
-                         vtkUnstructuredGrid* output);
+                         const RowVectors3d& restPoints, const SolveOutcome& outcome,
+                         OutputMode mode, vtkUnstructuredGrid* output);
 
 // RelativeResidual, SolveTimeMs, PrecomputeTimeMs, Method, Backend, diagnostics.
 void AddFieldData(const SolveOutcome& outcome, const Settings& settings,

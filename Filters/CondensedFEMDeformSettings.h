@@ -31,7 +31,9 @@ struct Settings {
   OutputMode output() const { return static_cast<OutputMode>(outputMode); }
   MethodChoice methodChoice() const { return static_cast<MethodChoice>(method); }
   bool fullReference() const { return methodChoice() == MethodChoice::FullReference; }
-  bool largeDeformation() const { return static_cast<ModelChoice>(model) == ModelChoice::NeoHookean; }
+  bool largeDeformation() const {
+    return static_cast<ModelChoice>(model) == ModelChoice::NeoHookean;
+  }
 };
 
 } // namespace fem_filter

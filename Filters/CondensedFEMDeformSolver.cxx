@@ -59,8 +59,9 @@ void Solver::chooseBackend(const Settings& settings, PrecomputeOptions& options,
     notes.push_back("Backend CUDA is not available (" + cudaUnavailable_ + "); using the CPU");
 }
 
-Status Solver::run(const PrecomputeRequest& given, const SolveInput& input, const Settings& settings,
-                   const std::function<void(double)>& progress, SolveOutcome& outcome) {
+Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
+                   const Settings& settings, const std::function<void(double)>& progress,
+                   SolveOutcome& outcome) {
   outcome = SolveOutcome();
   PrecomputeOptions options = given.options;
   ApplyMethodAndOrder(settings, options);

@@ -46,44 +46,47 @@ bool ToSurfaceMesh(vtkPointSet* input, CellPolicy policy, SurfaceMesh& out, std:
         return false;
       }
     switch (type) {
-      case VTK_EMPTY_CELL:
-      case VTK_VERTEX:
-      case VTK_POLY_VERTEX:
-        break;
-      case VTK_TRIANGLE:
-      case VTK_QUAD:
-      case VTK_POLYGON:
-        for (vtkIdType k = 0; k < m; ++k) out.connectivity.push_back(ids->GetId(k));
-        out.offsets.push_back(std::int64_t(out.connectivity.size()));
-        break;
-      case VTK_PIXEL:
-        add({ids->GetId(0), ids->GetId(1), ids->GetId(3), ids->GetId(2)});
-        break;
-      case VTK_TRIANGLE_STRIP:
-        for (vtkIdType k = 0; k + 2 < m; ++k) {
-          if (k % 2 == 0)
-            add({ids->GetId(k), ids->GetId(k + 1), ids->GetId(k + 2)});
-          else
-            add({ids->GetId(k + 1), ids->GetId(k), ids->GetId(k + 2)});
-        }
-        break;
-      case VTK_LINE:
-      case VTK_POLY_LINE:
-        if (policy == CellPolicy::EdgesOfAnyCell)
-          for (vtkIdType k = 0; k + 1 < m; ++k) add({ids->GetId(k), ids->GetId(k + 1)});
-        break;
-      default:
-        if (policy == CellPolicy::SurfaceOnly) {
-          why = "cell " + std::to_string(c) + " is not a surface cell (VTK cell type " +
-                std::to_string(type) + "); extract the surface first (Extract Surface)";
-          return false;
-        }
-        input->GetCell(c, cell);
-        for (int e = 0; e < cell->GetNumberOfEdges(); ++e) {
-          vtkIdList* ep = cell->GetEdge(e)->GetPointIds();
-          if (ep->GetNumberOfIds() >= 2) add({ep->GetId(0), ep->GetId(1)}); // corner points (higher-order edges list them first)
-        }
-        break;
+    case VTK_EMPTY_CELL:
+    case VTK_VERTEX:
+    case VTK_POLY_VERTEX:
+      break;
+    case VTK_TRIANGLE:
+    case VTK_QUAD:
+    case VTK_POLYGON:
+      for (vtkIdType k = 0; k < m; ++k)
+        out.connectivity.push_back(ids->GetId(k));
+      out.offsets.push_back(std::int64_t(out.connectivity.size()));
+      break;
+    case VTK_PIXEL:
+      add({ids->GetId(0), ids->GetId(1), ids->GetId(3), ids->GetId(2)});
+      break;
+    case VTK_TRIANGLE_STRIP:
+      for (vtkIdType k = 0; k + 2 < m; ++k) {
+        if (k % 2 == 0)
+          add({ids->GetId(k), ids->GetId(k + 1), ids->GetId(k + 2)});
+        else
+          add({ids->GetId(k + 1), ids->GetId(k), ids->GetId(k + 2)});
+      }
+      break;
+    case VTK_LINE:
+    case VTK_POLY_LINE:
+      if (policy == CellPolicy::EdgesOfAnyCell)
+        for (vtkIdType k = 0; k + 1 < m; ++k)
+          add({ids->GetId(k), ids->GetId(k + 1)});
+      break;
+    default:
+      if (policy == CellPolicy::SurfaceOnly) {
+        why = "cell " + std::to_string(c) + " is not a surface cell (VTK cell type " +
+              std::to_string(type) + "); extract the surface first (Extract Surface)";
+        return false;
+      }
+      input->GetCell(c, cell);
+      for (int e = 0; e < cell->GetNumberOfEdges(); ++e) {
+        vtkIdList* ep = cell->GetEdge(e)->GetPointIds();
+        if (ep->GetNumberOfIds() >= 2)
+          add({ep->GetId(0), ep->GetId(1)}); // corner points (higher-order edges list them first)
+      }
+      break;
     }
   }
   return true;

@@ -26,15 +26,18 @@ vtkStandardNewMacro(vtkBezierCut);
 
 namespace {
 void Resize(std::vector<double>& c, vtkIdType n, vtkObject* self) {
-  if (n < 0) n = 0;
+  if (n < 0)
+    n = 0;
   if (static_cast<vtkIdType>(c.size()) != 3 * n) {
     c.resize(static_cast<std::size_t>(3 * n), 0.0);
     self->Modified();
   }
 }
 void SetPoint(std::vector<double>& c, vtkIdType i, double x, double y, double z, vtkObject* self) {
-  if (i < 0) return;
-  if (3 * i + 3 > static_cast<vtkIdType>(c.size())) c.resize(static_cast<std::size_t>(3 * i + 3), 0.0);
+  if (i < 0)
+    return;
+  if (3 * i + 3 > static_cast<vtkIdType>(c.size()))
+    c.resize(static_cast<std::size_t>(3 * i + 3), 0.0);
   double* p = c.data() + 3 * i;
   if (p[0] != x || p[1] != y || p[2] != z) {
     p[0] = x;
@@ -49,7 +52,8 @@ void GetPoint(const std::vector<double>& c, vtkIdType i, double p[3]) {
 }
 std::vector<Eigen::Vector3d> ToCurve(const std::vector<double>& c) {
   std::vector<Eigen::Vector3d> out;
-  for (std::size_t i = 0; i + 2 < c.size(); i += 3) out.emplace_back(c[i], c[i + 1], c[i + 2]);
+  for (std::size_t i = 0; i + 2 < c.size(); i += 3)
+    out.emplace_back(c[i], c[i + 1], c[i + 2]);
   return out;
 }
 } // namespace
@@ -139,8 +143,12 @@ void vtkBezierCut::SetCurveVPoint(vtkIdType i, double x, double y, double z) {
   SetPoint(this->CurveV, i, x, y, z, this);
   this->CurvesPlaced = this->CurvesPlaced || this->GetMTime() != before;
 }
-void vtkBezierCut::GetCurveUPoint(vtkIdType i, double p[3]) const { GetPoint(this->CurveU, i, p); }
-void vtkBezierCut::GetCurveVPoint(vtkIdType i, double p[3]) const { GetPoint(this->CurveV, i, p); }
+void vtkBezierCut::GetCurveUPoint(vtkIdType i, double p[3]) const {
+  GetPoint(this->CurveU, i, p);
+}
+void vtkBezierCut::GetCurveVPoint(vtkIdType i, double p[3]) const {
+  GetPoint(this->CurveV, i, p);
+}
 
 int vtkBezierCut::FillOutputPortInformation(int port, vtkInformation* info) {
   info->Set(vtkDataObject::DATA_TYPE_NAME(), port == 0 ? "vtkPointSet" : "vtkPolyData");
@@ -245,7 +253,8 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
       }
   }
   faceplan::BezierCutOptions options;
-  options.operation = this->Operation == FILL ? faceplan::CutOperation::Fill : faceplan::CutOperation::Cut;
+  options.operation =
+      this->Operation == FILL ? faceplan::CutOperation::Fill : faceplan::CutOperation::Cut;
   options.flipNormal = this->FlipNormal != 0;
   options.displayResolution = this->SurfaceResolution;
 
@@ -258,7 +267,8 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
     this->Fail(status.message, output, surface);
     return false;
   }
-  for (const std::string& w : result.warnings) vtkWarningMacro(<< "Bezier Cut: " << w);
+  for (const std::string& w : result.warnings)
+    vtkWarningMacro(<< "Bezier Cut: " << w);
   if (cache.skippedCells() > 0)
     vtkWarningMacro(<< "Bezier Cut: " << cache.skippedCells()
                     << " line or vertex cells of the input were ignored (passed through unmoved)");
@@ -277,7 +287,8 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
   displacement->SetNumberOfTuples(n);
   displacement->FillValue(0.0);
   for (vtkIdType i = 0; i < n; ++i) {
-    if (!result.moved[static_cast<std::size_t>(i)]) continue;
+    if (!result.moved[static_cast<std::size_t>(i)])
+      continue;
     double before[3], after[3];
     input->GetPoints()->GetPoint(i, before);
     points->SetPoint(i, result.points(i, 0), result.points(i, 1), result.points(i, 2));
@@ -305,7 +316,8 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
   vtkNew<vtkPoints> spts;
   spts->SetDataTypeToDouble();
   spts->SetNumberOfPoints(s.numPoints());
-  for (vtkIdType i = 0; i < s.numPoints(); ++i) spts->SetPoint(i, s.points(i, 0), s.points(i, 1), s.points(i, 2));
+  for (vtkIdType i = 0; i < s.numPoints(); ++i)
+    spts->SetPoint(i, s.points(i, 0), s.points(i, 1), s.points(i, 2));
   vtkNew<vtkCellArray> tris;
   for (std::int64_t c = 0; c < s.numCells(); ++c) {
     const std::int64_t* ids = s.cell(c);

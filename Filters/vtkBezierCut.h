@@ -11,9 +11,9 @@
  * other side. See Core/BezierCut.h for the exact rules and guarantees (no flipped, degenerate or
  * newly intersecting triangles; intermediary surfaces when direct projection would fold).
  *
- * Output port 0: the input's cells and point order with the new coordinates (double precision), a point vector array
- * `Displacement` (exactly zero where unmoved), the input's arrays (ROIMask, ROIBoundary, ...)
- * passed through, and field data `NumberOfMovedPoints`, `IntermediarySteps`.
+ * Output port 0: the input's cells and point order with the new coordinates (double precision), a
+ * point vector array `Displacement` (exactly zero where unmoved), the input's arrays (ROIMask,
+ * ROIBoundary, ...) passed through, and field data `NumberOfMovedPoints`, `IntermediarySteps`.
  * Output port 1: the operative surface as triangles (point arrays `Normals`, `UV`).
  * Errors (ill-defined control points, missing ROI arrays, a cut that cannot be mapped without
  * folding) are reported with vtkErrorMacro and give empty outputs. The input is never modified.
@@ -42,7 +42,9 @@ public:
   /// and three quarters of the way along it, so that a new cut meets the bone. The Get methods
   /// report the curves of the last run.
   void SetNumberOfCurveUPoints(vtkIdType n);
-  vtkIdType GetNumberOfCurveUPoints() const { return static_cast<vtkIdType>(this->CurveU.size() / 3); }
+  vtkIdType GetNumberOfCurveUPoints() const {
+    return static_cast<vtkIdType>(this->CurveU.size() / 3);
+  }
   void SetCurveUPoint(vtkIdType i, double x, double y, double z);
   void GetCurveUPoint(vtkIdType i, double p[3]) const;
   ///@}
@@ -50,7 +52,9 @@ public:
   ///@{
   /// Control points of CurveV (3m+1 points); point 0 must equal CurveU's point 0.
   void SetNumberOfCurveVPoints(vtkIdType n);
-  vtkIdType GetNumberOfCurveVPoints() const { return static_cast<vtkIdType>(this->CurveV.size() / 3); }
+  vtkIdType GetNumberOfCurveVPoints() const {
+    return static_cast<vtkIdType>(this->CurveV.size() / 3);
+  }
   void SetCurveVPoint(vtkIdType i, double x, double y, double z);
   void GetCurveVPoint(vtkIdType i, double p[3]) const;
   ///@}

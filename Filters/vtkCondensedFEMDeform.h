@@ -22,9 +22,10 @@
  * `Displacement` and field data `RelativeResidual`, `SolveTimeMs`, `PrecomputeTimeMs`, `Method`,
  * `Backend` (and `VerifyMaxRelativeError` with Verify on), `ConditionEstimate`, `ElementOrder`,
  * `LargestStrain`, `InvertedCells` and `Model` (with Model NeoHookean also `LoadSteps`,
- * `NewtonIterations`, `SmallestVolumeRatio` and, with LiftOff, `LiftedNodes`). Precompute and solve warnings (slivers, strain above 10%,
- * cells inverted by the displacement, single-precision fallback) are reported with vtkWarningMacro.
- * Output port 1: a vtkTable of stage timings (columns `Stage`, `TimeMs`, `Reused`, `Backend`).
+ * `NewtonIterations`, `SmallestVolumeRatio` and, with LiftOff, `LiftedNodes`). Precompute and solve
+ * warnings (slivers, strain above 10%, cells inverted by the displacement, single-precision
+ * fallback) are reported with vtkWarningMacro. Output port 1: a vtkTable of stage timings (columns
+ * `Stage`, `TimeMs`, `Reused`, `Backend`).
  *
  * The precompute (assembly, ordering, factorization, condensation) runs on a worker thread and is
  * cached: when only the bone's Displacement values change (a new cut on the same bone, ROI and

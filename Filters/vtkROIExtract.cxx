@@ -60,10 +60,13 @@ vtkCxxSetObjectMacro(vtkROIExtract, Region, vtkImplicitFunction);
 
 vtkROIExtract::vtkROIExtract() = default;
 
-vtkROIExtract::~vtkROIExtract() { this->SetRegion(nullptr); }
+vtkROIExtract::~vtkROIExtract() {
+  this->SetRegion(nullptr);
+}
 
 void vtkROIExtract::SetNumberOfPointIds(vtkIdType n) {
-  if (n < 0) n = 0;
+  if (n < 0)
+    n = 0;
   if (static_cast<vtkIdType>(this->PointIds.size()) != n) {
     this->PointIds.resize(static_cast<std::size_t>(n), 0);
     this->Modified();
@@ -71,7 +74,8 @@ void vtkROIExtract::SetNumberOfPointIds(vtkIdType n) {
 }
 
 void vtkROIExtract::SetPointId(vtkIdType index, vtkIdType pointId) {
-  if (index < 0) return;
+  if (index < 0)
+    return;
   if (index >= static_cast<vtkIdType>(this->PointIds.size()))
     this->PointIds.resize(static_cast<std::size_t>(index + 1), 0);
   if (this->PointIds[index] != pointId) {
@@ -93,7 +97,8 @@ void vtkROIExtract::RemoveAllPointIds() {
 }
 
 vtkIdType vtkROIExtract::GetPointId(vtkIdType index) const {
-  return index >= 0 && index < static_cast<vtkIdType>(this->PointIds.size()) ? this->PointIds[index] : -1;
+  return index >= 0 && index < static_cast<vtkIdType>(this->PointIds.size()) ? this->PointIds[index]
+                                                                             : -1;
 }
 
 int vtkROIExtract::RequestDataObject(vtkInformation* request, vtkInformationVector** inputVector,
@@ -113,7 +118,8 @@ int vtkROIExtract::RequestDataObject(vtkInformation* request, vtkInformationVect
 
 vtkMTimeType vtkROIExtract::GetMTime() {
   vtkMTimeType t = this->Superclass::GetMTime();
-  if (this->Region) t = std::max(t, this->Region->GetMTime());
+  if (this->Region)
+    t = std::max(t, this->Region->GetMTime());
   return t;
 }
 
@@ -163,7 +169,8 @@ bool vtkROIExtract::Extract(vtkPointSet* input, vtkPointSet* output) {
 
   faceplan::SurfaceMesh mesh;
   std::string why;
-  if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::EdgesOfAnyCell, mesh, why)) {
+  if (!faceplan::vtkconvert::ToSurfaceMesh(input, faceplan::vtkconvert::CellPolicy::EdgesOfAnyCell,
+                                           mesh, why)) {
     vtkErrorMacro(<< "ROI Extract: " << why);
     return false;
   }
@@ -191,7 +198,8 @@ bool vtkROIExtract::Extract(vtkPointSet* input, vtkPointSet* output) {
     }
   }
   if (this->InsideOut)
-    for (auto& s : selected) s = s ? 0 : 1;
+    for (auto& s : selected)
+      s = s ? 0 : 1;
 
   faceplan::ROIResult roi;
   const faceplan::Status status = faceplan::ComputeROI(mesh, selected, roi);
@@ -214,7 +222,8 @@ bool vtkROIExtract::Extract(vtkPointSet* input, vtkPointSet* output) {
   output->GetPointData()->RemoveArray("ROIBoundary");
   output->GetPointData()->AddArray(mask);
   output->GetPointData()->AddArray(boundary);
-  if (roi.numROI == 0) vtkWarningMacro(<< "ROI Extract: the ROI is empty");
+  if (roi.numROI == 0)
+    vtkWarningMacro(<< "ROI Extract: the ROI is empty");
   return true;
 }
 

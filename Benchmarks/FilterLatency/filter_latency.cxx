@@ -47,7 +47,8 @@ double Field(vtkDataObject* out, const char* name) {
 }
 
 std::string FieldText(vtkDataObject* out, const char* name) {
-  auto* array = out ? vtkStringArray::SafeDownCast(out->GetFieldData()->GetAbstractArray(name)) : nullptr;
+  auto* array =
+      out ? vtkStringArray::SafeDownCast(out->GetFieldData()->GetAbstractArray(name)) : nullptr;
   return array && array->GetNumberOfValues() > 0 ? array->GetValue(0) : std::string("?");
 }
 
@@ -72,17 +73,23 @@ int main(int argc, char** argv) {
   std::string scene, backend = "CPU", json;
   int edits = 30;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--scene")) scene = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--backend")) backend = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--edits")) edits = std::max(1, std::atoi(argv[i + 1]));
-    else if (!std::strcmp(argv[i], "--json")) json = argv[i + 1];
+    if (!std::strcmp(argv[i], "--scene"))
+      scene = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--backend"))
+      backend = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--edits"))
+      edits = std::max(1, std::atoi(argv[i + 1]));
+    else if (!std::strcmp(argv[i], "--json"))
+      json = argv[i + 1];
     else {
       std::fprintf(stderr, "unknown option %s\n", argv[i]);
       return 2;
     }
   }
   if (scene.empty() || (backend != "CPU" && backend != "CUDA")) {
-    std::fprintf(stderr, "usage: filter_latency --scene shell.vtk [--backend CPU|CUDA] [--edits N] [--json F]\n");
+    std::fprintf(
+        stderr,
+        "usage: filter_latency --scene shell.vtk [--backend CPU|CUDA] [--edits N] [--json F]\n");
     return 2;
   }
   vtkNew<vtkUnstructuredGridReader> tissue;
@@ -109,7 +116,8 @@ int main(int argc, char** argv) {
   vtkNew<vtkCondensedFEMDeform> fem;
   fem->SetInputConnection(0, tissue->GetOutputPort());
   fem->SetBoneConnection(cut->GetOutputPort());
-  fem->SetBackend(backend == "CUDA" ? vtkCondensedFEMDeform::BACKEND_CUDA : vtkCondensedFEMDeform::BACKEND_CPU);
+  fem->SetBackend(backend == "CUDA" ? vtkCondensedFEMDeform::BACKEND_CUDA
+                                    : vtkCondensedFEMDeform::BACKEND_CPU);
   fem->SetOutputMode(vtkCondensedFEMDeform::SURFACE);
   fem->SetContactDistance(0.5);
 
@@ -120,7 +128,8 @@ int main(int argc, char** argv) {
   fem->Update();
   const double firstMs = Ms(t0, std::chrono::steady_clock::now());
   vtkDataObject* out = fem->GetOutputDataObject(0);
-  const vtkIdType outputPoints = vtkPointSet::SafeDownCast(out) ? vtkPointSet::SafeDownCast(out)->GetNumberOfPoints() : 0;
+  const vtkIdType outputPoints =
+      vtkPointSet::SafeDownCast(out) ? vtkPointSet::SafeDownCast(out)->GetNumberOfPoints() : 0;
   if (outputPoints == 0) {
     std::fprintf(stderr, "CondensedFEMDeform produced no output\n");
     return 1;
@@ -148,19 +157,28 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "an edit of the cut started a new precompute\n");
     return 1;
   }
-  std::printf("shell (Surface output), backend %s (%s): tets %lld, first update %.1f ms | per edit (median of %d): "
-              "CondensedFEMDeform update %.3f ms (p90 %.3f), SolveTimeMs %.3f, overhead %.3f; BezierCut %.3f ms\n",
-              backend.c_str(), usedBackend.c_str(),
-              static_cast<long long>(tissue->GetOutput()->GetNumberOfCells()), firstMs, edits, Median(femMs),
-              [&] { std::vector<double> s = femMs; std::sort(s.begin(), s.end()); return s[(s.size() - 1) * 9 / 10]; }(),
-              Median(solveMs), Median(overheadMs), Median(cutMs));
+  std::printf(
+      "shell (Surface output), backend %s (%s): tets %lld, first update %.1f ms | per edit (median "
+      "of %d): "
+      "CondensedFEMDeform update %.3f ms (p90 %.3f), SolveTimeMs %.3f, overhead %.3f; BezierCut "
+      "%.3f ms\n",
+      backend.c_str(), usedBackend.c_str(),
+      static_cast<long long>(tissue->GetOutput()->GetNumberOfCells()), firstMs, edits,
+      Median(femMs),
+      [&] {
+        std::vector<double> s = femMs;
+        std::sort(s.begin(), s.end());
+        return s[(s.size() - 1) * 9 / 10];
+      }(),
+      Median(solveMs), Median(overheadMs), Median(cutMs));
   if (!json.empty()) {
     std::ofstream j(json);
-    j << "{\"backend\": \"" << backend << "\", \"backend_used\": \"" << usedBackend << "\", \"tets\": "
-      << tissue->GetOutput()->GetNumberOfCells() << ", \"edits\": " << edits << ", \"first_update_ms\": " << firstMs
-      << ", \"fem_update_ms_median\": " << Median(femMs) << ", \"solve_ms_median\": " << Median(solveMs)
-      << ", \"overhead_ms_median\": " << Median(overheadMs) << ", \"bezier_cut_ms_median\": " << Median(cutMs)
-      << "}\n";
+    j << "{\"backend\": \"" << backend << "\", \"backend_used\": \"" << usedBackend
+      << "\", \"tets\": " << tissue->GetOutput()->GetNumberOfCells() << ", \"edits\": " << edits
+      << ", \"first_update_ms\": " << firstMs << ", \"fem_update_ms_median\": " << Median(femMs)
+      << ", \"solve_ms_median\": " << Median(solveMs)
+      << ", \"overhead_ms_median\": " << Median(overheadMs)
+      << ", \"bezier_cut_ms_median\": " << Median(cutMs) << "}\n";
   }
   return 0;
 }

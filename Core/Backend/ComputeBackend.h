@@ -41,7 +41,7 @@ public:
   virtual bool providesFactorAndResponse() const { return false; }
 
   struct FactorResponseReport {
-    double factorizationMs = 0.0;       // numeric factorization, its uploads and the copy into `factor`
+    double factorizationMs = 0.0; // numeric factorization, its uploads and the copy into `factor`
     double worstRelativeResidual = 0.0; // max over ROI columns b of ||K_FF x - b|| / ||b||
     std::string detail;                 // one line: what ran where (for logs and the benchmark)
   };

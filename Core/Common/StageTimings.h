@@ -36,7 +36,8 @@ class StageClock {
 public:
   StageClock() : start_(std::chrono::steady_clock::now()) {}
   double elapsedMs() const {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_)
+        .count();
   }
   // Milliseconds since construction or the previous lap.
   double lapMs() {

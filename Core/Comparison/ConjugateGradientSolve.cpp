@@ -12,13 +12,14 @@ const char* CGPreconditionerName(CGPreconditioner p) {
 }
 
 namespace {
+template <class Scalar> using Matrix = Eigen::SparseMatrix<Scalar, Eigen::ColMajor, int>;
 template <class Scalar>
-using Matrix = Eigen::SparseMatrix<Scalar, Eigen::ColMajor, int>;
+using JacobiCG =
+    Eigen::ConjugateGradient<Matrix<Scalar>, Eigen::Upper, Eigen::DiagonalPreconditioner<Scalar>>;
 template <class Scalar>
-using JacobiCG = Eigen::ConjugateGradient<Matrix<Scalar>, Eigen::Upper, Eigen::DiagonalPreconditioner<Scalar>>;
-template <class Scalar>
-using IcholCG = Eigen::ConjugateGradient<Matrix<Scalar>, Eigen::Upper,
-                                         Eigen::IncompleteCholesky<Scalar, Eigen::Upper, Eigen::AMDOrdering<int>>>;
+using IcholCG = Eigen::ConjugateGradient<
+    Matrix<Scalar>, Eigen::Upper,
+    Eigen::IncompleteCholesky<Scalar, Eigen::Upper, Eigen::AMDOrdering<int>>>;
 } // namespace
 
 struct ConjugateGradientSolver::Impl {
@@ -26,18 +27,21 @@ struct ConjugateGradientSolver::Impl {
   CGOptions options;
   double setupMs = 0.0;
   Matrix<float> kffSingle;
-  std::variant<std::monostate, JacobiCG<double>, IcholCG<double>, JacobiCG<float>, IcholCG<float>> cg;
+  std::variant<std::monostate, JacobiCG<double>, IcholCG<double>, JacobiCG<float>, IcholCG<float>>
+      cg;
 };
 
 ConjugateGradientSolver::ConjugateGradientSolver() : impl_(std::make_unique<Impl>()) {}
 ConjugateGradientSolver::~ConjugateGradientSolver() = default;
-double ConjugateGradientSolver::setupMs() const { return impl_->setupMs; }
+double ConjugateGradientSolver::setupMs() const {
+  return impl_->setupMs;
+}
 
 namespace {
-template <class Solver, class Mat>
-Status Compute(Solver& solver, const Mat& matrix) {
+template <class Solver, class Mat> Status Compute(Solver& solver, const Mat& matrix) {
   solver.compute(matrix);
-  if (solver.info() != Eigen::Success) return Status::Error("preconditioner setup failed (not positive definite?)");
+  if (solver.info() != Eigen::Success)
+    return Status::Error("preconditioner setup failed (not positive definite?)");
   return Status::Ok();
 }
 } // namespace
@@ -75,11 +79,14 @@ void Run(Solver& solver, const Eigen::VectorXd& b, double tolerance, const Eigen
   using Scalar = typename Solver::Scalar;
   using Vec = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
   solver.setTolerance(static_cast<typename Solver::RealScalar>(tolerance));
-  if (maxIterations > 0) solver.setMaxIterations(maxIterations);
+  if (maxIterations > 0)
+    solver.setMaxIterations(maxIterations);
   const Vec bs = b.template cast<Scalar>();
   Vec xs;
-  if (guess && guess->size() == b.size()) xs = solver.solveWithGuess(bs, Vec(guess->template cast<Scalar>()));
-  else xs = solver.solve(bs);
+  if (guess && guess->size() == b.size())
+    xs = solver.solveWithGuess(bs, Vec(guess->template cast<Scalar>()));
+  else
+    xs = solver.solve(bs);
   x = xs.template cast<double>();
   report.iterations = static_cast<int>(solver.iterations());
   report.estimatedResidual = static_cast<double>(solver.error());
@@ -87,8 +94,9 @@ void Run(Solver& solver, const Eigen::VectorXd& b, double tolerance, const Eigen
 }
 } // namespace
 
-Status ConjugateGradientSolver::solve(const Eigen::VectorXd& b, double tolerance, const Eigen::VectorXd* guess,
-                                      Eigen::VectorXd& x, CGReport& report) const {
+Status ConjugateGradientSolver::solve(const Eigen::VectorXd& b, double tolerance,
+                                      const Eigen::VectorXd* guess, Eigen::VectorXd& x,
+                                      CGReport& report) const {
   return ReturnStatusOnException("the CG solve", [&]() -> Status {
     report = CGReport();
     const Impl& m = *impl_;

@@ -21,9 +21,9 @@ struct CGOptions {
 
 struct CGReport {
   int iterations = 0;
-  bool converged = false;           // Eigen reached the tolerance within maxIterations
-  double estimatedResidual = 0.0;   // Eigen's own relative residual (in the working precision)
-  double relativeResidual = 0.0;    // ||K_FF x - b|| / ||b||, recomputed in double
+  bool converged = false;         // Eigen reached the tolerance within maxIterations
+  double estimatedResidual = 0.0; // Eigen's own relative residual (in the working precision)
+  double relativeResidual = 0.0;  // ||K_FF x - b|| / ||b||, recomputed in double
   double solveMs = 0.0;
 };
 

@@ -15,7 +15,8 @@ namespace {
 void MakeFreeLayout(const TetMesh& mesh, const NodeSets& sets, FreeSystem& s) {
   std::vector<char> used(mesh.numPoints(), 0);
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
-    for (int k = 0; k < 4; ++k) used[mesh.tets(e, k)] = 1;
+    for (int k = 0; k < 4; ++k)
+      used[mesh.tets(e, k)] = 1;
   NodeLayout layout = MakeLayout(used, sets);
   s.dofNode = std::move(layout.dofNode);
   s.meshNode = std::move(layout.meshNode);
@@ -60,18 +61,21 @@ Status BuildFreeSystem(const PrecomputeRequest& request, FreeSystem& s) {
 
 Status RoiVector(const FreeSystem& s, const RowVectors3d& movable, Eigen::VectorXd& roi) {
   if (movable.rows() != static_cast<Eigen::Index>(s.roiPosition.size()))
-    return Status::Error("expected " + std::to_string(s.roiPosition.size()) + " ROI displacements, got " +
-                         std::to_string(movable.rows()));
-  if (!movable.allFinite()) return Status::Error("prescribed displacements contain NaN or infinite values");
+    return Status::Error("expected " + std::to_string(s.roiPosition.size()) +
+                         " ROI displacements, got " + std::to_string(movable.rows()));
+  if (!movable.allFinite())
+    return Status::Error("prescribed displacements contain NaN or infinite values");
   roi = Eigen::VectorXd::Zero(3 * s.roi);
   for (size_t k = 0; k < s.roiPosition.size(); ++k)
-    if (s.roiPosition[k] >= 0) roi.segment<3>(3 * s.roiPosition[k]) = movable.row(k).transpose();
+    if (s.roiPosition[k] >= 0)
+      roi.segment<3>(3 * s.roiPosition[k]) = movable.row(k).transpose();
   return Status::Ok();
 }
 
 Eigen::VectorXd FreeRightHandSide(const FreeSystem& s, const Eigen::VectorXd& roi) {
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(s.freeDofs());
-  if (roi.size() > 0) rhs.noalias() -= s.kfr * roi;
+  if (roi.size() > 0)
+    rhs.noalias() -= s.kfr * roi;
   return rhs;
 }
 
@@ -79,25 +83,32 @@ namespace {
 Eigen::RowVector3d ValueOf(const FreeSystem& s, int node, const Eigen::VectorXd& freeValues,
                            const Eigen::VectorXd& roi) {
   const int pos = s.dofNode[node];
-  if (pos < 0) return Eigen::RowVector3d::Zero();
-  if (pos >= s.freeNodes()) return roi.segment<3>(3 * (pos - s.freeNodes())).transpose();
+  if (pos < 0)
+    return Eigen::RowVector3d::Zero();
+  if (pos >= s.freeNodes())
+    return roi.segment<3>(3 * (pos - s.freeNodes())).transpose();
   return freeValues.segment<3>(3 * pos).transpose();
 }
 } // namespace
 
-RowVectors3d KeptDisplacement(const FreeSystem& s, const Eigen::VectorXd& freeValues, const Eigen::VectorXd& roi) {
+RowVectors3d KeptDisplacement(const FreeSystem& s, const Eigen::VectorXd& freeValues,
+                              const Eigen::VectorXd& roi) {
   RowVectors3d out(static_cast<Eigen::Index>(s.kept.size()), 3);
-  for (size_t k = 0; k < s.kept.size(); ++k) out.row(k) = ValueOf(s, s.kept[k], freeValues, roi);
+  for (size_t k = 0; k < s.kept.size(); ++k)
+    out.row(k) = ValueOf(s, s.kept[k], freeValues, roi);
   return out;
 }
 
-RowVectors3d AllDisplacement(const FreeSystem& s, const Eigen::VectorXd& freeValues, const Eigen::VectorXd& roi) {
+RowVectors3d AllDisplacement(const FreeSystem& s, const Eigen::VectorXd& freeValues,
+                             const Eigen::VectorXd& roi) {
   RowVectors3d out(s.numMeshNodes, 3);
-  for (Eigen::Index i = 0; i < s.numMeshNodes; ++i) out.row(i) = ValueOf(s, static_cast<int>(i), freeValues, roi);
+  for (Eigen::Index i = 0; i < s.numMeshNodes; ++i)
+    out.row(i) = ValueOf(s, static_cast<int>(i), freeValues, roi);
   return out;
 }
 
-double FreeRelativeResidual(const FreeSystem& s, const Eigen::VectorXd& x, const Eigen::VectorXd& b) {
+double FreeRelativeResidual(const FreeSystem& s, const Eigen::VectorXd& x,
+                            const Eigen::VectorXd& b) {
   const double bn = b.norm();
   const Eigen::VectorXd r = s.kff.selfadjointView<Eigen::Upper>() * x - b;
   return bn > 0.0 ? r.norm() / bn : x.norm();

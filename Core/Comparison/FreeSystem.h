@@ -12,8 +12,8 @@ namespace faceplan {
 
 struct FreeSystem {
   Eigen::Index numMeshNodes = 0;
-  std::vector<int> dofNode;     // mesh node -> block position, -1 without DOFs
-  std::vector<int> meshNode;    // block position -> mesh node
+  std::vector<int> dofNode;  // mesh node -> block position, -1 without DOFs
+  std::vector<int> meshNode; // block position -> mesh node
   int keptFree = 0, interior = 0, roi = 0;
   std::vector<int> roiPosition; // NodeSets::movable index -> ROI position, -1 when unused
   std::vector<int> kept;        // NodeSets::kept as given
@@ -36,11 +36,12 @@ Eigen::VectorXd FreeRightHandSide(const FreeSystem& system, const Eigen::VectorX
 
 // Kept (NodeSets::kept order) or all nodes' displacement from free values and the ROI vector.
 RowVectors3d KeptDisplacement(const FreeSystem& system, const Eigen::VectorXd& freeValues,
-                               const Eigen::VectorXd& roi);
-RowVectors3d AllDisplacement(const FreeSystem& system, const Eigen::VectorXd& freeValues,
                               const Eigen::VectorXd& roi);
+RowVectors3d AllDisplacement(const FreeSystem& system, const Eigen::VectorXd& freeValues,
+                             const Eigen::VectorXd& roi);
 
 // ||K_FF x - b|| / ||b||.
-double FreeRelativeResidual(const FreeSystem& system, const Eigen::VectorXd& x, const Eigen::VectorXd& b);
+double FreeRelativeResidual(const FreeSystem& system, const Eigen::VectorXd& x,
+                            const Eigen::VectorXd& b);
 
 } // namespace faceplan

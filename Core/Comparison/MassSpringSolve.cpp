@@ -62,18 +62,21 @@ Status MassSpringModel::build(const PrecomputeRequest& request) {
     auto addBlock = [&](int na, int nb, const Eigen::Matrix3d& block) {
       // Block (na, nb) of the global matrix, sorted into K_FF (upper) and K_FP.
       const int fa = freeIndex_[na], fb = freeIndex_[nb], pb = prescribedIndex_[nb];
-      if (fa < 0) return;
+      if (fa < 0)
+        return;
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
           if (fb >= 0) {
-            if (3 * fa + i <= 3 * fb + j) ff.emplace_back(3 * fa + i, 3 * fb + j, block(i, j));
+            if (3 * fa + i <= 3 * fb + j)
+              ff.emplace_back(3 * fa + i, 3 * fb + j, block(i, j));
           } else if (pb >= 0) {
             fp.emplace_back(3 * fa + i, 3 * pb + j, block(i, j));
           }
         }
     };
     for (const auto& [edge, volumeTimesE] : edgeStiffness) {
-      const Eigen::Vector3d d = (mesh.points.row(edge.second) - mesh.points.row(edge.first)).transpose();
+      const Eigen::Vector3d d =
+          (mesh.points.row(edge.second) - mesh.points.row(edge.first)).transpose();
       const double length2 = d.squaredNorm();
       const Eigen::Matrix3d block = (volumeTimesE / length2) * (d * d.transpose()) / length2;
       addBlock(edge.first, edge.first, block);
@@ -99,7 +102,8 @@ Status MassSpringModel::build(const PrecomputeRequest& request) {
   });
 }
 
-Status MassSpringModel::solve(const RowVectors3d& movable, RowVectors3d& kept, RowVectors3d* all) const {
+Status MassSpringModel::solve(const RowVectors3d& movable, RowVectors3d& kept,
+                              RowVectors3d* all) const {
   return ReturnStatusOnException("the mass-spring solve", [&]() -> Status {
     if (!ready_)
       return Status::Error("mass-spring solve before a successful build");
@@ -119,8 +123,10 @@ Status MassSpringModel::solve(const RowVectors3d& movable, RowVectors3d& kept, R
       x = solution.col(0);
     }
     auto valueOf = [&](int node) -> Eigen::RowVector3d {
-      if (freeIndex_[node] >= 0) return x.segment<3>(3 * freeIndex_[node]).transpose();
-      if (prescribedIndex_[node] >= 0) return up.segment<3>(3 * prescribedIndex_[node]).transpose();
+      if (freeIndex_[node] >= 0)
+        return x.segment<3>(3 * freeIndex_[node]).transpose();
+      if (prescribedIndex_[node] >= 0)
+        return up.segment<3>(3 * prescribedIndex_[node]).transpose();
       return Eigen::RowVector3d::Zero();
     };
     kept.resize(static_cast<Eigen::Index>(kept_.size()), 3);

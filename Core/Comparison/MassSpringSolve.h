@@ -5,8 +5,8 @@
 // no counterpart), linearised about the rest shape (k n n^T per edge) and solved statically with
 // the same boundary conditions (constrained nodes held, ROI prescribed) by a sparse Cholesky.
 // Its difference to FEM is modelling error, not solver error. Never throws.
-#include "SparseSolver/CholmodFactor.h"
 #include "CondensedFEM/CondensedFEM.h"
+#include "SparseSolver/CholmodFactor.h"
 
 namespace faceplan {
 

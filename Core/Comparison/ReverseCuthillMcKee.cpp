@@ -26,29 +26,36 @@ int LevelStructure(int root, const std::vector<int>& start, const std::vector<in
           touched.push_back(w);
         }
       }
-    if (next.empty()) break;
+    if (next.empty())
+      break;
     frontier.swap(next);
     ++depth;
   }
   lastLevel = frontier;
-  for (int v : touched) level[v] = -1; // leave the scratch array clean
+  for (int v : touched)
+    level[v] = -1; // leave the scratch array clean
   return depth + 1;
 }
 
 } // namespace
 
-std::vector<int> ReverseCuthillMcKee(const std::vector<int>& start, const std::vector<int>& adjacent) {
+std::vector<int> ReverseCuthillMcKee(const std::vector<int>& start,
+                                     const std::vector<int>& adjacent) {
   const int n = static_cast<int>(start.size()) - 1;
   std::vector<int> degree(n), order, level(n, -1);
-  for (int v = 0; v < n; ++v) degree[v] = start[v + 1] - start[v];
+  for (int v = 0; v < n; ++v)
+    degree[v] = start[v + 1] - start[v];
   std::vector<char> placed(n, 0);
   order.reserve(n);
   std::vector<int> byDegree(n);
-  for (int v = 0; v < n; ++v) byDegree[v] = v;
-  std::stable_sort(byDegree.begin(), byDegree.end(), [&](int a, int b) { return degree[a] < degree[b]; });
+  for (int v = 0; v < n; ++v)
+    byDegree[v] = v;
+  std::stable_sort(byDegree.begin(), byDegree.end(),
+                   [&](int a, int b) { return degree[a] < degree[b]; });
   std::vector<int> neighbours;
   for (int seed : byDegree) {
-    if (placed[seed]) continue;
+    if (placed[seed])
+      continue;
     // Pseudo-peripheral node: move to a smallest-degree vertex of the last level while the
     // eccentricity grows.
     int root = seed;
@@ -59,7 +66,8 @@ std::vector<int> ReverseCuthillMcKee(const std::vector<int>& start, const std::v
                                               [&](int a, int b) { return degree[a] < degree[b]; });
       std::vector<int> candidateLast;
       const int candidateDepth = LevelStructure(candidate, start, adjacent, level, candidateLast);
-      if (candidateDepth <= depth) break;
+      if (candidateDepth <= depth)
+        break;
       root = candidate;
       depth = candidateDepth;
       last.swap(candidateLast);
@@ -88,12 +96,14 @@ std::vector<int> ReverseCuthillMcKee(const std::vector<int>& start, const std::v
   return order;
 }
 
-int GraphBandwidth(const std::vector<int>& start, const std::vector<int>& adjacent, const std::vector<int>& order) {
+int GraphBandwidth(const std::vector<int>& start, const std::vector<int>& adjacent,
+                   const std::vector<int>& order) {
   const int n = static_cast<int>(start.size()) - 1;
   const std::vector<int> position = InversePermutation(order.data(), n);
   int band = 0;
   for (int v = 0; v < n; ++v)
-    for (int k = start[v]; k < start[v + 1]; ++k) band = std::max(band, std::abs(position[v] - position[adjacent[k]]));
+    for (int k = start[v]; k < start[v + 1]; ++k)
+      band = std::max(band, std::abs(position[v] - position[adjacent[k]]));
   return band;
 }
 

@@ -8,9 +8,11 @@ namespace faceplan {
 
 // adjacency: CSR (start has n + 1 entries); self loops are ignored.
 // Returns order[k] = the vertex placed at position k.
-std::vector<int> ReverseCuthillMcKee(const std::vector<int>& start, const std::vector<int>& adjacent);
+std::vector<int> ReverseCuthillMcKee(const std::vector<int>& start,
+                                     const std::vector<int>& adjacent);
 
 // Largest |position(u) - position(v)| over the graph's edges for a given order.
-int GraphBandwidth(const std::vector<int>& start, const std::vector<int>& adjacent, const std::vector<int>& order);
+int GraphBandwidth(const std::vector<int>& start, const std::vector<int>& adjacent,
+                   const std::vector<int>& order);
 
 } // namespace faceplan

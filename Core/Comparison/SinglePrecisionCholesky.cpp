@@ -7,13 +7,17 @@ namespace faceplan {
 
 struct SinglePrecisionCholesky::Impl {
   const FreeSystem* system = nullptr;
-  Eigen::SimplicialLLT<Eigen::SparseMatrix<float, Eigen::ColMajor, int>, Eigen::Upper, Eigen::AMDOrdering<int>> llt;
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<float, Eigen::ColMajor, int>, Eigen::Upper,
+                       Eigen::AMDOrdering<int>>
+      llt;
   double factorizeMs = 0.0;
 };
 
 SinglePrecisionCholesky::SinglePrecisionCholesky() : impl_(std::make_unique<Impl>()) {}
 SinglePrecisionCholesky::~SinglePrecisionCholesky() = default;
-double SinglePrecisionCholesky::factorizeMs() const { return impl_->factorizeMs; }
+double SinglePrecisionCholesky::factorizeMs() const {
+  return impl_->factorizeMs;
+}
 
 Status SinglePrecisionCholesky::factorize(const FreeSystem& system) {
   return ReturnStatusOnException("the single-precision factorization", [&]() -> Status {
@@ -23,14 +27,15 @@ Status SinglePrecisionCholesky::factorize(const FreeSystem& system) {
     impl_->llt.compute(single);
     impl_->factorizeMs = clock.elapsedMs();
     if (impl_->llt.info() != Eigen::Success)
-      return Status::Error("single-precision Cholesky failed: K_FF is not positive definite in float");
+      return Status::Error(
+          "single-precision Cholesky failed: K_FF is not positive definite in float");
     impl_->system = &system;
     return Status::Ok();
   });
 }
 
-Status SinglePrecisionCholesky::solve(const Eigen::VectorXd& b, int refinementSteps, Eigen::VectorXd& x,
-                                      SinglePrecisionReport& report) const {
+Status SinglePrecisionCholesky::solve(const Eigen::VectorXd& b, int refinementSteps,
+                                      Eigen::VectorXd& x, SinglePrecisionReport& report) const {
   return ReturnStatusOnException("the single-precision solve", [&]() -> Status {
     report = SinglePrecisionReport();
     if (!impl_->system)

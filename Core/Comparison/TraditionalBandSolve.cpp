@@ -20,8 +20,8 @@ namespace {
 
 // Fortran LAPACK with the trailing hidden length of the character argument.
 using Pbtrf = void (*)(const char*, const int*, const int*, double*, const int*, int*, std::size_t);
-using Pbtrs = void (*)(const char*, const int*, const int*, const int*, const double*, const int*, double*,
-                       const int*, int*, std::size_t);
+using Pbtrs = void (*)(const char*, const int*, const int*, const int*, const double*, const int*,
+                       double*, const int*, int*, std::size_t);
 
 struct Lapack {
   Pbtrf pbtrf = nullptr;
@@ -36,13 +36,16 @@ const Lapack& FindLapack() {
     l.pbtrf = reinterpret_cast<Pbtrf>(dlsym(self, "dpbtrf_"));
     l.pbtrs = reinterpret_cast<Pbtrs>(dlsym(self, "dpbtrs_"));
     for (const char* name : {"liblapack.so.3", "libopenblas.so.0", "liblapack.so"}) {
-      if (l.pbtrf && l.pbtrs) break;
+      if (l.pbtrf && l.pbtrs)
+        break;
       void* handle = dlopen(name, RTLD_NOW | RTLD_GLOBAL);
-      if (!handle) continue;
+      if (!handle)
+        continue;
       l.pbtrf = reinterpret_cast<Pbtrf>(dlsym(handle, "dpbtrf_"));
       l.pbtrs = reinterpret_cast<Pbtrs>(dlsym(handle, "dpbtrs_"));
     }
-    if (!l.pbtrf || !l.pbtrs) l.why = "LAPACK's dpbtrf_/dpbtrs_ were not found (no liblapack.so.3 loaded)";
+    if (!l.pbtrf || !l.pbtrs)
+      l.why = "LAPACK's dpbtrf_/dpbtrs_ were not found (no liblapack.so.3 loaded)";
     return l;
   }();
   return lapack;
@@ -52,14 +55,17 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
                        TraditionalBandResult& r, const TraditionalBandOptions& options) {
   r = TraditionalBandResult();
   const Lapack& lapack = FindLapack();
-  if (!lapack.pbtrf) return Status::Error(lapack.why);
+  if (!lapack.pbtrf)
+    return Status::Error(lapack.why);
   const TetMesh& mesh = request.mesh;
   const NodeSets& sets = request.sets;
   Status status = ValidateSolveInputs(mesh, request.materials, sets);
-  if (!status) return status;
+  if (!status)
+    return status;
   if (movable.rows() != static_cast<Eigen::Index>(sets.movable.size()))
     return Status::Error("expected one ROI displacement per movable node");
-  if (!movable.allFinite()) return Status::Error("prescribed displacements contain NaN or infinite values");
+  if (!movable.allFinite())
+    return Status::Error("prescribed displacements contain NaN or infinite values");
 
   StageClock clock;
   const Eigen::Index n = mesh.numPoints(), m = mesh.numTets();
@@ -67,8 +73,10 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
   // Reordering: free nodes (used, not constrained), their graph, reverse Cuthill-McKee.
   std::vector<char> used(n, 0), constrained(n, 0);
   for (Eigen::Index e = 0; e < m; ++e)
-    for (int k = 0; k < 4; ++k) used[mesh.tets(e, k)] = 1;
-  for (int i : sets.constrained) constrained[i] = 1;
+    for (int k = 0; k < 4; ++k)
+      used[mesh.tets(e, k)] = 1;
+  for (int i : sets.constrained)
+    constrained[i] = 1;
   std::vector<int> naturalIndex(n, -1), freeNode;
   for (Eigen::Index i = 0; i < n; ++i)
     if (used[i] && !constrained[i]) {
@@ -81,7 +89,8 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b) {
         const int ia = naturalIndex[mesh.tets(e, a)], ib = naturalIndex[mesh.tets(e, b)];
-        if (a != b && ia >= 0 && ib >= 0) neighbours[ia].push_back(ib);
+        if (a != b && ia >= 0 && ib >= 0)
+          neighbours[ia].push_back(ib);
       }
   std::vector<int> start(numFree + 1, 0), adjacent;
   for (int v = 0; v < numFree; ++v) {
@@ -91,14 +100,17 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
     start[v + 1] = start[v] + static_cast<int>(list.size());
   }
   adjacent.reserve(start[numFree]);
-  for (auto& list : neighbours) adjacent.insert(adjacent.end(), list.begin(), list.end());
+  for (auto& list : neighbours)
+    adjacent.insert(adjacent.end(), list.begin(), list.end());
   neighbours.clear();
   std::vector<int> natural(numFree);
-  for (int v = 0; v < numFree; ++v) natural[v] = v;
+  for (int v = 0; v < numFree; ++v)
+    natural[v] = v;
   r.semiBandwidthBefore = 3 * GraphBandwidth(start, adjacent, natural) + 2;
   const std::vector<int> order = ReverseCuthillMcKee(start, adjacent);
   std::vector<int> freeIndex(n, -1);
-  for (int k = 0; k < numFree; ++k) freeIndex[freeNode[order[k]]] = k;
+  for (int k = 0; k < numFree; ++k)
+    freeIndex[freeNode[order[k]]] = k;
   const int nodeBand = GraphBandwidth(start, adjacent, order);
   const int kd = numFree > 0 ? 3 * nodeBand + 2 : 0;
   const int dofs = 3 * numFree;
@@ -119,7 +131,8 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
   std::vector<ElementMatrix> ke(static_cast<size_t>(m));
   TetCorners corners;
   for (Eigen::Index e = 0; e < m; ++e) {
-    for (int k = 0; k < 4; ++k) corners.row(k) = mesh.points.row(mesh.tets(e, k));
+    for (int k = 0; k < 4; ++k)
+      corners.row(k) = mesh.points.row(mesh.tets(e, k));
     ke[e] = TetStiffness(corners, request.materials.E(e), request.materials.nu(e));
   }
   r.elementStiffnessMs = clock.lapMs();
@@ -133,16 +146,20 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
     for (int k = 0; k < 4; ++k) {
       const int f = freeIndex[mesh.tets(e, k)];
       any |= f >= 0;
-      for (int c = 0; c < 3; ++c) dofOf[3 * k + c] = f >= 0 ? 3 * f + c : -1;
+      for (int c = 0; c < 3; ++c)
+        dofOf[3 * k + c] = f >= 0 ? 3 * f + c : -1;
     }
-    if (!any) continue;
+    if (!any)
+      continue;
     const ElementMatrix& K = ke[e];
     for (int p = 0; p < 12; ++p) {
       const int i = dofOf[p];
-      if (i < 0) continue;
+      if (i < 0)
+        continue;
       for (int q = 0; q < 12; ++q) {
         const int j = dofOf[q];
-        if (j < i) continue; // upper triangle only (j >= i); skips -1 too
+        if (j < i)
+          continue; // upper triangle only (j >= i); skips -1 too
         ab[static_cast<size_t>(kd + i - j) + static_cast<size_t>(j) * ldab] += K(p, q);
       }
     }
@@ -151,7 +168,8 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
 
   // Boundary condition: prescribed values moved to the right-hand side, element by element.
   RowVectors3d prescribed = RowVectors3d::Zero(n, 3);
-  for (size_t k = 0; k < sets.movable.size(); ++k) prescribed.row(sets.movable[k]) = movable.row(k);
+  for (size_t k = 0; k < sets.movable.size(); ++k)
+    prescribed.row(sets.movable[k]) = movable.row(k);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(dofs);
   for (Eigen::Index e = 0; e < m; ++e) {
     bool anyFree = false, anyPrescribed = false;
@@ -164,11 +182,13 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
         anyPrescribed |= prescribed.row(node).squaredNorm() > 0.0;
       }
     }
-    if (!anyFree || !anyPrescribed) continue;
+    if (!anyFree || !anyPrescribed)
+      continue;
     const Eigen::Matrix<double, 12, 1> fe = ke[e] * ue;
     for (int k = 0; k < 4; ++k) {
       const int f = freeIndex[mesh.tets(e, k)];
-      if (f >= 0) rhs.segment<3>(3 * f) -= fe.segment<3>(3 * k);
+      if (f >= 0)
+        rhs.segment<3>(3 * f) -= fe.segment<3>(3 * k);
     }
   }
   ke.clear();
@@ -190,14 +210,16 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
     const int one = 1;
     lapack.pbtrs("U", &dofs, &kd, &one, ab.data(), &ldab, x.data(), &dofs, &info, 1);
     r.solveMs = clock.lapMs();
-    if (info != 0) return Status::Error("dpbtrs failed, info " + std::to_string(info));
+    if (info != 0)
+      return Status::Error("dpbtrs failed, info " + std::to_string(info));
     // Residual with the stored band (symmetric product), untimed.
     Eigen::VectorXd y = Eigen::VectorXd::Zero(dofs);
     for (int j = 0; j < dofs; ++j)
       for (int i = std::max(0, j - kd); i <= j; ++i) {
         const double a = original[static_cast<size_t>(kd + i - j) + static_cast<size_t>(j) * ldab];
         y[i] += a * x[j];
-        if (i != j) y[j] += a * x[i];
+        if (i != j)
+          y[j] += a * x[i];
       }
     const double bn = rhs.norm();
     r.relativeResidual = bn > 0 ? (y - rhs).norm() / bn : x.norm();
@@ -208,13 +230,18 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
 
   RowVectors3d all = prescribed;
   for (Eigen::Index i = 0; i < n; ++i) {
-    if (freeIndex[i] >= 0) all.row(i) = x.segment<3>(3 * freeIndex[i]).transpose();
-    else if (!constrained[i]) all.row(i).setZero();
+    if (freeIndex[i] >= 0)
+      all.row(i) = x.segment<3>(3 * freeIndex[i]).transpose();
+    else if (!constrained[i])
+      all.row(i).setZero();
   }
   r.keptDisplacement.resize(static_cast<Eigen::Index>(sets.kept.size()), 3);
-  for (size_t k = 0; k < sets.kept.size(); ++k) r.keptDisplacement.row(k) = all.row(sets.kept[k]);
-  if (options.recoverAll) r.allDisplacement = all;
-  if (!all.allFinite()) return Status::Error("the band solve produced non-finite values");
+  for (size_t k = 0; k < sets.kept.size(); ++k)
+    r.keptDisplacement.row(k) = all.row(sets.kept[k]);
+  if (options.recoverAll)
+    r.allDisplacement = all;
+  if (!all.allFinite())
+    return Status::Error("the band solve produced non-finite values");
   return Status::Ok();
 }
 
@@ -222,7 +249,8 @@ Status TraditionalImpl(const PrecomputeRequest& request, const RowVectors3d& mov
 
 bool BandLapackAvailable(std::string* why) {
   const Lapack& l = FindLapack();
-  if (why) *why = l.why;
+  if (why)
+    *why = l.why;
   return l.pbtrf && l.pbtrs;
 }
 

@@ -12,9 +12,9 @@
 namespace faceplan {
 
 struct TraditionalBandOptions {
-  double maxBandBytes = 4.0e9;        // refuse larger band matrices
-  double maxFactorFlops = 1.0e12;     // refuse factorizations estimated above this (n * kd^2)
-  bool recoverAll = false;            // also return every node's displacement
+  double maxBandBytes = 4.0e9;    // refuse larger band matrices
+  double maxFactorFlops = 1.0e12; // refuse factorizations estimated above this (n * kd^2)
+  bool recoverAll = false;        // also return every node's displacement
 };
 
 struct TraditionalBandResult {
@@ -23,16 +23,17 @@ struct TraditionalBandResult {
   double reorderingMs = 0, elementStiffnessMs = 0, assemblyMs = 0, boundaryConditionMs = 0,
          factorizationMs = 0, solveMs = 0, totalMs = 0;
   long long freeDofs = 0;
-  int semiBandwidth = 0;            // in DOFs, after reordering
-  int semiBandwidthBefore = 0;      // in DOFs, in the mesh's own numbering
+  int semiBandwidth = 0;       // in DOFs, after reordering
+  int semiBandwidthBefore = 0; // in DOFs, in the mesh's own numbering
   double bandBytes = 0.0;
-  double relativeResidual = 0.0;    // of the band system, in double
+  double relativeResidual = 0.0; // of the band system, in double
 };
 
 // True when LAPACK's dpbtrf/dpbtrs can be found in this process.
 bool BandLapackAvailable(std::string* why = nullptr);
 
 Status SolveTraditionalBand(const PrecomputeRequest& request, const RowVectors3d& movable,
-                            TraditionalBandResult& result, const TraditionalBandOptions& options = {});
+                            TraditionalBandResult& result,
+                            const TraditionalBandOptions& options = {});
 
 } // namespace faceplan

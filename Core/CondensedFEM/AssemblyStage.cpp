@@ -27,12 +27,12 @@ Status AssembleStiffness(PrecomputeState& state) {
   // follows from the cells alone) while the gather map, the element matrices and the separation
   // are made here.
   const Groups cornersOf = CornersByNode(cells, numCells, nodesPerCell, layout.dofNode,
-                                        static_cast<int>(layout.meshNode.size()));
+                                         static_cast<int>(layout.meshNode.size()));
   auto lower = std::make_shared<const NodeNeighbours>(
       LowerNodeNeighbours(cells, nodesPerCell, layout.dofNode, cornersOf));
   StartEarlyOrdering(state, lower);
-  const Status patternBuilt = BuildCellAssemblyPattern(cells, numCells, nodesPerCell, layout.dofNode,
-                                                       cornersOf, *lower, pattern);
+  const Status patternBuilt = BuildCellAssemblyPattern(cells, numCells, nodesPerCell,
+                                                       layout.dofNode, cornersOf, *lower, pattern);
   if (!patternBuilt)
     return patternBuilt;
   const double patternMs = clock.lapMs();

@@ -48,7 +48,8 @@ void BackgroundPrecompute::stopForExit() {
 }
 
 void BackgroundPrecompute::joinWorker() {
-  if (worker_.joinable()) worker_.join();
+  if (worker_.joinable())
+    worker_.join();
 }
 
 void BackgroundPrecompute::start(PrecomputeRequest request, ProgressCallback progress) {
@@ -73,7 +74,8 @@ void BackgroundPrecompute::start(PrecomputeRequest request, ProgressCallback pro
     std::shared_ptr<const CondensedSystem> system;
     Status status = Precompute(request, system, flag.get(), progress);
     std::lock_guard<std::mutex> lock(mutex_);
-    if (generation != generation_) return; // superseded: never publish a stale result
+    if (generation != generation_)
+      return; // superseded: never publish a stale result
     status_ = status;
     system_ = status ? system : nullptr;
     finished_ = true;
@@ -95,7 +97,8 @@ bool BackgroundPrecompute::ready() const {
 
 void BackgroundPrecompute::cancel() {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (cancelFlag_) cancelFlag_->store(true);
+  if (cancelFlag_)
+    cancelFlag_->store(true);
   if (!finished_) {
     // Whoever waits gets "cancelled" unless a new start() supersedes this request.
     ++generation_;

@@ -1,7 +1,7 @@
 // The Condensation stage: the dense response of the kept DOFs to the ROI DOFs.
-#include "CondensedFEM/DeformationCheck.h"
 #include "Common/ParallelFor.h"
 #include "Common/WorkerThreads.h"
+#include "CondensedFEM/DeformationCheck.h"
 #include "CondensedFEM/PrecomputeStages.h"
 #include "CondensedFEM/ResponseProbe.h"
 
@@ -66,8 +66,8 @@ Status BuildResponse(CondensedSystem& sys, const SparseMatrix& coupling,
     return Status::Ok();
   }
   how << "full solves with per-column residuals and refinement (the probe estimate "
-      << fast.residualEstimate << " of the " << substitutions << " missed "
-      << sys.residualTolerance << ")";
+      << fast.residualEstimate << " of the " << substitutions << " missed " << sys.residualTolerance
+      << ")";
   sys.info.responsePath = how.str();
   sys.response.resize(keptDofs, roiDofs);
   const Eigen::Index evenShare = (roiDofs + threads - 1) / threads; // keep every core busy
@@ -152,9 +152,9 @@ Status Condense(PrecomputeState& state) {
     // A backend may hold the response in lower precision: probe it against the double response.
     std::string probeError;
     StageClock probeClock;
-    info.responseProbeError = ProbeResponseOperator(sys.response, *sys.responseOperator,
-                                                    kProbeFullBytes, info.responseProbeRowFraction,
-                                                    probeError);
+    info.responseProbeError =
+        ProbeResponseOperator(sys.response, *sys.responseOperator, kProbeFullBytes,
+                              info.responseProbeRowFraction, probeError);
     info.responseProbeMs = probeClock.elapsedMs();
     std::ostringstream note;
     note.precision(3);

@@ -10,10 +10,10 @@
 // rotated into the normal frame (K' = Q^T K Q on their blocks), the normal DOF is prescribed and
 // the tangential ones are free, so the same precompute/solve split holds.
 #include "Backend/ComputeBackend.h"
-#include "Element/QuadraticTet.h"
 #include "Common/StageTimings.h"
 #include "Common/Status.h"
 #include "CondensedFEM/RigidSegments.h"
+#include "Element/QuadraticTet.h"
 #include "Mesh/NodeSets.h"
 #include "Mesh/TetMesh.h"
 
@@ -26,14 +26,14 @@
 namespace faceplan {
 
 enum class SolveMethod {
-  Auto,           // pick the cheapest exact method from the sizes (see ChooseMethod)
-  DenseResponse,  // precompute kept x ROI response; an edit is one matrix-vector product
-  CachedFactor,   // keep the sparse Cholesky factor of the free block; an edit is one solve
-  FullReference,  // no condensation, no cache: assemble and factor everything on every solve
-  RigidSegments   // precompute the kept response to 12 affine motions per rigid segment (plus the
-                  // general response to the ROI DOFs of segment-0 nodes); an edit is one product
-                  // with the 12 s segment parameters and the general part. Auto picks it when
-                  // NodeSets::movableSegment names segments and the response fits the budget.
+  Auto,          // pick the cheapest exact method from the sizes (see ChooseMethod)
+  DenseResponse, // precompute kept x ROI response; an edit is one matrix-vector product
+  CachedFactor,  // keep the sparse Cholesky factor of the free block; an edit is one solve
+  FullReference, // no condensation, no cache: assemble and factor everything on every solve
+  RigidSegments  // precompute the kept response to 12 affine motions per rigid segment (plus the
+                 // general response to the ROI DOFs of segment-0 nodes); an edit is one product
+                 // with the 12 s segment parameters and the general part. Auto picks it when
+                 // NodeSets::movableSegment names segments and the response fits the budget.
 };
 const char* MethodName(SolveMethod method);
 
@@ -101,8 +101,8 @@ struct SolveInput {
   // without segments ignores them.
   std::vector<SegmentTransform> segmentTransforms;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero(); // body load density * gravity, if non-zero
-  RowVectors3d nodalLoads;          // n x 3 or empty
-  bool recoverInterior = false;      // also return every node's displacement
+  RowVectors3d nodalLoads;                           // n x 3 or empty
+  bool recoverInterior = false;                      // also return every node's displacement
 };
 
 struct SolveResult {
@@ -161,11 +161,11 @@ struct SystemInfo {
   std::string backend;
   long long freeDofs = 0, keptDofs = 0, roiDofs = 0, interiorDofs = 0;
   double factorNonzeros = 0.0;
-  double factorBytes = 0.0;  // the numeric factor's estimated size (from the symbolic analysis)
+  double factorBytes = 0.0; // the numeric factor's estimated size (from the symbolic analysis)
   double responseBytes = 0.0;
   double memoryBudgetBytes = 0.0; // the budget the precompute was checked against
   std::string choiceReason;
-  std::string ordering;     // fill-reducing ordering of the free block ("METIS", "AMD", ...)
+  std::string ordering; // fill-reducing ordering of the free block ("METIS", "AMD", ...)
   bool orderedBesideAssembly = false; // made from the node graph while the assembly ran
   // Threads beside the assembly: their own run times. The stage rows hold only the waits for
   // them, so that the rows add up to the precompute's time.
@@ -175,16 +175,16 @@ struct SystemInfo {
   StageTimings precomputeTimings;
 
   // Diagnostics.
-  double conditionEstimate = 0.0;  // 1 / CHOLMOD rcond of the free block (0 when there is none)
+  double conditionEstimate = 0.0; // 1 / CHOLMOD rcond of the free block (0 when there is none)
   ElementOrder elementOrder = ElementOrder::Linear;
-  long long solverNodes = 0;       // nodes of the solved mesh (corners + mid-edge nodes if quadratic)
-  long long sliverCells = 0;       // cells below sliverQualityThreshold
-  long long foldedFaces = 0;       // shared faces whose two cells overlap (CheckFoldedFaces)
-  double worstQuality = 1.0;       // smallest mean-ratio quality
-  double responseProbeError = 0.0; // relative deviation of the backend's response operator
+  long long solverNodes = 0; // nodes of the solved mesh (corners + mid-edge nodes if quadratic)
+  long long sliverCells = 0; // cells below sliverQualityThreshold
+  long long foldedFaces = 0; // shared faces whose two cells overlap (CheckFoldedFaces)
+  double worstQuality = 1.0; // smallest mean-ratio quality
+  double responseProbeError = 0.0;       // relative deviation of the backend's response operator
   double responseProbeRowFraction = 1.0; // share of the response's rows that probe compared
   double responseProbeMs = 0.0;          // the probe's time (inside the Condensation row)
-  double conditionEstimateMs = 0.0;      // cholmod_rcond on the factor (inside the Factorization row)
+  double conditionEstimateMs = 0.0; // cholmod_rcond on the factor (inside the Factorization row)
   bool responseRedoneInDouble = false;
   std::vector<std::string> warnings; // the precompute's warnings
 };

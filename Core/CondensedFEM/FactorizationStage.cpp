@@ -21,7 +21,8 @@ Status ChooseSolveMethod(PrecomputeState& state) {
   info.factorBytes = info.freeDofs > 0 ? sys.factor.factorBytes() : 0.0;
   if (info.factorBytes > info.memoryBudgetBytes)
     return Status::Error("the sparse factor would need about " + MegabyteText(info.factorBytes) +
-                         ", more than the memory budget of " + MegabyteText(info.memoryBudgetBytes) +
+                         ", more than the memory budget of " +
+                         MegabyteText(info.memoryBudgetBytes) +
                          " (available memory unless memoryBudgetBytes is set): use a coarser mesh");
   PrecomputeOptions fitted = options;
   fitted.denseResponseBudgetBytes =
@@ -31,9 +32,10 @@ Status ChooseSolveMethod(PrecomputeState& state) {
                             double(sys.factor.trailingDofs()), info.choiceReason);
   if (info.freeDofs == 0)
     sys.method = SolveMethod::CachedFactor;
-  const double columns = sys.method == SolveMethod::DenseResponse   ? double(info.roiDofs)
-                         : sys.method == SolveMethod::RigidSegments ? double(state.segmentCoupling.cols())
-                                                                    : 0.0;
+  const double columns = sys.method == SolveMethod::DenseResponse ? double(info.roiDofs)
+                         : sys.method == SolveMethod::RigidSegments
+                             ? double(state.segmentCoupling.cols())
+                             : 0.0;
   const double responseBytes = 8.0 * double(info.keptDofs) * columns;
   if (info.factorBytes + responseBytes > info.memoryBudgetBytes)
     return Status::Error("the " + std::string(MethodName(sys.method)) + " response would need " +

@@ -16,7 +16,8 @@ namespace faceplan {
 
 namespace {
 
-Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, SolveResult& result) {
+Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input,
+                     SolveResult& result) {
   StageClock total, clock;
   const TetMesh& mesh = request.mesh;
   const NodeSets& sets = request.sets;
@@ -24,9 +25,11 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
   result.method = SolveMethod::FullReference;
   result.backend = "CPU";
   Status status = ValidateSolveInputs(mesh, request.materials, sets);
-  if (!status) return status;
+  if (!status)
+    return status;
   if (!sets.sliding.empty())
-    return Status::Error("the reference solve ties every constrained node: it does not model sliding nodes");
+    return Status::Error(
+        "the reference solve ties every constrained node: it does not model sliding nodes");
   if (input.movableDisplacement.rows() != static_cast<Eigen::Index>(sets.movable.size()))
     return Status::Error("expected one ROI displacement per movable node");
   if (!input.movableDisplacement.allFinite())
@@ -36,14 +39,18 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
   const Eigen::Index n = mesh.numPoints();
   RowVectors3d prescribed = RowVectors3d::Zero(n, 3);
   std::vector<char> isConstrained(n, 0), used(n, 0);
-  for (int id : sets.constrained) isConstrained[id] = 1;
-  for (size_t k = 0; k < sets.movable.size(); ++k) prescribed.row(sets.movable[k]) = input.movableDisplacement.row(k);
+  for (int id : sets.constrained)
+    isConstrained[id] = 1;
+  for (size_t k = 0; k < sets.movable.size(); ++k)
+    prescribed.row(sets.movable[k]) = input.movableDisplacement.row(k);
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
-    for (int k = 0; k < 4; ++k) used[mesh.tets(e, k)] = 1;
+    for (int k = 0; k < 4; ++k)
+      used[mesh.tets(e, k)] = 1;
   std::vector<int> freeIndex(n, -1);
   int numFree = 0;
   for (Eigen::Index i = 0; i < n; ++i)
-    if (used[i] && !isConstrained[i]) freeIndex[i] = numFree++;
+    if (used[i] && !isConstrained[i])
+      freeIndex[i] = numFree++;
   result.timings[Stage::Separation].ms = clock.lapMs();
 
   AssemblyPattern pattern;
@@ -66,31 +73,39 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
       anyFree |= freeIndex[node] >= 0;
       anyPrescribed |= isConstrained[node] && prescribed.row(node).squaredNorm() > 0.0;
     }
-    if (!anyFree || !anyPrescribed) continue;
-    for (int k = 0; k < 4; ++k) corners.row(k) = mesh.points.row(mesh.tets(e, k));
+    if (!anyFree || !anyPrescribed)
+      continue;
+    for (int k = 0; k < 4; ++k)
+      corners.row(k) = mesh.points.row(mesh.tets(e, k));
     const ElementMatrix ke = TetStiffness(corners, request.materials.E(e), request.materials.nu(e));
     Eigen::Matrix<double, 12, 1> ue = Eigen::Matrix<double, 12, 1>::Zero();
     for (int k = 0; k < 4; ++k)
-      if (isConstrained[mesh.tets(e, k)]) ue.segment<3>(3 * k) = prescribed.row(mesh.tets(e, k)).transpose();
+      if (isConstrained[mesh.tets(e, k)])
+        ue.segment<3>(3 * k) = prescribed.row(mesh.tets(e, k)).transpose();
     const Eigen::Matrix<double, 12, 1> fe = ke * ue;
     for (int k = 0; k < 4; ++k) {
       const int f = freeIndex[mesh.tets(e, k)];
-      if (f >= 0) rhs.segment<3>(3 * f) -= fe.segment<3>(3 * k);
+      if (f >= 0)
+        rhs.segment<3>(3 * f) -= fe.segment<3>(3 * k);
     }
   }
   result.timings[Stage::BoundaryCondition].ms = clock.lapMs();
   if (input.nodalLoads.size() > 0) {
-    if (input.nodalLoads.rows() != n) return Status::Error("nodal loads must have one row per mesh point");
+    if (input.nodalLoads.rows() != n)
+      return Status::Error("nodal loads must have one row per mesh point");
     for (Eigen::Index i = 0; i < n; ++i)
-      if (freeIndex[i] >= 0) rhs.segment<3>(3 * freeIndex[i]) += input.nodalLoads.row(i).transpose();
+      if (freeIndex[i] >= 0)
+        rhs.segment<3>(3 * freeIndex[i]) += input.nodalLoads.row(i).transpose();
   }
   if (input.gravity.squaredNorm() > 0.0) {
     for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-      for (int k = 0; k < 4; ++k) corners.row(k) = mesh.points.row(mesh.tets(e, k));
+      for (int k = 0; k < 4; ++k)
+        corners.row(k) = mesh.points.row(mesh.tets(e, k));
       const double quarter = request.materials.rho(e) * TetVolume(corners) / 4.0;
       for (int k = 0; k < 4; ++k) {
         const int f = freeIndex[mesh.tets(e, k)];
-        if (f >= 0) rhs.segment<3>(3 * f) += quarter * input.gravity;
+        if (f >= 0)
+          rhs.segment<3>(3 * f) += quarter * input.gravity;
       }
     }
   }
@@ -100,28 +115,36 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
   if (numFree > 0) {
     CholmodFactor factor;
     status = factor.analyze(pattern.upper);
-    if (!status) return status;
+    if (!status)
+      return status;
     result.timings[Stage::Reordering].ms = clock.lapMs();
     status = factor.factorize(pattern.upper);
-    if (!status) return status;
+    if (!status)
+      return status;
     result.timings[Stage::Factorization].ms = clock.lapMs();
     Eigen::MatrixXd solution;
     status = factor.solve(rhs, solution);
-    if (!status) return status;
+    if (!status)
+      return status;
     x = solution.col(0);
     result.timings[Stage::Solve].ms = clock.lapMs();
     const double rhsNorm = rhs.norm();
     result.relativeResidual =
-        rhsNorm > 0 ? (pattern.upper.selfadjointView<Eigen::Upper>() * x - rhs).norm() / rhsNorm : x.norm();
+        rhsNorm > 0 ? (pattern.upper.selfadjointView<Eigen::Upper>() * x - rhs).norm() / rhsNorm
+                    : x.norm();
   }
 
   RowVectors3d all = prescribed;
   for (Eigen::Index i = 0; i < n; ++i)
-    if (freeIndex[i] >= 0) all.row(i) = x.segment<3>(3 * freeIndex[i]).transpose();
-    else if (!isConstrained[i]) all.row(i).setZero();
+    if (freeIndex[i] >= 0)
+      all.row(i) = x.segment<3>(3 * freeIndex[i]).transpose();
+    else if (!isConstrained[i])
+      all.row(i).setZero();
   result.keptDisplacement.resize(static_cast<Eigen::Index>(sets.kept.size()), 3);
-  for (size_t k = 0; k < sets.kept.size(); ++k) result.keptDisplacement.row(k) = all.row(sets.kept[k]);
-  if (input.recoverInterior) result.allDisplacement = all;
+  for (size_t k = 0; k < sets.kept.size(); ++k)
+    result.keptDisplacement.row(k) = all.row(sets.kept[k]);
+  if (input.recoverInterior)
+    result.allDisplacement = all;
   if (!all.allFinite() || !std::isfinite(result.relativeResidual))
     return Status::Error("the reference solve produced non-finite values");
   result.timings[Stage::Total].ms = total.elapsedMs();
@@ -130,7 +153,8 @@ Status ReferenceImpl(const PrecomputeRequest& request, const SolveInput& input, 
 
 } // namespace
 
-Status SolveFullReference(const PrecomputeRequest& request, const SolveInput& input, SolveResult& result) {
+Status SolveFullReference(const PrecomputeRequest& request, const SolveInput& input,
+                          SolveResult& result) {
   return ReturnStatusOnException("the reference solve",
                                  [&]() -> Status { return ReferenceImpl(request, input, result); });
 }

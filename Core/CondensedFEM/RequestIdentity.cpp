@@ -24,7 +24,8 @@ static_assert(sizeof(PrecomputeOptions) == 128,
 template <class Matrix> bool SameMatrix(const Matrix& a, const Matrix& b) {
   return a.rows() == b.rows() && a.cols() == b.cols() &&
          (a.size() == 0 ||
-          std::memcmp(a.data(), b.data(), sizeof(typename Matrix::Scalar) * static_cast<size_t>(a.size())) == 0);
+          std::memcmp(a.data(), b.data(),
+                      sizeof(typename Matrix::Scalar) * static_cast<size_t>(a.size())) == 0);
 }
 
 } // namespace

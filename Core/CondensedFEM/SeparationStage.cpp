@@ -90,7 +90,6 @@ NodeSets QuadraticNodeSets(const QuadraticMesh& q, const NodeSets& sets,
   return out;
 }
 
-
 void DescribeSlidingNodes(const NodeSets& sets, CondensedSystem& sys) {
   const NodeLayout& layout = sys.layout;
   sys.slidingOfPosition.assign(layout.meshNode.size(), -1);

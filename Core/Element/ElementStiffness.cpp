@@ -47,11 +47,13 @@ void ComputePackedElementStiffness(const TetMesh& mesh, const Materials& materia
   ParallelFor(m, 20000, [&](std::int64_t begin, std::int64_t end) {
     TetCorners corners;
     for (std::int64_t e = begin; e < end; ++e) {
-      for (int k = 0; k < 4; ++k) corners.row(k) = mesh.points.row(mesh.tets(e, k));
+      for (int k = 0; k < 4; ++k)
+        corners.row(k) = mesh.points.row(mesh.tets(e, k));
       const ElementMatrix ke = TetStiffness(corners, materials.E(e), materials.nu(e));
       double* out = packed.data() + static_cast<size_t>(e) * kPackedElementSize;
       for (int p = 0; p < 12; ++p)
-        for (int q = p; q < 12; ++q) *out++ = ke(p, q);
+        for (int q = p; q < 12; ++q)
+          *out++ = ke(p, q);
     }
   });
 }

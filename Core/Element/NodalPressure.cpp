@@ -2,8 +2,8 @@
 
 #include "Element/QuadraticTet.h"
 
-#include "Element/ElementStiffness.h"
 #include "Common/ParallelFor.h"
+#include "Element/ElementStiffness.h"
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -13,7 +13,6 @@ namespace faceplan {
 
 namespace {
 
-
 double Lambda(const Materials& materials, Eigen::Index cell) {
   double lambda, mu;
   LameParameters(materials.E(cell), materials.nu(cell), lambda, mu);
@@ -22,25 +21,28 @@ double Lambda(const Materials& materials, Eigen::Index cell) {
 
 // Per cell: D(k, 3 a + c) = int phi_k dN_a/dx_c (k: corner, a: node) and P(k) = int phi_k, with the
 // degree-2 four-point rule (exact for straight cells: phi_k is linear, dN_a/dx too).
-bool CellPressureCoupling(const RowVectors3d& points, const int* cell, Eigen::Matrix<double, 4, 30>& D,
-                          Eigen::Vector4d& P) {
+bool CellPressureCoupling(const RowVectors3d& points, const int* cell,
+                          Eigen::Matrix<double, 4, 30>& D, Eigen::Vector4d& P) {
   const double alpha = 0.5854101966249685, beta = 0.1381966011250105;
   D.setZero();
   P.setZero();
   Eigen::Matrix<double, 10, 3> x;
-  for (int a = 0; a < 10; ++a) x.row(a) = points.row(cell[a]);
+  for (int a = 0; a < 10; ++a)
+    x.row(a) = points.row(cell[a]);
   for (int q = 0; q < 4; ++q) {
     Eigen::Vector4d L = Eigen::Vector4d::Constant(beta);
     L[q] = alpha;
     const Eigen::Matrix<double, 10, 3> gref = Tet10ReferenceGradients(L);
     const Eigen::Matrix3d J = x.transpose() * gref;
     const double det = J.determinant();
-    if (!(det > 0.0)) return false;
+    if (!(det > 0.0))
+      return false;
     const Eigen::Matrix<double, 10, 3> g = gref * J.inverse();
     const double w = det / 24.0;
     for (int k = 0; k < 4; ++k) {
       P[k] += w * L[k];
-      for (int a = 0; a < 10; ++a) D.block<1, 3>(k, 3 * a) += (w * L[k]) * g.row(a);
+      for (int a = 0; a < 10; ++a)
+        D.block<1, 3>(k, 3 * a) += (w * L[k]) * g.row(a);
     }
   }
   return true;
@@ -55,7 +57,8 @@ bool BuildCoupling(const RowVectors3d& points, const int* cells, Eigen::Index nu
   Eigen::Vector4d P;
   for (Eigen::Index e = 0; e < numCells; ++e) {
     const double lambda = Lambda(materials, e);
-    if (!(lambda > 0.0)) continue; // keeps its own volumetric term (see ShearOnlyMaterials)
+    if (!(lambda > 0.0))
+      continue; // keeps its own volumetric term (see ShearOnlyMaterials)
     const int* cell = cells + e * Nodes;
     if (!CellPressureCoupling(points, cell, D, P))
       return false;
@@ -63,8 +66,10 @@ bool BuildCoupling(const RowVectors3d& points, const int* cells, Eigen::Index nu
       mass[cell[k]] += P[k] / lambda;
       for (int a = 0; a < Nodes; ++a) {
         const int node = dofNode[cell[a]];
-        if (node < 0) continue;
-        for (int c = 0; c < 3; ++c) triplets.emplace_back(cell[k], 3 * node + c, D(k, 3 * a + c));
+        if (node < 0)
+          continue;
+        for (int c = 0; c < 3; ++c)
+          triplets.emplace_back(cell[k], 3 * node + c, D(k, 3 * a + c));
       }
     }
   }
@@ -104,7 +109,8 @@ Status NodalPressureStiffness(const RowVectors3d& points, const int* cells, Eige
   G.setFromTriplets(triplets.begin(), triplets.end());
   std::vector<Eigen::Triplet<double, int>>().swap(triplets);
   Eigen::VectorXd weight(pressureNodes);
-  for (Eigen::Index i = 0; i < pressureNodes; ++i) weight[i] = mass[i] > 0.0 ? 1.0 / mass[i] : 0.0;
+  for (Eigen::Index i = 0; i < pressureNodes; ++i)
+    weight[i] = mass[i] > 0.0 ? 1.0 / mass[i] : 0.0;
   const SparseMatrix WG = weight.asDiagonal() * G;
   const SparseMatrix Gt = G.transpose();
   SparseMatrix full = Gt * WG;

@@ -13,9 +13,10 @@
 // extra unknowns and only changes the assembled stiffness; the price is a wider stencil: K_vol
 // couples every pair of nodes that share a corner node's patch (about 6x the Cholesky factor of
 // the mean-dilatation TET10 on a 35k-cell shell). (The same idea on 4-node cells, the averaged
-// nodal pressure tetrahedron of Bonet & Burton 1998, still locked on that shell: docs/STABILITY.md.)
-// Per-cell lambda enters through M_n (the harmonic, volume-weighted mean over the patch); cells with
-// lambda <= 0 (nu <= 0) keep their own volumetric term and take no part in the nodal pressure.
+// nodal pressure tetrahedron of Bonet & Burton 1998, still locked on that shell:
+// docs/STABILITY.md.) Per-cell lambda enters through M_n (the harmonic, volume-weighted mean over
+// the patch); cells with lambda <= 0 (nu <= 0) keep their own volumetric term and take no part in
+// the nodal pressure.
 #include "Element/StiffnessAssembly.h"
 #include "Mesh/TetMesh.h"
 

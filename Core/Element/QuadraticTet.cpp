@@ -1,7 +1,7 @@
 #include "Element/QuadraticTet.h"
 
-#include "Element/ElementStiffness.h"
 #include "Common/ParallelFor.h"
+#include "Element/ElementStiffness.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -16,7 +16,8 @@ Eigen::Matrix<double, 10, 3> Tet10ReferenceGradients(const Eigen::Vector4d& L) {
   Eigen::Matrix<double, 4, 3> dL;
   dL << -1, -1, -1, 1, 0, 0, 0, 1, 0, 0, 0, 1;
   Eigen::Matrix<double, 10, 3> g;
-  for (int i = 0; i < 4; ++i) g.row(i) = (4.0 * L[i] - 1.0) * dL.row(i);
+  for (int i = 0; i < 4; ++i)
+    g.row(i) = (4.0 * L[i] - 1.0) * dL.row(i);
   for (int e = 0; e < 6; ++e) {
     const int i = kTet10EdgeCorners[e][0], j = kTet10EdgeCorners[e][1];
     g.row(4 + e) = 4.0 * (L[i] * dL.row(j) + L[j] * dL.row(i));
@@ -26,11 +27,12 @@ Eigen::Matrix<double, 10, 3> Tet10ReferenceGradients(const Eigen::Vector4d& L) {
 
 namespace {
 
-
 Eigen::Matrix<double, 10, 1> ShapeValues(const Eigen::Vector4d& L) {
   Eigen::Matrix<double, 10, 1> n;
-  for (int i = 0; i < 4; ++i) n[i] = L[i] * (2.0 * L[i] - 1.0);
-  for (int e = 0; e < 6; ++e) n[4 + e] = 4.0 * L[kTet10EdgeCorners[e][0]] * L[kTet10EdgeCorners[e][1]];
+  for (int i = 0; i < 4; ++i)
+    n[i] = L[i] * (2.0 * L[i] - 1.0);
+  for (int e = 0; e < 6; ++e)
+    n[4 + e] = 4.0 * L[kTet10EdgeCorners[e][0]] * L[kTet10EdgeCorners[e][1]];
   return n;
 }
 
@@ -66,18 +68,21 @@ Status MakeQuadraticMesh(const TetMesh& mesh, QuadraticMesh& out,
     for (int e = 0; e < 6; ++e) {
       std::uint64_t a = static_cast<std::uint32_t>(mesh.tets(c, kTet10EdgeCorners[e][0]));
       std::uint64_t b = static_cast<std::uint32_t>(mesh.tets(c, kTet10EdgeCorners[e][1]));
-      if (a > b) std::swap(a, b);
+      if (a > b)
+        std::swap(a, b);
       keys[c * 6 + e] = {(a << 32) | b, c * 6 + e};
     }
   std::sort(keys.begin(), keys.end());
   for (size_t k = 0; k < keys.size(); ++k) {
     if (k == 0 || keys[k].first != keys[k - 1].first)
-      out.edges.push_back({static_cast<int>(keys[k].first >> 32), static_cast<int>(keys[k].first & 0xffffffffu)});
+      out.edges.push_back(
+          {static_cast<int>(keys[k].first >> 32), static_cast<int>(keys[k].first & 0xffffffffu)});
     const std::int64_t slot = keys[k].second;
     out.cells(slot / 6, 4 + slot % 6) = static_cast<int>(n + out.edges.size() - 1);
   }
   for (Eigen::Index c = 0; c < m; ++c)
-    for (int k = 0; k < 4; ++k) out.cells(c, k) = mesh.tets(c, k);
+    for (int k = 0; k < 4; ++k)
+      out.cells(c, k) = mesh.tets(c, k);
   if (n + static_cast<Eigen::Index>(out.edges.size()) > std::numeric_limits<int>::max())
     return Status::Error("mesh too large for a quadratic mesh with 32-bit ids");
 
@@ -94,14 +99,16 @@ Status MakeQuadraticMesh(const TetMesh& mesh, QuadraticMesh& out,
     for (int k = 0; k < 4; ++k) {
       std::array<int, 3> f;
       for (int j = 0, t = 0; j < 4; ++j)
-        if (j != k) f[t++] = mesh.tets(c, j);
+        if (j != k)
+          f[t++] = mesh.tets(c, j);
       std::sort(f.begin(), f.end());
       faces[c * 4 + k] = {f, c, k};
     }
   std::sort(faces.begin(), faces.end());
   for (size_t k = 0; k < faces.size();) {
     size_t j = k + 1;
-    while (j < faces.size() && faces[j].sorted == faces[k].sorted) ++j;
+    while (j < faces.size() && faces[j].sorted == faces[k].sorted)
+      ++j;
     if (j - k == 1) {
       const Face& f = faces[k];
       for (int e = 0; e < 6; ++e)
@@ -116,7 +123,8 @@ Status MakeQuadraticMesh(const TetMesh& mesh, QuadraticMesh& out,
   for (size_t e = 0; e < out.edges.size(); ++e) {
     const int a = out.edges[e][0], b = out.edges[e][1];
     Eigen::Vector3d mid = 0.5 * (mesh.points.row(a) + mesh.points.row(b)).transpose();
-    if (projection && out.boundaryEdge[e]) mid = projection(mid, a, b);
+    if (projection && out.boundaryEdge[e])
+      mid = projection(mid, a, b);
     out.points.row(n + static_cast<Eigen::Index>(e)) = mid.transpose();
   }
   return Status::Ok();
@@ -140,7 +148,8 @@ Tet10Matrix Tet10Stiffness(const Tet10Nodes& x, double E, double nu, double* min
     const Eigen::Matrix<double, 10, 3> g = gref * J.inverse(); // rows: grad_x N_a
     const double w = rule.weight * det;
     volume += w;
-    for (int a = 0; a < 10; ++a) divergence.segment<3>(3 * a) += w * g.row(a).transpose();
+    for (int a = 0; a < 10; ++a)
+      divergence.segment<3>(3 * a) += w * g.row(a).transpose();
     for (int a = 0; a < 10; ++a)
       for (int b = a; b < 10; ++b) {
         const Eigen::RowVector3d ga = g.row(a), gb = g.row(b);
@@ -150,9 +159,12 @@ Tet10Matrix Tet10Stiffness(const Tet10Nodes& x, double E, double nu, double* min
       }
   }
   for (int a = 0; a < 10; ++a)
-    for (int b = 0; b < a; ++b) ke.block<3, 3>(3 * a, 3 * b) = ke.block<3, 3>(3 * b, 3 * a).transpose();
-  if (meanDilatation && volume > 0.0) ke += (lambda / volume) * divergence * divergence.transpose();
-  if (minJacobian) *minJacobian = smallest;
+    for (int b = 0; b < a; ++b)
+      ke.block<3, 3>(3 * a, 3 * b) = ke.block<3, 3>(3 * b, 3 * a).transpose();
+  if (meanDilatation && volume > 0.0)
+    ke += (lambda / volume) * divergence * divergence.transpose();
+  if (minJacobian)
+    *minJacobian = smallest;
   return ke;
 }
 
@@ -167,8 +179,8 @@ Eigen::Matrix<double, 10, 1> Tet10ShapeIntegrals(const Tet10Nodes& x) {
 }
 
 void ComputePackedTet10Stiffness(const QuadraticMesh& mesh, const Materials& materials,
-                                 PackedElementMatrices& packed, std::vector<long long>& invalidCells,
-                                 bool meanDilatation) {
+                                 PackedElementMatrices& packed,
+                                 std::vector<long long>& invalidCells, bool meanDilatation) {
   const Eigen::Index m = mesh.cells.rows();
   packed.resize(static_cast<size_t>(m) * kPackedTet10Size);
   invalidCells.clear();
@@ -177,13 +189,17 @@ void ComputePackedTet10Stiffness(const QuadraticMesh& mesh, const Materials& mat
     Tet10Nodes nodes;
     std::vector<long long> bad;
     for (std::int64_t e = begin; e < end; ++e) {
-      for (int k = 0; k < 10; ++k) nodes.row(k) = mesh.points.row(mesh.cells(e, k));
+      for (int k = 0; k < 10; ++k)
+        nodes.row(k) = mesh.points.row(mesh.cells(e, k));
       double minJ = 0.0;
-      const Tet10Matrix ke = Tet10Stiffness(nodes, materials.E(e), materials.nu(e), &minJ, meanDilatation);
-      if (!(minJ > 0.0)) bad.push_back(e);
+      const Tet10Matrix ke =
+          Tet10Stiffness(nodes, materials.E(e), materials.nu(e), &minJ, meanDilatation);
+      if (!(minJ > 0.0))
+        bad.push_back(e);
       double* out = packed.data() + static_cast<size_t>(e) * kPackedTet10Size;
       for (int p = 0; p < 30; ++p)
-        for (int q = p; q < 30; ++q) *out++ = ke(p, q);
+        for (int q = p; q < 30; ++q)
+          *out++ = ke(p, q);
     }
     std::lock_guard<std::mutex> lock(invalidMutex);
     invalidCells.insert(invalidCells.end(), bad.begin(), bad.end());

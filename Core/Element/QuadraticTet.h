@@ -32,10 +32,10 @@ using MidEdgeProjection =
 using Tet10Cells = Eigen::Matrix<int, Eigen::Dynamic, 10, Eigen::RowMajor>;
 
 struct QuadraticMesh {
-  RowVectors3d points;                          // corners (same ids as the linear mesh), then edges
-  Tet10Cells cells;                       // m x 10
-  std::vector<std::array<int, 2>> edges;  // edge e is node numCorners + e, between these corners
-  std::vector<char> boundaryEdge;         // edge lies on the boundary of the linear mesh
+  RowVectors3d points;                   // corners (same ids as the linear mesh), then edges
+  Tet10Cells cells;                      // m x 10
+  std::vector<std::array<int, 2>> edges; // edge e is node numCorners + e, between these corners
+  std::vector<char> boundaryEdge;        // edge lies on the boundary of the linear mesh
   Eigen::Index numCorners = 0;
 };
 
@@ -54,8 +54,8 @@ using Tet10Matrix = Eigen::Matrix<double, 30, 30>;
 // bbar^T with bbar = (1/V) int div N (the P2-P0 mixed element with the constant pressure
 // condensed out: exact and symmetric). It keeps one incompressibility constraint per cell instead
 // of four, which removes volumetric locking as nu -> 0.5; the shear (mu) term is fully integrated.
-Tet10Matrix Tet10Stiffness(const Tet10Nodes& nodes, double E, double nu, double* minJacobian = nullptr,
-                           bool meanDilatation = false);
+Tet10Matrix Tet10Stiffness(const Tet10Nodes& nodes, double E, double nu,
+                           double* minJacobian = nullptr, bool meanDilatation = false);
 
 // Integral of each shape function over the cell (the consistent load of a unit body force):
 // -V/20 at corners and V/5 at mid-edge nodes for a straight cell.
@@ -66,7 +66,7 @@ constexpr int kPackedTet10Size = 30 * 31 / 2; // 465
 // Packed upper triangles of every cell (m x 465, row-major). Cells whose Jacobian is not positive
 // somewhere are listed in `invalidCells`.
 void ComputePackedTet10Stiffness(const QuadraticMesh& mesh, const Materials& materials,
-                                 PackedElementMatrices& packed, std::vector<long long>& invalidCells,
-                                 bool meanDilatation = false);
+                                 PackedElementMatrices& packed,
+                                 std::vector<long long>& invalidCells, bool meanDilatation = false);
 
 } // namespace faceplan

@@ -1,8 +1,8 @@
 #include "Element/StiffnessAssembly.h"
 
-#include "Element/ElementStiffness.h"
 #include "Common/GroupByKey.h"
 #include "Common/ParallelFor.h"
+#include "Element/ElementStiffness.h"
 
 #include <algorithm>
 #include <limits>
@@ -21,8 +21,8 @@ NodeNeighbours LowerNodeNeighbours(const int* cells, Eigen::Index numCells, int 
                              CornersByNode(cells, numCells, nodesPerCell, dofNode, numDofNodes));
 }
 
-NodeNeighbours LowerNodeNeighbours(const int* cells, int nodesPerCell, const std::vector<int>& dofNode,
-                                   const Groups& cornersOf) {
+NodeNeighbours LowerNodeNeighbours(const int* cells, int nodesPerCell,
+                                   const std::vector<int>& dofNode, const Groups& cornersOf) {
   // The nodes in parallel, each writing only its own list.
   const int numDofNodes = static_cast<int>(cornersOf.start.size()) - 1;
   NodeNeighbours lower(numDofNodes);
@@ -105,7 +105,9 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
     rowStart[p] = pos;
     pos += dofs - p;
   }
-  auto packedPosition = [&](int p, int q) { return p <= q ? rowStart[p] + (q - p) : rowStart[q] + (p - q); };
+  auto packedPosition = [&](int p, int q) {
+    return p <= q ? rowStart[p] + (q - p) : rowStart[q] + (p - q);
+  };
   // The gather map column node by column node, in parallel: each node's three columns take the
   // contributions of the cells at that node (in increasing cell order, so each entry lists its
   // packed indices in increasing order), one per cell and entry. No cells x 78 intermediate and
@@ -126,7 +128,8 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
           continue;
         if (nr == nc && a != b)
           return false; // a node twice in one cell
-        const int idx = static_cast<int>(std::lower_bound(rows.begin(), rows.end(), nr) - rows.begin());
+        const int idx =
+            static_cast<int>(std::lower_bound(rows.begin(), rows.end(), nr) - rows.begin());
         for (int ic = 0; ic < 3; ++ic)
           for (int ir = 0; ir < (nr == nc ? ic + 1 : 3); ++ir)
             visit(colStart[3 * nc + ic] + 3 * idx + ir,
@@ -153,7 +156,8 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
     const int first = colStart[3 * begin], last = colStart[3 * end];
     std::vector<int> fill(count.begin() + first, count.begin() + last);
     for (std::int64_t nc = begin; nc < end; ++nc)
-      visitNode(static_cast<int>(nc), [&](int t, int packed) { pattern.packedIndex[fill[t - first]++] = packed; });
+      visitNode(static_cast<int>(nc),
+                [&](int t, int packed) { pattern.packedIndex[fill[t - first]++] = packed; });
   });
   pattern.gatherStart = std::move(count);
   return Status::Ok();

@@ -35,8 +35,8 @@ NodeNeighbours LowerNodeNeighbours(const int* cells, Eigen::Index numCells, int 
 Groups CornersByNode(const int* cells, Eigen::Index numCells, int nodesPerCell,
                      const std::vector<int>& dofNode, int numDofNodes);
 // LowerNodeNeighbours from that index, already built.
-NodeNeighbours LowerNodeNeighbours(const int* cells, int nodesPerCell, const std::vector<int>& dofNode,
-                                   const Groups& cornersOf);
+NodeNeighbours LowerNodeNeighbours(const int* cells, int nodesPerCell,
+                                   const std::vector<int>& dofNode, const Groups& cornersOf);
 
 // The upper-triangle structure (3 DOFs per node, rows sorted) of the first `nodes` DOF nodes of
 // `lower`; values are zero when zeroValues, else left uninitialised (a structure to analyse).

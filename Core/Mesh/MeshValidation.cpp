@@ -411,8 +411,8 @@ Status CheckRigidModesHeld(const TetMesh& mesh, const std::vector<int>& constrai
   }
   if (pieces == 0)
     return Status::Ok();
-  // Each piece's nodes, ascending: cells grouped by piece, nodes deduplicated with a stamp per node,
-  // then the (much shorter) lists sorted.
+  // Each piece's nodes, ascending: cells grouped by piece, nodes deduplicated with a stamp per
+  // node, then the (much shorter) lists sorted.
   const Groups cellsOf = GroupByKey(m, pieces, [&](std::int64_t e) { return pieceOf[e]; });
   std::vector<std::vector<int>> nodesOf(pieces);
   std::vector<int> stamp(n, -1);

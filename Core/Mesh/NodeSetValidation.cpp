@@ -16,15 +16,18 @@ Status ValidateNodeSets(const TetMesh& mesh, const NodeSets& sets) {
   };
   for (Status s : {check(sets.constrained, "constrained"), check(sets.movable, "ROI (movable)"),
                    check(sets.kept, "kept")})
-    if (!s) return s;
+    if (!s)
+      return s;
   if (sets.constrained.empty())
     return Status::Error("no constrained node: the tissue is tied to nothing, so its stiffness "
                          "matrix is singular");
   std::vector<char> constrained(n, 0);
-  for (int id : sets.constrained) constrained[id] = 1;
+  for (int id : sets.constrained)
+    constrained[id] = 1;
   for (int id : sets.movable)
     if (!constrained[id])
-      return Status::Error("ROI (movable) node " + std::to_string(id) + " is not a constrained node");
+      return Status::Error("ROI (movable) node " + std::to_string(id) +
+                           " is not a constrained node");
   if (!sets.movableSegment.empty()) {
     if (sets.movableSegment.size() != sets.movable.size())
       return Status::Error("movableSegment needs one segment id per movable node (" +
@@ -38,13 +41,15 @@ Status ValidateNodeSets(const TetMesh& mesh, const NodeSets& sets) {
     return Status::Error("slidingNormal needs one normal per sliding node (" +
                          std::to_string(sets.sliding.size()) + "), got " +
                          std::to_string(sets.slidingNormal.size()));
-  if (Status s = check(sets.sliding, "sliding"); !s) return s;
+  if (Status s = check(sets.sliding, "sliding"); !s)
+    return s;
   std::vector<char> sliding(n, 0);
   for (size_t k = 0; k < sets.sliding.size(); ++k) {
     const int id = sets.sliding[k];
     if (!constrained[id])
       return Status::Error("sliding node " + std::to_string(id) + " is not a constrained node");
-    if (sliding[id]) return Status::Error("sliding node " + std::to_string(id) + " is listed twice");
+    if (sliding[id])
+      return Status::Error("sliding node " + std::to_string(id) + " is listed twice");
     sliding[id] = 1;
     const double norm = sets.slidingNormal[k].norm();
     if (!std::isfinite(norm) || std::abs(norm - 1.0) > 1e-6)

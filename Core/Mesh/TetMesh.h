@@ -10,7 +10,7 @@ using Tets = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
 
 struct TetMesh {
   RowVectors3d points; // n x 3
-  Tets tets;     // m x 4, positively oriented (det[x1-x0, x2-x0, x3-x0] > 0)
+  Tets tets;           // m x 4, positively oriented (det[x1-x0, x2-x0, x3-x0] > 0)
 
   Eigen::Index numPoints() const { return points.rows(); }
   Eigen::Index numTets() const { return tets.rows(); }
@@ -30,10 +30,15 @@ struct Materials {
     m.density = Eigen::VectorXd::Constant(1, rho);
     return m;
   }
-  double E(Eigen::Index cell) const { return youngsModulus.size() == 1 ? youngsModulus[0] : youngsModulus[cell]; }
-  double nu(Eigen::Index cell) const { return poissonRatio.size() == 1 ? poissonRatio[0] : poissonRatio[cell]; }
+  double E(Eigen::Index cell) const {
+    return youngsModulus.size() == 1 ? youngsModulus[0] : youngsModulus[cell];
+  }
+  double nu(Eigen::Index cell) const {
+    return poissonRatio.size() == 1 ? poissonRatio[0] : poissonRatio[cell];
+  }
   double rho(Eigen::Index cell) const {
-    if (density.size() == 0) return 0.0;
+    if (density.size() == 0)
+      return 0.0;
     return density.size() == 1 ? density[0] : density[cell];
   }
 };

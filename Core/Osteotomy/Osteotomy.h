@@ -15,7 +15,7 @@ namespace faceplan {
 
 struct OsteotomyBone {
   SurfaceMesh mesh;                      // triangles, current positions
-  RowVectors3d displacement;            // n x 3: motion so far from the undeformed bone
+  RowVectors3d displacement;             // n x 3: motion so far from the undeformed bone
   std::vector<int> segmentId;            // n: 0 = moved by no osteotomy
   std::vector<std::uint8_t> roiMask;     // n
   std::vector<double> segmentTransforms; // 12 per segment id 1, 2, ... (may be short or empty)
@@ -32,8 +32,8 @@ struct OsteotomyMove {
 };
 
 struct OsteotomyResult {
-  RowVectors3d points;                  // n x 3, the new segment moved
-  RowVectors3d displacement;            // n x 3, cumulative from the undeformed bone
+  RowVectors3d points;                   // n x 3, the new segment moved
+  RowVectors3d displacement;             // n x 3, cumulative from the undeformed bone
   std::vector<int> segmentId;            // n; the new segment's points get newSegmentId
   std::vector<std::uint8_t> roiMask;     // n; 1 on the new segment, else the input's
   std::vector<double> segmentTransforms; // 12 * newSegmentId (NaN for a segment that is not rigid)

@@ -29,8 +29,8 @@ Status ValidateSurfaceMesh(const SurfaceMesh& mesh) {
   for (std::size_t k = 0; k < mesh.connectivity.size(); ++k) {
     const std::int64_t id = mesh.connectivity[k];
     if (id < 0 || id >= n)
-      return Status::Error("surface cells: point id " + std::to_string(id) +
-                           " out of range [0, " + std::to_string(n) + ")");
+      return Status::Error("surface cells: point id " + std::to_string(id) + " out of range [0, " +
+                           std::to_string(n) + ")");
   }
   return Status::Ok();
 }
@@ -39,18 +39,22 @@ Status ComputeROI(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& sele
                   ROIResult& result) {
   result = ROIResult{};
   Status s = ValidateSurfaceMesh(mesh);
-  if (!s) return s;
+  if (!s)
+    return s;
   const std::int64_t n = mesh.numPoints();
   if (std::int64_t(selected.size()) != n)
-    return Status::Error("ROI selection has " + std::to_string(selected.size()) +
-                         " entries for " + std::to_string(n) + " points");
+    return Status::Error("ROI selection has " + std::to_string(selected.size()) + " entries for " +
+                         std::to_string(n) + " points");
 
   std::vector<std::uint8_t> mask(n), boundary(n, 0);
-  for (std::int64_t i = 0; i < n; ++i) mask[i] = selected[i] ? 1 : 0;
+  for (std::int64_t i = 0; i < n; ++i)
+    mask[i] = selected[i] ? 1 : 0;
 
   auto edge = [&](std::int64_t a, std::int64_t b) {
-    if (mask[a] && !mask[b]) boundary[a] = 1;
-    if (mask[b] && !mask[a]) boundary[b] = 1;
+    if (mask[a] && !mask[b])
+      boundary[a] = 1;
+    if (mask[b] && !mask[a])
+      boundary[b] = 1;
   };
   for (std::int64_t c = 0; c < mesh.numCells(); ++c) {
     const std::int64_t m = mesh.cellSize(c);
@@ -58,7 +62,8 @@ Status ComputeROI(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& sele
     if (m == 2) {
       edge(ids[0], ids[1]);
     } else if (m >= 3) {
-      for (std::int64_t k = 0; k < m; ++k) edge(ids[k], ids[(k + 1) % m]);
+      for (std::int64_t k = 0; k < m; ++k)
+        edge(ids[k], ids[(k + 1) % m]);
     }
   }
   result.mask = std::move(mask);

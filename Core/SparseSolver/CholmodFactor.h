@@ -1,9 +1,9 @@
 #pragma once
 // RAII wrapper of a CHOLMOD supernodal Cholesky factor of a symmetric positive definite matrix
 // given by its upper triangle. Solves are serialized (a cholmod_common is not thread-safe).
-#include "SparseSolver/FillReducingOrdering.h"
 #include "Common/Status.h"
 #include "Element/StiffnessAssembly.h"
+#include "SparseSolver/FillReducingOrdering.h"
 
 #include <Eigen/Core>
 #include <functional>

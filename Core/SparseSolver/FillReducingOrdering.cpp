@@ -25,8 +25,9 @@ namespace {
 // with compact index >= 0, numbered by that index. visitNeighbours(node, f) calls f(neighbour)
 // for each neighbour of lower or equal index, in increasing order (repeats allowed).
 template <class VisitNeighbours>
-void NodeGraphUpper(const std::vector<int>& compact, int compactNodes, VisitNeighbours&& visitNeighbours,
-                    std::vector<int>& columnStart, std::vector<int>& rows) {
+void NodeGraphUpper(const std::vector<int>& compact, int compactNodes,
+                    VisitNeighbours&& visitNeighbours, std::vector<int>& columnStart,
+                    std::vector<int>& rows) {
   std::vector<int> lastSeen(compactNodes, -1);
   columnStart.assign(1, 0);
   rows.clear();
@@ -127,8 +128,8 @@ Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, 
     if (!halfStatus[h])
       return halfStatus[h];
   leaves = halfLeaves[0] + halfLeaves[1];
-  method = std::string(halfMethod[0]) == "AMD" || std::string(halfMethod[1]) == "AMD" ? "AMD"
-                                                                                       : "METIS";
+  method =
+      std::string(halfMethod[0]) == "AMD" || std::string(halfMethod[1]) == "AMD" ? "AMD" : "METIS";
   size_t next = 0;
   for (int h = 0; h < 2; ++h)
     for (int k : halfOrder[h])
@@ -140,10 +141,10 @@ Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, 
 }
 
 // Levels of the dissection split over threads for a graph of `nodes` nodes. `leaves` > 0 asks for
-// that many (1, 2, 4, ... 64); 0 chooses: no split below kSplitFromNodes nodes, else up to 8 leaves,
-// as many as there are cores. Why not always: a split top costs some fill (its separator comes
-// from one bisection, METIS's own dissection tries harder): at ~100k cells (16k nodes) the CPU
-// factorization took ~5 % longer with two leaves, while the ordering (~0.1 s) was hidden beside
+// that many (1, 2, 4, ... 64); 0 chooses: no split below kSplitFromNodes nodes, else up to 8
+// leaves, as many as there are cores. Why not always: a split top costs some fill (its separator
+// comes from one bisection, METIS's own dissection tries harder): at ~100k cells (16k nodes) the
+// CPU factorization took ~5 % longer with two leaves, while the ordering (~0.1 s) was hidden beside
 // the assembly anyway; at 1M cells (175k nodes) the ordering is the longest CPU path and the split
 // factor was no larger. FACEPLAN_DISSECTION_LEAVES overrides the choice, for benchmarks.
 constexpr int kSplitFromNodes = 50000;
@@ -152,7 +153,8 @@ int ParallelDissectionDepth(int nodes, int leaves) {
   int most = nodes >= kSplitFromNodes ? std::min(WorkerThreads(16), 8) : 1;
   if (leaves > 0)
     most = std::min(leaves, 64);
-  else if (const char* text = std::getenv("FACEPLAN_DISSECTION_LEAVES"); text && std::atoi(text) >= 1)
+  else if (const char* text = std::getenv("FACEPLAN_DISSECTION_LEAVES");
+           text && std::atoi(text) >= 1)
     most = std::min(std::atoi(text), 64);
   int depth = 0;
   for (int parts = 2; parts <= most; parts *= 2)
@@ -220,8 +222,8 @@ Status OrderWithTrailing(int nodes, int dofsPerNode, const std::vector<char>& tr
 } // namespace
 
 Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
-                              const std::vector<char>& trailingNode,
-                              FillReducingOrdering& ordering, int leaves) {
+                              const std::vector<char>& trailingNode, FillReducingOrdering& ordering,
+                              int leaves) {
   if (dofsPerNode <= 0 || upper.rows() % dofsPerNode != 0 || upper.rows() != upper.cols())
     return Status::Error("internal: ordering needs a square matrix of whole nodes");
   const int nodes = static_cast<int>(upper.rows() / dofsPerNode);

@@ -31,7 +31,7 @@ struct FillReducingOrdering {
   std::vector<int> permutation; // position -> DOF (CHOLMOD's Perm convention)
   int trailingDofs = 0;         // the last trailingDofs positions hold the requested nodes' DOFs
   const char* method = "";      // "METIS" or "AMD"
-  int leaves = 1;               // graphs ordered whole: > 1 when the dissection's top was split here
+  int leaves = 1; // graphs ordered whole: > 1 when the dissection's top was split here
 };
 
 // `upper`: the free block's upper triangle, `dofsPerNode` consecutive DOFs per node;
@@ -39,8 +39,8 @@ struct FillReducingOrdering {
 // nested dissection's top is split into, each ordered on its own thread (1, 2, 4, ... 64); 0 lets
 // the ordering choose (no split below 50,000 nodes, else as many as there are cores, up to 8).
 Status OrderNodesWithTrailing(const SparseMatrix& upper, int dofsPerNode,
-                              const std::vector<char>& trailingNode,
-                              FillReducingOrdering& ordering, int leaves = 0);
+                              const std::vector<char>& trailingNode, FillReducingOrdering& ordering,
+                              int leaves = 0);
 
 // The same from the node graph itself: `lower` as LowerNodeNeighbours gives it
 // (Element/StiffnessAssembly.h), of which the first `nodes` are ordered. Gives the ordering

@@ -49,7 +49,9 @@ __attribute__((visibility("default"))) void gk_randinit(uint64_t seed) {
   threadRandom.seed(static_cast<unsigned int>(seed)); // srand() takes the low 32 bits
 }
 
-__attribute__((visibility("default"))) uint32_t gk_randint32(void) { return threadRandom.next(); }
+__attribute__((visibility("default"))) uint32_t gk_randint32(void) {
+  return threadRandom.next();
+}
 
 __attribute__((visibility("default"))) uint64_t gk_randint64(void) {
   const uint64_t high = threadRandom.next();

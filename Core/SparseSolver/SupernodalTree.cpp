@@ -24,7 +24,8 @@ std::vector<int> SupernodeOfColumns(const SupernodalStructure& tree) {
   return supernodeOf;
 }
 
-std::vector<int> SupernodeParents(const SupernodalStructure& tree, const std::vector<int>& supernodeOf) {
+std::vector<int> SupernodeParents(const SupernodalStructure& tree,
+                                  const std::vector<int>& supernodeOf) {
   std::vector<int> parent(tree.nsuper, -1);
   for (int k = 0; k < tree.nsuper; ++k) {
     const SupernodeShape shape = tree.shape(k);

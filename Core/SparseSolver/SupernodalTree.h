@@ -37,7 +37,8 @@ std::vector<int> SupernodeOfColumns(const SupernodalStructure& tree);
 
 // Each supernode's parent in the tree: the supernode of its first off-diagonal row, always later in
 // the order; -1 for a root. supernodeOf as SupernodeOfColumns gives it.
-std::vector<int> SupernodeParents(const SupernodalStructure& tree, const std::vector<int>& supernodeOf);
+std::vector<int> SupernodeParents(const SupernodalStructure& tree,
+                                  const std::vector<int>& supernodeOf);
 
 // marked[k] = 1 for every supernode k that holds one of `rows` or lies above one in the tree;
 // every supernode when `rows` is empty. A supernode's parent is the supernode of its first

@@ -29,8 +29,8 @@ namespace faceplan {
 void ApplySupernodeRelaxation(cholmod_common& common, SupernodeRelaxation relaxation);
 
 // `upper`: a symmetric matrix's upper triangle; `perm`: position -> DOF. The factor's Perm is in
-// `upper`'s numbering and its ordering CHOLMOD_GIVEN. `nodeBlocked` (optional) tells which path ran.
-// Null when CHOLMOD fails (common.status says why).
+// `upper`'s numbering and its ordering CHOLMOD_GIVEN. `nodeBlocked` (optional) tells which path
+// ran. Null when CHOLMOD fails (common.status says why).
 cholmod_factor* AnalyzeInGivenOrder(const SparseMatrix& upper, const std::vector<int>& perm,
                                     cholmod_common& common, bool* nodeBlocked = nullptr);
 

@@ -180,8 +180,8 @@ Status BuildTrailingResponse(const CholmodFactor& factor, const SparseMatrix& kf
   Eigen::MatrixXd combined(n, kProbes);
   for (Eigen::Index dof = 0; dof < n; ++dof)
     for (int j = 0; j < kProbes; ++j)
-      combined(dof, j) = dof < keptDofs ? -keptPrediction(dof, j)
-                                        : probe[size_t(position[dof]) * kProbes + j];
+      combined(dof, j) =
+          dof < keptDofs ? -keptPrediction(dof, j) : probe[size_t(position[dof]) * kProbes + j];
   const Eigen::MatrixXd residual = kffUpper.selfadjointView<Eigen::Upper>() * combined - loads;
   out.residualEstimate = 0.0;
   for (int j = 0; j < kProbes; ++j) {

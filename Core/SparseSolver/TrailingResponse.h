@@ -11,8 +11,8 @@
 // the relative residual an edit sees (the root mean square of the column residuals in
 // expectation, not a bound on the largest) and shows any kept row the pruned solve got wrong; the
 // caller redoes the response with per-column residuals and refinement when it misses its tolerance.
-#include "SparseSolver/CholmodFactor.h"
 #include "Common/Status.h"
+#include "SparseSolver/CholmodFactor.h"
 
 #include <atomic>
 #include <functional>

@@ -28,9 +28,11 @@ void ParallelCopy(char* dst, const char* src, size_t bytes, int threads) {
   const size_t part = (bytes + threads - 1) / threads;
   for (int t = 0; t < threads; ++t) {
     const size_t a = std::min(bytes, t * part), b = std::min(bytes, a + part);
-    if (a < b) pool.emplace_back([=] { std::memcpy(dst + a, src + a, b - a); });
+    if (a < b)
+      pool.emplace_back([=] { std::memcpy(dst + a, src + a, b - a); });
   }
-  for (auto& th : pool) th.join();
+  for (auto& th : pool)
+    th.join();
 }
 } // namespace
 
@@ -46,29 +48,34 @@ int main(int argc, char** argv) {
   // Page-aligned, so that parts of it can be registered on their own.
   struct Buffer {
     char* p;
-    explicit Buffer(size_t n) : p(static_cast<char*>(std::aligned_alloc(4096, (n + 4095) / 4096 * 4096))) {}
+    explicit Buffer(size_t n)
+        : p(static_cast<char*>(std::aligned_alloc(4096, (n + 4095) / 4096 * 4096))) {}
     ~Buffer() { std::free(p); }
     char* data() { return p; }
   } host(bytes), other(bytes);
   auto t0 = std::chrono::steady_clock::now();
   std::memset(host.data(), 0, bytes);
-  std::printf("%.2f GB, %d host threads; first touch (memset) %.0f ms\n", bytes / 1e9, threads, Ms(t0));
+  std::printf("%.2f GB, %d host threads; first touch (memset) %.0f ms\n", bytes / 1e9, threads,
+              Ms(t0));
 
   // Staged, as DownloadLarge.
   const size_t chunk = size_t(64) << 20;
   char* stage[2];
   t0 = std::chrono::steady_clock::now();
-  for (auto& s : stage) Check(cudaHostAlloc(reinterpret_cast<void**>(&s), chunk, 0), "cudaHostAlloc");
+  for (auto& s : stage)
+    Check(cudaHostAlloc(reinterpret_cast<void**>(&s), chunk, 0), "cudaHostAlloc");
   const double allocMs = Ms(t0);
   cudaEvent_t done[2];
-  for (auto& e : done) Check(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "event");
+  for (auto& e : done)
+    Check(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "event");
   for (int rep = 0; rep < 2; ++rep) {
     t0 = std::chrono::steady_clock::now();
     const size_t chunks = (bytes + chunk - 1) / chunk;
     for (size_t k = 0; k <= chunks; ++k) {
       if (k < chunks) {
         const size_t off = k * chunk, len = std::min(chunk, bytes - off);
-        Check(cudaMemcpyAsync(stage[k % 2], device + off, len, cudaMemcpyDeviceToHost, stream), "copy");
+        Check(cudaMemcpyAsync(stage[k % 2], device + off, len, cudaMemcpyDeviceToHost, stream),
+              "copy");
         Check(cudaEventRecord(done[k % 2], stream), "record");
       }
       if (k > 0) {
@@ -78,8 +85,8 @@ int main(int argc, char** argv) {
       }
     }
     const double ms = Ms(t0);
-    std::printf("staged (2 x 64 MB pinned, %.0f ms to allocate): %.0f ms = %.1f GB/s\n", allocMs, ms,
-                bytes / 1e6 / ms);
+    std::printf("staged (2 x 64 MB pinned, %.0f ms to allocate): %.0f ms = %.1f GB/s\n", allocMs,
+                ms, bytes / 1e6 / ms);
   }
   // Host memcpy alone, pageable to pageable.
   std::memset(other.data(), 0, bytes);
@@ -96,7 +103,8 @@ int main(int argc, char** argv) {
     Check(cudaMemcpyAsync(host.data(), device, bytes, cudaMemcpyDeviceToHost, stream), "copy");
     Check(cudaStreamSynchronize(stream), "sync");
     const double ms = Ms(t0);
-    std::printf("registered: register %.0f ms, copy %.0f ms = %.1f GB/s\n", registerMs, ms, bytes / 1e6 / ms);
+    std::printf("registered: register %.0f ms, copy %.0f ms = %.1f GB/s\n", registerMs, ms,
+                bytes / 1e6 / ms);
   }
   t0 = std::chrono::steady_clock::now();
   Check(cudaHostUnregister(host.data()), "cudaHostUnregister");
@@ -112,7 +120,8 @@ int main(int argc, char** argv) {
         const size_t a = p * part, len = p + 1 == parts ? bytes - a : part;
         Check(cudaHostRegister(host.data() + a, len, cudaHostRegisterDefault), "register part");
       });
-    for (auto& th : pool) th.join();
+    for (auto& th : pool)
+      th.join();
   }
   std::printf("register in 8 parts on threads: %.0f ms\n", Ms(t0));
   return 0;

@@ -30,12 +30,16 @@ inline TetMesh MakePerturbedBox(int nx, int ny, int nz, unsigned seed, double ji
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        auto corner = [&](int c) { return id(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1)); };
+        auto corner = [&](int c) {
+          return id(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+        };
         for (const auto& p : paths) {
           int v[4] = {corner(0), corner(p[0]), corner(p[1]), corner(p[2])};
           Eigen::Matrix3d edges;
-          for (int c = 0; c < 3; ++c) edges.col(c) = (mesh.points.row(v[c + 1]) - mesh.points.row(v[0])).transpose();
-          if (edges.determinant() < 0) std::swap(v[2], v[3]);
+          for (int c = 0; c < 3; ++c)
+            edges.col(c) = (mesh.points.row(v[c + 1]) - mesh.points.row(v[0])).transpose();
+          if (edges.determinant() < 0)
+            std::swap(v[2], v[3]);
           mesh.tets.row(t++) << v[0], v[1], v[2], v[3];
         }
       }

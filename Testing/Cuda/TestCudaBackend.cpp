@@ -4,13 +4,13 @@
 #include "CudaTestMesh.h"
 
 #include "Backend/ComputeBackend.h"
+#include "Common/RelativeDifference.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "CondensedFEM/CondensedSystem.h"
 #include "CudaDenseResponse.h"
 #include "Element/ElementStiffness.h"
-#include "Common/RelativeDifference.h"
-#include "Support/ShellMeshGenerator.h"
 #include "Element/StiffnessAssembly.h"
+#include "Support/ShellMeshGenerator.h"
 
 #include <gtest/gtest.h>
 
@@ -24,10 +24,11 @@
 namespace faceplan {
 namespace {
 
-#define REQUIRE_GPU_OR_SKIP()                                                 \
-  do {                                                                        \
-    std::string why_;                                                         \
-    if (!cuda::DeviceAvailable(&why_)) GTEST_SKIP() << "no usable GPU: " << why_; \
+#define REQUIRE_GPU_OR_SKIP()                                                                      \
+  do {                                                                                             \
+    std::string why_;                                                                              \
+    if (!cuda::DeviceAvailable(&why_))                                                             \
+      GTEST_SKIP() << "no usable GPU: " << why_;                                                   \
   } while (0)
 
 std::shared_ptr<ComputeBackend> Gpu() {
@@ -51,7 +52,8 @@ Materials RandomMaterials(Eigen::Index cells, unsigned seed) {
 }
 
 // The face-like shell's precompute request: random per-cell materials, the scene's node sets.
-PrecomputeRequest ShellRequest(const FaceLikeScene& scene, unsigned materialSeed, SolveMethod method) {
+PrecomputeRequest ShellRequest(const FaceLikeScene& scene, unsigned materialSeed,
+                               SolveMethod method) {
   PrecomputeRequest request;
   request.mesh = scene.shell.mesh;
   request.materials = RandomMaterials(request.mesh.numTets(), materialSeed);
@@ -63,14 +65,16 @@ PrecomputeRequest ShellRequest(const FaceLikeScene& scene, unsigned materialSeed
 }
 
 // dofNode: a random permutation of the nodes, with every `dropEvery`-th node dropped (-1).
-std::vector<int> RandomNumbering(Eigen::Index nodes, unsigned seed, int dropEvery, int& numDofNodes) {
+std::vector<int> RandomNumbering(Eigen::Index nodes, unsigned seed, int dropEvery,
+                                 int& numDofNodes) {
   std::vector<int> order(nodes);
   std::iota(order.begin(), order.end(), 0);
   std::shuffle(order.begin(), order.end(), std::mt19937(seed));
   std::vector<int> dofNode(nodes, -1);
   numDofNodes = 0;
   for (Eigen::Index i = 0; i < nodes; ++i)
-    if (dropEvery <= 0 || i % dropEvery != 0) dofNode[order[i]] = numDofNodes++;
+    if (dropEvery <= 0 || i % dropEvery != 0)
+      dofNode[order[i]] = numDofNodes++;
   return dofNode;
 }
 
@@ -105,7 +109,8 @@ TEST(CudaBackend, AssembledStiffnessMatchesCpuPerCellMaterials) {
   ASSERT_TRUE(BuildAssemblyPattern(mesh, dofNode, numDofNodes, pattern));
   AssemblyPattern gpuPattern = pattern;
 
-  const double first = CompareAssembly(*gpu, mesh, RandomMaterials(mesh.numTets(), 1), gpuPattern, pattern);
+  const double first =
+      CompareAssembly(*gpu, mesh, RandomMaterials(mesh.numTets(), 1), gpuPattern, pattern);
   EXPECT_LE(first, 1e-12);
   cuda::AssemblyDetail detail;
   ASSERT_TRUE(cuda::LastAssemblyDetail(*gpu, detail));
@@ -113,7 +118,8 @@ TEST(CudaBackend, AssembledStiffnessMatchesCpuPerCellMaterials) {
 
   // Same pattern object again with new materials: the cached gather map is reused and the new
   // materials are used.
-  const double second = CompareAssembly(*gpu, mesh, RandomMaterials(mesh.numTets(), 2), gpuPattern, pattern);
+  const double second =
+      CompareAssembly(*gpu, mesh, RandomMaterials(mesh.numTets(), 2), gpuPattern, pattern);
   EXPECT_LE(second, 1e-12);
   ASSERT_TRUE(cuda::LastAssemblyDetail(*gpu, detail));
   EXPECT_TRUE(detail.patternReused);
@@ -129,12 +135,14 @@ TEST(CudaBackend, AssembledStiffnessMatchesCpuUniformMaterialAndNewPattern) {
   const Materials uniform = Materials::Uniform(3.0e3, 0.45);
   for (unsigned seed : {1u, 2u}) {
     int numDofNodes = 0;
-    const std::vector<int> dofNode = RandomNumbering(mesh.numPoints(), 100 + seed, seed == 1 ? 0 : 5, numDofNodes);
+    const std::vector<int> dofNode =
+        RandomNumbering(mesh.numPoints(), 100 + seed, seed == 1 ? 0 : 5, numDofNodes);
     AssemblyPattern pattern;
 
     ASSERT_TRUE(BuildAssemblyPattern(mesh, dofNode, numDofNodes, pattern));
     AssemblyPattern gpuPattern = pattern;
-    EXPECT_LE(CompareAssembly(*gpu, mesh, uniform, gpuPattern, pattern), 1e-12) << "numbering " << seed;
+    EXPECT_LE(CompareAssembly(*gpu, mesh, uniform, gpuPattern, pattern), 1e-12)
+        << "numbering " << seed;
   }
   // Moved points with the same pattern: the new coordinates are used.
   int numDofNodes = 0;
@@ -177,7 +185,8 @@ TEST(CudaBackend, ResponseApplyMatchesCpuFromSeveralThreads) {
   std::mt19937 rng(3);
   std::normal_distribution<double> normal;
   Eigen::MatrixXd response(1537, 401);
-  for (Eigen::Index i = 0; i < response.size(); ++i) response.data()[i] = normal(rng);
+  for (Eigen::Index i = 0; i < response.size(); ++i)
+    response.data()[i] = normal(rng);
   std::unique_ptr<ResponseOperator> op;
   const Status made = gpu->makeResponseOperator(response, op);
   ASSERT_TRUE(made && op) << made.message;
@@ -185,7 +194,8 @@ TEST(CudaBackend, ResponseApplyMatchesCpuFromSeveralThreads) {
   std::vector<Eigen::VectorXd> inputs(64);
   for (auto& v : inputs) {
     v.resize(response.cols());
-    for (Eigen::Index i = 0; i < v.size(); ++i) v[i] = normal(rng);
+    for (Eigen::Index i = 0; i < v.size(); ++i)
+      v[i] = normal(rng);
   }
   std::vector<double> worst(4, 0.0);
   std::vector<std::thread> threads;
@@ -203,12 +213,15 @@ TEST(CudaBackend, ResponseApplyMatchesCpuFromSeveralThreads) {
           worst[t] = std::numeric_limits<double>::infinity();
           return;
         }
-        worst[t] = std::max(worst[t], RelativeMaxDifference(kept.data(), reference.data(), kept.size()));
+        worst[t] =
+            std::max(worst[t], RelativeMaxDifference(kept.data(), reference.data(), kept.size()));
       }
     });
   }
-  for (auto& th : threads) th.join();
-  for (double w : worst) EXPECT_LE(w, 1e-12);
+  for (auto& th : threads)
+    th.join();
+  for (double w : worst)
+    EXPECT_LE(w, 1e-12);
 
   Eigen::VectorXd kept;
   const Status wrongSize = op->apply(Eigen::VectorXd::Zero(5), kept);
@@ -256,22 +269,25 @@ void CompareFullPipeline(SolveMethod method) {
     const Status solved = Solve(*system, input, results[b]);
     ASSERT_TRUE(solved.ok) << solved.message;
     if (b == 1) {
-      EXPECT_NE(Describe(*system).backend.find("CUDA"), std::string::npos) << Describe(*system).backend;
+      EXPECT_NE(Describe(*system).backend.find("CUDA"), std::string::npos)
+          << Describe(*system).backend;
       EXPECT_TRUE(pre.warnings.empty()) << pre.warnings.front(); // no fallback to the CPU
       cuda::FactorAndResponseDetail detail;
       // DenseResponse: the numeric factorization and the response ran on the GPU.
-      EXPECT_EQ(cuda::LastFactorAndResponseDetail(*request.options.backend, detail) && detail.succeeded,
+      EXPECT_EQ(cuda::LastFactorAndResponseDetail(*request.options.backend, detail) &&
+                    detail.succeeded,
                 method == SolveMethod::DenseResponse);
     }
   }
   ASSERT_EQ(results[0].keptDisplacement.rows(), static_cast<Eigen::Index>(scene.kept.size()));
   ASSERT_EQ(results[1].keptDisplacement.rows(), results[0].keptDisplacement.rows());
-  const double diff = RelativeMaxDifference(results[1].keptDisplacement.data(),
-                                            results[0].keptDisplacement.data(),
-                                            static_cast<size_t>(results[0].keptDisplacement.size()));
+  const double diff =
+      RelativeMaxDifference(results[1].keptDisplacement.data(), results[0].keptDisplacement.data(),
+                            static_cast<size_t>(results[0].keptDisplacement.size()));
   EXPECT_LE(diff, 1e-10) << MethodName(method);
   EXPECT_GT(results[0].keptDisplacement.cwiseAbs().maxCoeff(), 0.0);
-  std::printf("%s: relative max difference of kept displacements GPU vs CPU: %.3e\n", MethodName(method), diff);
+  std::printf("%s: relative max difference of kept displacements GPU vs CPU: %.3e\n",
+              MethodName(method), diff);
 }
 
 TEST(CudaBackend, PrecomputeAndSolveDenseResponseMatchCpu) {
@@ -303,7 +319,8 @@ TEST(CudaBackend, PrecomputeUsesGpuFactorizationAndResponse) {
   request.options.backend = gpu;
   const Status gpuPre = Precompute(request, gpuSystem);
   ASSERT_TRUE(gpuPre.ok) << gpuPre.message;
-  for (const std::string& w : gpuPre.warnings) ADD_FAILURE() << "warning: " << w;
+  for (const std::string& w : gpuPre.warnings)
+    ADD_FAILURE() << "warning: " << w;
 
   cuda::FactorAndResponseDetail detail;
   ASSERT_TRUE(cuda::LastFactorAndResponseDetail(*gpu, detail));
@@ -323,8 +340,9 @@ TEST(CudaBackend, PrecomputeUsesGpuFactorizationAndResponse) {
 
   ASSERT_EQ(gpuSystem->response.rows(), cpuSystem->response.rows());
   ASSERT_EQ(gpuSystem->response.cols(), cpuSystem->response.cols());
-  const double responseDiff = RelativeMaxDifference(gpuSystem->response.data(), cpuSystem->response.data(),
-                                                    static_cast<size_t>(cpuSystem->response.size()));
+  const double responseDiff =
+      RelativeMaxDifference(gpuSystem->response.data(), cpuSystem->response.data(),
+                            static_cast<size_t>(cpuSystem->response.size()));
   EXPECT_LE(responseDiff, 1e-10);
 
   // Solve with prescribed ROI displacements, gravity and nodal loads (the loads go through the
@@ -333,23 +351,28 @@ TEST(CudaBackend, PrecomputeUsesGpuFactorizationAndResponse) {
   std::normal_distribution<double> normal(0.0, 0.01);
   SolveInput input;
   input.movableDisplacement.resize(static_cast<Eigen::Index>(scene.movable.size()), 3);
-  for (Eigen::Index i = 0; i < input.movableDisplacement.size(); ++i) input.movableDisplacement.data()[i] = normal(rng);
+  for (Eigen::Index i = 0; i < input.movableDisplacement.size(); ++i)
+    input.movableDisplacement.data()[i] = normal(rng);
   input.gravity = Eigen::Vector3d(0.0, -9.81, 0.0);
   input.nodalLoads = Eigen::MatrixXd::Zero(request.mesh.numPoints(), 3);
-  for (Eigen::Index i = 0; i < input.nodalLoads.rows(); i += 7) input.nodalLoads.row(i) << 0.0, 0.0, 1e-3;
+  for (Eigen::Index i = 0; i < input.nodalLoads.rows(); i += 7)
+    input.nodalLoads.row(i) << 0.0, 0.0, 1e-3;
   SolveResult cpuResult, gpuResult;
   ASSERT_TRUE(Solve(*cpuSystem, input, cpuResult).ok);
   const Status solved = Solve(*gpuSystem, input, gpuResult);
   ASSERT_TRUE(solved.ok) << solved.message;
   ASSERT_EQ(gpuResult.keptDisplacement.size(), cpuResult.keptDisplacement.size());
-  const double solveDiff = RelativeMaxDifference(gpuResult.keptDisplacement.data(), cpuResult.keptDisplacement.data(),
-                                                 static_cast<size_t>(cpuResult.keptDisplacement.size()));
+  const double solveDiff =
+      RelativeMaxDifference(gpuResult.keptDisplacement.data(), cpuResult.keptDisplacement.data(),
+                            static_cast<size_t>(cpuResult.keptDisplacement.size()));
   EXPECT_LE(solveDiff, 1e-10);
   EXPECT_GT(cpuResult.keptDisplacement.cwiseAbs().maxCoeff(), 0.0);
-  std::printf("Precompute with GPU factorization + response: response vs CPU %.3e, solve vs CPU %.3e, residual %.3e, "
+  std::printf("Precompute with GPU factorization + response: response vs CPU %.3e, solve vs CPU "
+              "%.3e, residual %.3e, "
               "factorization %.1f ms, condensation %.1f ms\n",
               responseDiff, solveDiff, detail.response.worstRelativeResidual,
-              info.precomputeTimings[Stage::Factorization].ms, info.precomputeTimings[Stage::Condensation].ms);
+              info.precomputeTimings[Stage::Factorization].ms,
+              info.precomputeTimings[Stage::Condensation].ms);
 }
 
 // The dense response built with GPU triangular solves equals Core's CPU response, in one pass and
@@ -378,23 +401,28 @@ TEST(CudaBackend, DenseResponseOnGpuMatchesCoreResponse) {
     ASSERT_TRUE(built) << built.message;
     ASSERT_EQ(response.rows(), reference.rows());
     ASSERT_EQ(response.cols(), reference.cols());
-    const double diff = RelativeMaxDifference(response.data(), reference.data(), static_cast<size_t>(reference.size()));
+    const double diff = RelativeMaxDifference(response.data(), reference.data(),
+                                              static_cast<size_t>(reference.size()));
     EXPECT_LE(diff, 1e-10) << "maxColumns " << maxColumns;
     EXPECT_LE(detail.worstRelativeResidual, 1e-10);
     EXPECT_GT(detail.worstRelativeResidual, 0.0); // the check ran
-    if (maxColumns > 0) EXPECT_GT(detail.blocks, 1);
-    std::printf("GPU response (%d passes): relative difference %.3e, worst residual %.3e\n", detail.blocks, diff,
-                detail.worstRelativeResidual);
+    if (maxColumns > 0)
+      EXPECT_GT(detail.blocks, 1);
+    std::printf("GPU response (%d passes): relative difference %.3e, worst residual %.3e\n",
+                detail.blocks, diff, detail.worstRelativeResidual);
     ASSERT_TRUE(op);
     std::mt19937 rng(maxColumns + 1);
     std::normal_distribution<double> normal;
     Eigen::VectorXd roi(reference.cols());
-    for (Eigen::Index i = 0; i < roi.size(); ++i) roi[i] = normal(rng);
+    for (Eigen::Index i = 0; i < roi.size(); ++i)
+      roi[i] = normal(rng);
     Eigen::VectorXd kept;
     const Status applied = op->apply(roi, kept);
     ASSERT_TRUE(applied) << applied.message;
     const Eigen::VectorXd expected = reference * roi;
-    EXPECT_LE(RelativeMaxDifference(kept.data(), expected.data(), static_cast<size_t>(expected.size())), 1e-10);
+    EXPECT_LE(
+        RelativeMaxDifference(kept.data(), expected.data(), static_cast<size_t>(expected.size())),
+        1e-10);
   }
 }
 
@@ -416,7 +444,8 @@ TEST(CudaBackend, GpuFactorizationMatchesCholmod) {
   std::mt19937 rng(5);
   std::normal_distribution<double> normal;
   Eigen::MatrixXd b(system->kff.rows(), 3);
-  for (Eigen::Index i = 0; i < b.size(); ++i) b.data()[i] = normal(rng);
+  for (Eigen::Index i = 0; i < b.size(); ++i)
+    b.data()[i] = normal(rng);
   Eigen::MatrixXd x;
   const Status solved = gpuFactor.solve(b, x);
   ASSERT_TRUE(solved) << solved.message;
@@ -432,7 +461,8 @@ TEST(CudaBackend, GpuFactorizationMatchesCholmod) {
       cuda::BuildDenseResponse(gpuFactor.view(), &system->kff, system->kfr, system->response.rows(),
                                &response, nullptr, detail);
   ASSERT_TRUE(built) << built.message;
-  EXPECT_LE(RelativeMaxDifference(response.data(), system->response.data(), static_cast<size_t>(response.size())),
+  EXPECT_LE(RelativeMaxDifference(response.data(), system->response.data(),
+                                  static_cast<size_t>(response.size())),
             1e-9);
   EXPECT_LE(detail.worstRelativeResidual, 1e-10);
   std::printf("GPU factorization: solve residual %.3e, response residual %.3e\n", residual,

@@ -87,7 +87,8 @@ public:
       if (hook_ == Hook::FailAfterFactor) {
         return Status::Error("simulated failure after the factorization");
       }
-      response = Eigen::MatrixXd::Zero(keptDofs, kfr.cols()); // wrong values, flagged by the residual
+      response =
+          Eigen::MatrixXd::Zero(keptDofs, kfr.cols()); // wrong values, flagged by the residual
       report.worstRelativeResidual = 1.0;
       return Status::Ok();
     }
@@ -116,7 +117,8 @@ TEST(CudaFallback, PrecomputeFallsBackWhenTheFactorResponseHookFails) {
   input.movableDisplacement.resize(static_cast<Eigen::Index>(scene.movable.size()), 3);
   std::mt19937 rng(3);
   std::normal_distribution<double> normal(0.0, 0.01);
-  for (Eigen::Index i = 0; i < input.movableDisplacement.size(); ++i) input.movableDisplacement.data()[i] = normal(rng);
+  for (Eigen::Index i = 0; i < input.movableDisplacement.size(); ++i)
+    input.movableDisplacement.data()[i] = normal(rng);
 
   std::shared_ptr<const CondensedSystem> reference;
   request.options.backend = MakeCpuBackend();
@@ -127,7 +129,8 @@ TEST(CudaFallback, PrecomputeFallsBackWhenTheFactorResponseHookFails) {
 
   const bool gpu = cuda::DeviceAvailable();
   using Hook = HookBackend::Hook;
-  for (Hook hook : {Hook::Cuda, Hook::FailBeforeFactor, Hook::FailAfterFactor, Hook::LargeResidual}) {
+  for (Hook hook :
+       {Hook::Cuda, Hook::FailBeforeFactor, Hook::FailAfterFactor, Hook::LargeResidual}) {
     SCOPED_TRACE(static_cast<int>(hook));
     auto backend = std::make_shared<HookBackend>(hook);
     request.options.backend = backend;
@@ -137,13 +140,19 @@ TEST(CudaFallback, PrecomputeFallsBackWhenTheFactorResponseHookFails) {
     EXPECT_EQ(backend->calls, 1);
     const bool expectFallback = hook != Hook::Cuda || !gpu;
     std::string warnings;
-    for (const std::string& w : pre.warnings) warnings += w + "\n";
-    EXPECT_EQ(warnings.find("factorization/response failed") != std::string::npos, expectFallback) << warnings;
-    if (hook == Hook::Cuda && !gpu) EXPECT_NE(warnings.find("factorized and built the response on the CPU"), std::string::npos) << warnings;
-    if (hook == Hook::FailBeforeFactor) EXPECT_NE(warnings.find("simulated device failure"), std::string::npos) << warnings;
+    for (const std::string& w : pre.warnings)
+      warnings += w + "\n";
+    EXPECT_EQ(warnings.find("factorization/response failed") != std::string::npos, expectFallback)
+        << warnings;
+    if (hook == Hook::Cuda && !gpu)
+      EXPECT_NE(warnings.find("factorized and built the response on the CPU"), std::string::npos)
+          << warnings;
+    if (hook == Hook::FailBeforeFactor)
+      EXPECT_NE(warnings.find("simulated device failure"), std::string::npos) << warnings;
     if (hook == Hook::FailAfterFactor || hook == Hook::LargeResidual)
       EXPECT_NE(warnings.find("the response was built on the CPU"), std::string::npos) << warnings;
-    if (hook == Hook::LargeResidual) EXPECT_NE(warnings.find("residual"), std::string::npos) << warnings;
+    if (hook == Hook::LargeResidual)
+      EXPECT_NE(warnings.find("residual"), std::string::npos) << warnings;
     EXPECT_TRUE(system->factor.isFactorized());
     EXPECT_LE(RelativeMaxDifference(system->response, reference->response), 1e-10);
     EXPECT_LE(system->responseResidual, 1e-10);

@@ -31,13 +31,14 @@ struct HollowSphere {
 
 // L2 norm of the error of nodal displacements u (one row per mesh point) over the mesh, with the
 // degree-2 four-point rule per tetrahedron; l2Exact receives the exact solution's L2 norm.
-inline double HollowSphereL2Error(const TetMesh& mesh, const RowVectors3d& u, const HollowSphere& exact,
-                                  double& l2Exact) {
+inline double HollowSphereL2Error(const TetMesh& mesh, const RowVectors3d& u,
+                                  const HollowSphere& exact, double& l2Exact) {
   const double alpha = 0.5854101966249685, beta = 0.1381966011250105;
   double err2 = 0.0, ref2 = 0.0;
   TetCorners c;
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-    for (int k = 0; k < 4; ++k) c.row(k) = mesh.points.row(mesh.tets(e, k));
+    for (int k = 0; k < 4; ++k)
+      c.row(k) = mesh.points.row(mesh.tets(e, k));
     const double w = TetVolume(c) / 4.0;
     for (int q = 0; q < 4; ++q) {
       Eigen::Vector4d bary = Eigen::Vector4d::Constant(beta);

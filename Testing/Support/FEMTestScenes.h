@@ -16,7 +16,8 @@ RowVectors3d SmoothRoiField(const PrecomputeRequest& request, double amplitude =
 // z = lz are movable. Corner (0, 0, 0) is tied, and the nodes of the edge x = lx, y = 0 slide on
 // the plane y = 0, which removes the rigid motions the walls leave. Every node is kept. Pressing
 // the plate makes a homogeneous uniaxial state.
-PrecomputeRequest PressedBlockRequest(double lx, double ly, double lz, double nu, double E = 3000.0);
+PrecomputeRequest PressedBlockRequest(double lx, double ly, double lz, double nu,
+                                      double E = 3000.0);
 
 // A thick spherical shell (radii 40 and 55): the bottom of its inner surface is tied, the rest of
 // it slides on the sphere (sliding nodes with the radial normal), and a cap on top is pushed

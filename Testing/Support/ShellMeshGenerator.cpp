@@ -22,9 +22,9 @@ struct SphereTriangulation {
 // face (A,B,C), so the sorted (vertex, weight) pairs identify it whichever face produced it.
 SphereTriangulation Icosphere(int s) {
   const double phi = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Eigen::Vector3d> ico = {{-1, phi, 0}, {1, phi, 0},  {-1, -phi, 0}, {1, -phi, 0},
-                                      {0, -1, phi}, {0, 1, phi},  {0, -1, -phi}, {0, 1, -phi},
-                                      {phi, 0, -1}, {phi, 0, 1},  {-phi, 0, -1}, {-phi, 0, 1}};
+  std::vector<Eigen::Vector3d> ico = {{-1, phi, 0}, {1, phi, 0}, {-1, -phi, 0}, {1, -phi, 0},
+                                      {0, -1, phi}, {0, 1, phi}, {0, -1, -phi}, {0, 1, -phi},
+                                      {phi, 0, -1}, {phi, 0, 1}, {-phi, 0, -1}, {-phi, 0, 1}};
   const int faces[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                             {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                             {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
@@ -34,12 +34,14 @@ SphereTriangulation Icosphere(int s) {
   auto vertexId = [&](int a, int wa, int b, int wb, int c, int wc) {
     std::array<std::pair<int, int>, 3> terms = {{{a, wa}, {b, wb}, {c, wc}}};
     for (auto& t : terms)
-      if (t.second == 0) t.first = -1;
+      if (t.second == 0)
+        t.first = -1;
     std::sort(terms.begin(), terms.end());
-    const std::array<int, 6> key = {terms[0].first, terms[0].second, terms[1].first,
-                                    terms[1].second, terms[2].first, terms[2].second};
+    const std::array<int, 6> key = {terms[0].first,  terms[0].second, terms[1].first,
+                                    terms[1].second, terms[2].first,  terms[2].second};
     auto it = index.find(key);
-    if (it != index.end()) return it->second;
+    if (it != index.end())
+      return it->second;
     const Eigen::Vector3d p = (wa * ico[a] + wb * ico[b] + wc * ico[c]) / double(s);
     out.vertices.push_back(p.normalized());
     const int id = static_cast<int>(out.vertices.size()) - 1;
@@ -52,7 +54,8 @@ SphereTriangulation Icosphere(int s) {
     for (int i = 0; i < s; ++i) {
       for (int j = 0; i + j < s; ++j) {
         out.triangles.push_back({at(i, j), at(i + 1, j), at(i, j + 1)});
-        if (i + j + 1 < s) out.triangles.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+        if (i + j + 1 < s)
+          out.triangles.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
       }
     }
   }
@@ -66,7 +69,8 @@ void SplitPrism(const std::array<int, 6>& v, std::vector<std::array<int, 4>>& te
                                      {3, 5, 4, 0, 2, 1}, {4, 3, 5, 1, 0, 2}, {5, 4, 3, 2, 1, 0}};
   const int first = static_cast<int>(std::min_element(v.begin(), v.end()) - v.begin());
   std::array<int, 6> r;
-  for (int k = 0; k < 6; ++k) r[k] = v[rotation[first][k]];
+  for (int k = 0; k < 6; ++k)
+    r[k] = v[rotation[first][k]];
   if (std::min(r[1], r[5]) < std::min(r[2], r[4])) {
     tets.push_back({r[0], r[1], r[2], r[5]});
     tets.push_back({r[0], r[1], r[5], r[4]});
@@ -88,14 +92,15 @@ ShellMesh MakeSphericalShell(int subdivisions, int layers, double innerRadius, d
   shell.mesh.points.resize(static_cast<Eigen::Index>(perLayer) * (layers + 1), 3);
   for (int l = 0; l <= layers; ++l) {
     const double r = innerRadius + (outerRadius - innerRadius) * l / layers;
-    for (int v = 0; v < perLayer; ++v) shell.mesh.points.row(l * perLayer + v) = r * sphere.vertices[v].transpose();
+    for (int v = 0; v < perLayer; ++v)
+      shell.mesh.points.row(l * perLayer + v) = r * sphere.vertices[v].transpose();
   }
   std::vector<std::array<int, 4>> tets;
   tets.reserve(3 * sphere.triangles.size() * layers);
   for (int l = 0; l < layers; ++l) {
     for (const auto& t : sphere.triangles) {
-      SplitPrism({l * perLayer + t[0], l * perLayer + t[1], l * perLayer + t[2], (l + 1) * perLayer + t[0],
-                  (l + 1) * perLayer + t[1], (l + 1) * perLayer + t[2]},
+      SplitPrism({l * perLayer + t[0], l * perLayer + t[1], l * perLayer + t[2],
+                  (l + 1) * perLayer + t[0], (l + 1) * perLayer + t[1], (l + 1) * perLayer + t[2]},
                  tets);
     }
   }
@@ -103,9 +108,12 @@ ShellMesh MakeSphericalShell(int subdivisions, int layers, double innerRadius, d
   TetCorners corners;
   for (size_t e = 0; e < tets.size(); ++e) {
     auto tet = tets[e];
-    for (int k = 0; k < 4; ++k) corners.row(k) = shell.mesh.points.row(tet[k]);
-    if (TetVolume(corners) < 0) std::swap(tet[2], tet[3]);
-    for (int k = 0; k < 4; ++k) shell.mesh.tets(e, k) = tet[k];
+    for (int k = 0; k < 4; ++k)
+      corners.row(k) = shell.mesh.points.row(tet[k]);
+    if (TetVolume(corners) < 0)
+      std::swap(tet[2], tet[3]);
+    for (int k = 0; k < 4; ++k)
+      shell.mesh.tets(e, k) = tet[k];
   }
   for (int v = 0; v < perLayer; ++v) {
     shell.innerNodes.push_back(v);
@@ -123,7 +131,8 @@ FaceLikeScene MakeFaceLikeScene(int subdivisions, int layers, double roiFraction
   const double capZ = inner * (1.0 - 2.0 * roiFraction);
   for (int node : scene.shell.innerNodes) {
     scene.constrained.push_back(node);
-    if (scene.shell.mesh.points(node, 2) > capZ) scene.movable.push_back(node);
+    if (scene.shell.mesh.points(node, 2) > capZ)
+      scene.movable.push_back(node);
   }
   scene.kept = scene.shell.outerNodes;
   return scene;

@@ -8,8 +8,8 @@
 
 #include <condition_variable>
 #include <cstdlib>
-#include <string>
 #include <mutex>
+#include <string>
 #include <thread>
 
 using namespace faceplan;

@@ -34,7 +34,8 @@ Scene FaceShell(int subdivisions = 5, int layers = 2) {
   s.edit.resize(static_cast<Eigen::Index>(f.movable.size()), 3);
   for (size_t k = 0; k < f.movable.size(); ++k) {
     const Eigen::RowVector3d p = s.request.mesh.points.row(f.movable[k]);
-    s.edit.row(k) << 1.5 * std::sin(0.05 * p(0)), -std::cos(0.04 * p(1)), 2.0 + 0.5 * std::sin(0.03 * (p(0) + p(1)));
+    s.edit.row(k) << 1.5 * std::sin(0.05 * p(0)), -std::cos(0.04 * p(1)),
+        2.0 + 0.5 * std::sin(0.03 * (p(0) + p(1)));
   }
   return s;
 }
@@ -156,7 +157,8 @@ TEST(SolvePaths, SinglePrecisionWithinItsTolerance) {
 
 TEST(SolvePaths, TraditionalBandCholeskyMatchesReference) {
   std::string why;
-  if (!BandLapackAvailable(&why)) GTEST_SKIP() << why;
+  if (!BandLapackAvailable(&why))
+    GTEST_SKIP() << why;
   const Scene s = FaceShell();
   TraditionalBandResult band;
   const Status status = SolveTraditionalBand(s.request, s.edit, band);
@@ -178,7 +180,8 @@ TEST(SolvePaths, ReverseCuthillMcKeeShrinksBandwidthOfShuffledMesh) {
   for (Eigen::Index e = 0; e < s.request.mesh.numTets(); ++e)
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b)
-        if (a != b) neighbours[perm[s.request.mesh.tets(e, a)]].push_back(perm[s.request.mesh.tets(e, b)]);
+        if (a != b)
+          neighbours[perm[s.request.mesh.tets(e, a)]].push_back(perm[s.request.mesh.tets(e, b)]);
   std::vector<int> start(n + 1, 0), adjacent;
   for (Eigen::Index v = 0; v < n; ++v) {
     auto& l = neighbours[v];
@@ -222,7 +225,8 @@ TEST(SolvePaths, HollowSphereCGErrorIsDiscretisationError) {
   r.sets = {shell.innerNodes, shell.innerNodes, shell.outerNodes};
   RowVectors3d edit(static_cast<Eigen::Index>(shell.innerNodes.size()), 3);
   for (size_t k = 0; k < shell.innerNodes.size(); ++k)
-    edit.row(k) = exact.displacement(shell.mesh.points.row(shell.innerNodes[k]).transpose()).transpose();
+    edit.row(k) =
+        exact.displacement(shell.mesh.points.row(shell.innerNodes[k]).transpose()).transpose();
   FreeSystem system;
   ASSERT_TRUE(BuildFreeSystem(r, system).ok);
   Eigen::VectorXd roi, x;
@@ -237,11 +241,13 @@ TEST(SolvePaths, HollowSphereCGErrorIsDiscretisationError) {
   Eigen::MatrixXd direct;
   ASSERT_TRUE(factor.solve(FreeRightHandSide(system, roi), direct).ok);
   double norm;
-  const double error = HollowSphereL2Error(r.mesh, AllDisplacement(system, x, roi), exact, norm) / norm;
+  const double error =
+      HollowSphereL2Error(r.mesh, AllDisplacement(system, x, roi), exact, norm) / norm;
   const double directError =
       HollowSphereL2Error(r.mesh, AllDisplacement(system, direct.col(0), roi), exact, norm) / norm;
   EXPECT_LT(error, 0.2);
-  EXPECT_NEAR(error, directError, 1e-6 * directError); // solver error far below discretisation error
+  EXPECT_NEAR(error, directError,
+              1e-6 * directError); // solver error far below discretisation error
 }
 
 TEST(SolvePaths, ErrorsComeBackAsStatus) {

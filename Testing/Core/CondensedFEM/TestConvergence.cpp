@@ -1,9 +1,9 @@
 // Thick hollow sphere, radial displacement prescribed on the inner surface, free outer surface:
 // u(r) = A r + B / r^2 with sigma_rr(b) = 0 (Core/AnalyticHollowSphere.h). Linear tetrahedra
 // converge at order 2 in L2.
-#include "Support/AnalyticHollowSphere.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "Element/ElementStiffness.h"
+#include "Support/AnalyticHollowSphere.h"
 #include "Support/ShellMeshGenerator.h"
 
 #include <cmath>
@@ -31,7 +31,8 @@ void SolveAndMeasure(int subdivisions, int layers, double& h, double& relativeEr
   SolveInput input;
   input.movableDisplacement.resize(static_cast<Eigen::Index>(shell.innerNodes.size()), 3);
   for (size_t k = 0; k < shell.innerNodes.size(); ++k)
-    input.movableDisplacement.row(k) = exact.displacement(shell.mesh.points.row(shell.innerNodes[k]).transpose()).transpose();
+    input.movableDisplacement.row(k) =
+        exact.displacement(shell.mesh.points.row(shell.innerNodes[k]).transpose()).transpose();
   input.recoverInterior = true;
   SolveResult result;
   const Status solved = Solve(*system, input, result);
@@ -55,8 +56,10 @@ TEST(Convergence, HollowSphereL2OrderAtLeast1p8) {
   }
   for (size_t k = 1; k < errors.size(); ++k) {
     const double order = std::log(errors[k - 1] / errors[k]) / std::log(sizes[k - 1] / sizes[k]);
-    std::printf("h = %.4f  relative L2 error = %.3e  observed order = %.3f\n", sizes[k], errors[k], order);
-    if (k >= 2) EXPECT_GE(order, 1.8) << "between refinements " << k - 1 << " and " << k;
+    std::printf("h = %.4f  relative L2 error = %.3e  observed order = %.3f\n", sizes[k], errors[k],
+                order);
+    if (k >= 2)
+      EXPECT_GE(order, 1.8) << "between refinements " << k - 1 << " and " << k;
   }
   EXPECT_LT(errors.back(), errors.front());
 }

@@ -15,7 +15,8 @@ std::string PrecomputeError(const PrecomputeRequest& request) {
   EXPECT_EQ(system, nullptr);
   SolveResult reference;
   SolveInput input;
-  input.movableDisplacement = RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+  input.movableDisplacement =
+      RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
   EXPECT_FALSE(SolveFullReference(request, input, reference).ok);
   return s.message;
 }

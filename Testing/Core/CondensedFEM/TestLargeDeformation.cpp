@@ -240,8 +240,9 @@ TEST(LargeDeformation, LiftOffLetsABlockPulledUpLeaveTheFloor) {
   // Whichever way the floor's normal is given, the tissue side decides: pulled up, the block
   // leaves the floor as one rigid body; held both ways (no lift-off) it stretches.
   for (double sign : {1.0, -1.0}) {
-    FloorBlock b = BlockOnFloor(sign * Eigen::Vector3d::UnitZ(),
-                                [](const Eigen::RowVector3d&) { return Eigen::RowVector3d(0, 0, 3.0); });
+    FloorBlock b = BlockOnFloor(sign * Eigen::Vector3d::UnitZ(), [](const Eigen::RowVector3d&) {
+      return Eigen::RowVector3d(0, 0, 3.0);
+    });
     SolveResult lifted, held;
     LargeDeformationReport liftedReport, heldReport;
     Status s = SolveLargeDeformation(b.request, b.input, LiftOff(), lifted, liftedReport);
@@ -260,8 +261,9 @@ TEST(LargeDeformation, LiftOffLetsABlockPulledUpLeaveTheFloor) {
 }
 
 TEST(LargeDeformation, LiftOffKeepsAPressedBlockOnTheFloor) {
-  FloorBlock b = BlockOnFloor(Eigen::Vector3d::UnitZ(),
-                              [](const Eigen::RowVector3d&) { return Eigen::RowVector3d(0, 0, -3.0); });
+  FloorBlock b = BlockOnFloor(Eigen::Vector3d::UnitZ(), [](const Eigen::RowVector3d&) {
+    return Eigen::RowVector3d(0, 0, -3.0);
+  });
   SolveResult lifted, held;
   LargeDeformationReport liftedReport, heldReport;
   ASSERT_TRUE(SolveLargeDeformation(b.request, b.input, LiftOff(), lifted, liftedReport).ok);

@@ -23,18 +23,22 @@ PrecomputeRequest BoundaryDriven(int subdivisions, int layers) {
   PrecomputeRequest request;
   request.mesh = shell.mesh;
   request.materials = Materials::Uniform(2.0e3, 0.42);
-  for (int id : shell.innerNodes) request.sets.constrained.push_back(id);
-  for (int id : shell.outerNodes) request.sets.constrained.push_back(id);
+  for (int id : shell.innerNodes)
+    request.sets.constrained.push_back(id);
+  for (int id : shell.outerNodes)
+    request.sets.constrained.push_back(id);
   request.sets.movable = request.sets.constrained;
   // Kept: every node of the middle layer.
-  for (int v = 0; v < shell.nodesPerLayer; ++v) request.sets.kept.push_back((layers / 2) * shell.nodesPerLayer + v);
+  for (int v = 0; v < shell.nodesPerLayer; ++v)
+    request.sets.kept.push_back((layers / 2) * shell.nodesPerLayer + v);
   return request;
 }
 
-RowVectors3d FieldAt(const PrecomputeRequest& r, const std::vector<int>& nodes, const Eigen::Matrix3d& A,
-                      const Eigen::Vector3d& b) {
+RowVectors3d FieldAt(const PrecomputeRequest& r, const std::vector<int>& nodes,
+                     const Eigen::Matrix3d& A, const Eigen::Vector3d& b) {
   RowVectors3d u(static_cast<Eigen::Index>(nodes.size()), 3);
-  for (size_t k = 0; k < nodes.size(); ++k) u.row(k) = (A * r.mesh.points.row(nodes[k]).transpose() + b).transpose();
+  for (size_t k = 0; k < nodes.size(); ++k)
+    u.row(k) = (A * r.mesh.points.row(nodes[k]).transpose() + b).transpose();
   return u;
 }
 
@@ -50,7 +54,8 @@ void ExpectReproduces(SolveMethod method, const Eigen::Matrix3d& A, const Eigen:
   Status s = Solve(*system, input, result);
   ASSERT_TRUE(s.ok) << s.message;
   std::vector<int> all(request.mesh.numPoints());
-  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  for (size_t i = 0; i < all.size(); ++i)
+    all[i] = static_cast<int>(i);
   const RowVectors3d exact = FieldAt(request, all, A, b);
   EXPECT_LT(RelativeMaxDifference(result.allDisplacement, exact), 1e-12);
   const double scale = exact.cwiseAbs().maxCoeff();
@@ -110,7 +115,8 @@ TEST(RigidMotion, ZeroStrainAndZeroReaction) {
     const ElementMatrix ke = TetStiffness(c, 2.0e3, 0.42);
     const Eigen::Matrix<double, 12, 1> fe = ke * ue;
     forceScale = std::max(forceScale, (ke.cwiseAbs() * ue.cwiseAbs()).maxCoeff());
-    for (int k = 0; k < 4; ++k) nodalForce.row(request.mesh.tets(e, k)) += fe.segment<3>(3 * k).transpose();
+    for (int k = 0; k < 4; ++k)
+      nodalForce.row(request.mesh.tets(e, k)) += fe.segment<3>(3 * k).transpose();
   }
   maxForce = nodalForce.cwiseAbs().maxCoeff();
   EXPECT_LT(maxStrain, 1e-12);

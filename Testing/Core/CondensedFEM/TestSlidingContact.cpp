@@ -1,9 +1,9 @@
 // Sliding contact (NodeSets::sliding): only the normal displacement is prescribed. Checked against
 // the analytic uniaxial solution of a block between frictionless walls, and against CalculiX on a
 // curved surface (*TRANSFORM + *BOUNDARY on the local normal DOF).
+#include "CalculixRunner.h"
 #include "Common/RelativeDifference.h"
 #include "CondensedFEM/CondensedSystem.h"
-#include "CalculixRunner.h"
 #include "Support/BoxMeshGenerator.h"
 #include "Support/FEMTestScenes.h"
 
@@ -19,7 +19,9 @@ namespace {
 
 constexpr double kLx = 20.0, kLy = 16.0, kLz = 12.0, kPress = 0.6, kNu = 0.3;
 
-PrecomputeRequest PressedBlock() { return PressedBlockRequest(kLx, kLy, kLz, kNu); }
+PrecomputeRequest PressedBlock() {
+  return PressedBlockRequest(kLx, kLy, kLz, kNu);
+}
 
 // u = (nu e x, nu e y, -e z) with e = kPress / kLz: uniaxial compression, lateral expansion free.
 RowVectors3d Uniaxial(const RowVectors3d& points) {

@@ -1,6 +1,6 @@
 #include "Element/ElementStiffness.h"
-#include "Support/ShellMeshGenerator.h"
 #include "Element/StiffnessAssembly.h"
+#include "Support/ShellMeshGenerator.h"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -27,10 +27,12 @@ TEST(Assembly, GatherEqualsDenseElementSum) {
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
   TetCorners c;
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-    for (int k = 0; k < 4; ++k) c.row(k) = mesh.points.row(mesh.tets(e, k));
+    for (int k = 0; k < 4; ++k)
+      c.row(k) = mesh.points.row(mesh.tets(e, k));
     const ElementMatrix ke = TetStiffness(c, mat.E(e), mat.nu(e));
     for (int p = 0; p < 12; ++p)
-      for (int q = 0; q < 12; ++q) dense(3 * mesh.tets(e, p / 3) + p % 3, 3 * mesh.tets(e, q / 3) + q % 3) += ke(p, q);
+      for (int q = 0; q < 12; ++q)
+        dense(3 * mesh.tets(e, p / 3) + p % 3, 3 * mesh.tets(e, q / 3) + q % 3) += ke(p, q);
   }
   const SparseMatrix full = pattern.upper.selfadjointView<Eigen::Upper>();
   const Eigen::MatrixXd assembled = Eigen::MatrixXd(full);
@@ -38,7 +40,8 @@ TEST(Assembly, GatherEqualsDenseElementSum) {
   // The pattern holds exactly the structurally non-zero upper entries.
   Eigen::Index structural = 0;
   for (Eigen::Index j = 0; j < n; ++j)
-    for (Eigen::Index i = 0; i <= j; ++i) structural += dense(i, j) != 0.0;
+    for (Eigen::Index i = 0; i <= j; ++i)
+      structural += dense(i, j) != 0.0;
   EXPECT_LE(structural, pattern.upper.nonZeros());
 }
 
@@ -46,7 +49,8 @@ TEST(Assembly, DroppedNodesHaveNoDofs) {
   const ShellMesh shell = MakeSphericalShell(2, 2, 1.0, 1.5);
   std::vector<int> dofNode(shell.mesh.numPoints(), -1);
   int next = 0;
-  for (Eigen::Index i = shell.nodesPerLayer; i < shell.mesh.numPoints(); ++i) dofNode[i] = next++;
+  for (Eigen::Index i = shell.nodesPerLayer; i < shell.mesh.numPoints(); ++i)
+    dofNode[i] = next++;
   AssemblyPattern pattern;
 
   ASSERT_TRUE(BuildAssemblyPattern(shell.mesh, dofNode, next, pattern));
@@ -89,7 +93,8 @@ TEST(Assembly, GatherMapEqualsItsDefinition) {
         if (row > col)
           std::swap(row, col);
         const int k = entryOf(row, col);
-        ASSERT_GE(k, 0) << "cell " << e << " entry (" << row << ", " << col << ") not in the pattern";
+        ASSERT_GE(k, 0) << "cell " << e << " entry (" << row << ", " << col
+                        << ") not in the pattern";
         expected[k].push_back(packed);
       }
   ASSERT_EQ(pattern.gatherStart.size(), static_cast<size_t>(upper.nonZeros()) + 1);
@@ -107,7 +112,8 @@ TEST(Assembly, RefusesACellWithARepeatedNode) {
   std::vector<int> identity(mesh.numPoints());
   std::iota(identity.begin(), identity.end(), 0);
   AssemblyPattern pattern;
-  const Status s = BuildAssemblyPattern(mesh, identity, static_cast<int>(mesh.numPoints()), pattern);
+  const Status s =
+      BuildAssemblyPattern(mesh, identity, static_cast<int>(mesh.numPoints()), pattern);
   EXPECT_FALSE(s.ok);
   EXPECT_NE(s.message.find("same node twice"), std::string::npos) << s.message;
 }

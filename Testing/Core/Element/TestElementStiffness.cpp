@@ -16,7 +16,8 @@ TetCorners SampleTet() {
 // Independent textbook form: explicit 6x12 strain matrix B and 6x6 constitutive matrix D.
 ElementMatrix TextbookStiffness(const TetCorners& c, double E, double nu) {
   Eigen::Matrix4d M;
-  for (int a = 0; a < 4; ++a) M.row(a) << 1.0, c(a, 0), c(a, 1), c(a, 2);
+  for (int a = 0; a < 4; ++a)
+    M.row(a) << 1.0, c(a, 0), c(a, 1), c(a, 2);
   const Eigen::Matrix4d coeff = M.inverse(); // column a holds N_a's coefficients
   Eigen::Matrix<double, 6, 12> B = Eigen::Matrix<double, 6, 12>::Zero();
   for (int a = 0; a < 4; ++a) {
@@ -50,8 +51,10 @@ TEST(ElementStiffness, SymmetricWithSixRigidModes) {
   EXPECT_LT((ke - ke.transpose()).norm() / ke.norm(), 1e-14);
   Eigen::SelfAdjointEigenSolver<ElementMatrix> eig(ke);
   const auto& values = eig.eigenvalues();
-  for (int k = 0; k < 6; ++k) EXPECT_LT(std::abs(values[k]), 1e-12 * values[11]);
-  for (int k = 6; k < 12; ++k) EXPECT_GT(values[k], 1e-6 * values[11]);
+  for (int k = 0; k < 6; ++k)
+    EXPECT_LT(std::abs(values[k]), 1e-12 * values[11]);
+  for (int k = 6; k < 12; ++k)
+    EXPECT_GT(values[k], 1e-6 * values[11]);
 }
 
 TEST(ElementStiffness, VolumeSignAndScaling) {

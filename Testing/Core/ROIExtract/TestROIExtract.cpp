@@ -1,7 +1,7 @@
 // ROIExtract contract: ROIMask is the selection, ROIBoundary marks ROI vertices with a non-ROI
 // neighbour along a cell edge; malformed input gives an error and an empty result.
-#include "Support/FaceplanTestMeshes.h"
 #include "ROIExtract/ROIExtract.h"
+#include "Support/FaceplanTestMeshes.h"
 
 #include <gtest/gtest.h>
 
@@ -12,17 +12,21 @@ using namespace faceplan;
 namespace {
 
 // Reference: edges collected independently from the triangles.
-std::vector<std::uint8_t> ReferenceBoundary(const SurfaceMesh& m, const std::vector<std::uint8_t>& sel) {
+std::vector<std::uint8_t> ReferenceBoundary(const SurfaceMesh& m,
+                                            const std::vector<std::uint8_t>& sel) {
   std::set<std::pair<std::int64_t, std::int64_t>> edges;
   for (std::int64_t c = 0; c < m.numCells(); ++c) {
     const std::int64_t* ids = m.cell(c);
     const std::int64_t n = m.cellSize(c);
-    for (std::int64_t k = 0; k < n; ++k) edges.insert(std::minmax(ids[k], ids[(k + 1) % n]));
+    for (std::int64_t k = 0; k < n; ++k)
+      edges.insert(std::minmax(ids[k], ids[(k + 1) % n]));
   }
   std::vector<std::uint8_t> b(sel.size(), 0);
   for (auto [a, c] : edges) {
-    if (sel[a] && !sel[c]) b[a] = 1;
-    if (sel[c] && !sel[a]) b[c] = 1;
+    if (sel[a] && !sel[c])
+      b[a] = 1;
+    if (sel[c] && !sel[a])
+      b[c] = 1;
   }
   return b;
 }
@@ -32,7 +36,8 @@ std::vector<std::uint8_t> ReferenceBoundary(const SurfaceMesh& m, const std::vec
 TEST(ROIExtract, SphereCapMaskAndBoundary) {
   SurfaceMesh m = testmesh::Icosphere(3);
   std::vector<std::uint8_t> sel(m.numPoints());
-  for (Eigen::Index i = 0; i < m.numPoints(); ++i) sel[i] = m.points(i, 2) > 0.6;
+  for (Eigen::Index i = 0; i < m.numPoints(); ++i)
+    sel[i] = m.points(i, 2) > 0.6;
   ROIResult r;
   Status s = ComputeROI(m, sel, r);
   ASSERT_TRUE(s.ok) << s.message;
@@ -43,7 +48,8 @@ TEST(ROIExtract, SphereCapMaskAndBoundary) {
   for (std::size_t i = 0; i < sel.size(); ++i) {
     nb += r.boundary[i];
     nroi += sel[i];
-    if (r.boundary[i]) EXPECT_EQ(r.mask[i], 1) << "boundary vertex outside the ROI: " << i;
+    if (r.boundary[i])
+      EXPECT_EQ(r.mask[i], 1) << "boundary vertex outside the ROI: " << i;
   }
   EXPECT_GT(nb, 0);
   EXPECT_LT(nb, nroi); // a cap has interior vertices
@@ -85,7 +91,8 @@ TEST(ROIExtract, WholeMeshHasNoBoundary) {
   SurfaceMesh m = testmesh::Icosphere(1);
   ROIResult r;
   ASSERT_TRUE(ComputeROI(m, std::vector<std::uint8_t>(m.numPoints(), 1), r).ok);
-  for (auto b : r.boundary) EXPECT_EQ(b, 0);
+  for (auto b : r.boundary)
+    EXPECT_EQ(b, 0);
 }
 
 TEST(ROIExtract, Errors) {
