@@ -25,6 +25,7 @@ from paraview.simple import LoadPlugin
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import osteotomy_scenes  # noqa: E402
 import tet_folds  # noqa: E402
+import tet_strain  # noqa: E402
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy  # noqa: E402
 from vtkmodules.vtkCommonCore import reference, vtkPoints  # noqa: E402
 from vtkmodules.vtkCommonDataModel import (vtkGenericCell, vtkPolyData, vtkStaticCellLocator,  # noqa: E402
@@ -118,16 +119,7 @@ xyz = vtk_to_numpy(tissue.GetPoints().GetData()).astype(float)
 conn = vtk_to_numpy(tissue.GetCells().GetConnectivityArray()).reshape(-1, 4)
 u = vtk_to_numpy(out.GetPointData().GetArray("Displacement")).astype(float)
 
-# Small strain of each linear tet: grad u = dU * inv(dX).
-X = xyz[conn]
-dX = np.stack([X[:, k] - X[:, 0] for k in (1, 2, 3)], axis=2)  # columns = edges
-U = u[conn]
-dU = np.stack([U[:, k] - U[:, 0] for k in (1, 2, 3)], axis=2)
-grad = dU @ np.linalg.inv(dX)
-eps = 0.5 * (grad + np.transpose(grad, (0, 2, 1)))
-if args.neo_hookean:  # Green-Lagrange: (F^T F - I) / 2
-    eps = eps + 0.5 * np.transpose(grad, (0, 2, 1)) @ grad
-strain = np.abs(np.linalg.eigvalsh(eps)).max(axis=1)
+strain = tet_strain.largest_principal_strain(xyz, conn, u, green_lagrange=args.neo_hookean)
 
 
 def quality(measure):
@@ -223,4 +215,4 @@ for c in worst:
                                               " ".join("%d(%s)" % (n, state[n]) for n in conn[c])))
 if args.save:
     np.savez(args.save, strain=strain, mean_ratio=mean_ratio, min_angle=min_angle, state=state,
-             folded=folded, centroid=X.mean(axis=1), conn=conn, xyz=xyz, u=u)
+             folded=folded, centroid=xyz[conn].mean(axis=1), conn=conn, xyz=xyz, u=u)
