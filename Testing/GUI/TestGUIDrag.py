@@ -32,7 +32,7 @@ import time
 import traceback
 
 TARGET_UPDATES_PER_S = 30.0
-MOVES = 12
+MOVES = int(os.environ.get("FACEPLAN_GUI_DRAG_MOVES", "12"))  # more for scripts/profile_gui_drag
 
 sys.path.insert(0, os.environ["FACEPLAN_GUI_TESTS"])  # Testing/GUI, set by run_gui_test.py
 from gui_result import check, result, write_result  # noqa: E402
@@ -112,6 +112,7 @@ try:
         """MOVES moves of control point 1 (alternately down and back up, so that every move
         changes the face); records the frame figures under info[prefix + ...]."""
         frames_wall, frames_cpu = [], []
+        span_start = time.clock_gettime(time.CLOCK_MONOTONIC)  # perf -k CLOCK_MONOTONIC's clock
         phases = {name: {"wall": [], "cpu": []}
                   for name in ("pipeline", "representations", "render", "paint")}
 
@@ -121,7 +122,7 @@ try:
 
         for k in range(1, MOVES + 1):
             step = k if state["down"] else MOVES - k
-            curve[5] = faceplan_pipeline.CUT_Z - 0.5 - 0.25 * step
+            curve[5] = faceplan_pipeline.CUT_Z - 0.5 - 3.0 * step / MOVES  # over 3 mm whatever MOVES
             t0 = clock()
             cut.CurveU = curve
             fem.UpdatePipeline()  # Apply, as Auto Apply does: the shown outputs update, then draw
@@ -145,6 +146,7 @@ try:
             state["previous"] = current
         state["down"] = not state["down"]
         info = result["info"]
+        info[prefix + "monotonic_span_s"] = [span_start, time.clock_gettime(time.CLOCK_MONOTONIC)]
         median = statistics.median(frames_wall)
         info[prefix + "frame_ms"] = [round(t, 2) for t in frames_wall]
         info[prefix + "frame_ms_median"] = round(median, 2)
