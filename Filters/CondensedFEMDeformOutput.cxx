@@ -1,4 +1,5 @@
 #include "CondensedFEMDeformOutput.h"
+#include "FacePlanFieldData.h"
 
 #include "vtkCellArray.h"
 #include "vtkDoubleArray.h"
@@ -17,23 +18,8 @@
 namespace faceplan {
 namespace fem_filter {
 
-namespace {
-
-void AddScalar(vtkFieldData* fd, const char* name, double value) {
-  vtkNew<vtkDoubleArray> a;
-  a->SetName(name);
-  a->InsertNextValue(value);
-  fd->AddArray(a);
-}
-
-void AddString(vtkFieldData* fd, const char* name, const std::string& value) {
-  vtkNew<vtkStringArray> a;
-  a->SetName(name);
-  a->InsertNextValue(value);
-  fd->AddArray(a);
-}
-
-} // namespace
+using fielddata::AddScalar;
+using fielddata::AddString;
 
 void BuildDeformedTissue(vtkUnstructuredGrid* tissue, const TissueBoundary& boundary,
                          const RowVectors3d& restPoints, const SolveOutcome& outcome,

@@ -1,6 +1,7 @@
 #include "vtkTissueModelFromCT.h"
 
 #include "Copyleft/CGAL/LabeledImageMesher.h"
+#include "FacePlanFieldData.h"
 #include "FacePlanGather.h"
 #include "TissueModelFromCT/TissueModel.h"
 
@@ -32,12 +33,7 @@ vtkStandardNewMacro(vtkTissueModelFromCT);
 
 namespace {
 
-void AddScalar(vtkFieldData* fd, const char* name, double value) {
-  vtkNew<vtkDoubleArray> a;
-  a->SetName(name);
-  a->InsertNextValue(value);
-  fd->AddArray(a);
-}
+using faceplan::fielddata::AddScalar;
 
 // A triangle surface over the tissue points its facets use, renumbered densely;
 // TissuePointId maps back to the tissue.

@@ -1,0 +1,26 @@
+#include "FacePlanFieldData.h"
+
+#include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
+#include <vtkNew.h>
+#include <vtkStringArray.h>
+
+namespace faceplan {
+namespace fielddata {
+
+void AddScalar(vtkFieldData* fd, const char* name, double value) {
+  vtkNew<vtkDoubleArray> a;
+  a->SetName(name);
+  a->InsertNextValue(value);
+  fd->AddArray(a);
+}
+
+void AddString(vtkFieldData* fd, const char* name, const std::string& value) {
+  vtkNew<vtkStringArray> a;
+  a->SetName(name);
+  a->InsertNextValue(value);
+  fd->AddArray(a);
+}
+
+} // namespace fielddata
+} // namespace faceplan
