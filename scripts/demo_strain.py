@@ -1,14 +1,17 @@
 """How far the main demo's plan strains the tissue (pvpython), under the linear and the
 large-deformation model: the figures README.md gives beside `scripts/demo`.
 
-    pvpython scripts/demo_strain.py <FacePlan.so> <Data dir>
+    pvpython scripts/demo_strain.py <FacePlan.so> <Data dir> [--contact Tied|Sliding] [--release MM]
 
+--contact and --release set CondensedFEMDeform's ContactModel and ReleaseDistance (the demo's own:
+Tied, 0), to see how much of the strain the tissue's ties to the collapsed bone cause.
 Runs faceplan_pipeline.build (the demo's ROI, Bezier cut and CondensedFEMDeform, Volume output so
 every cell's strain can be taken) with Model LinearElastic, then NeoHookean, and prints for each the
 update time, the filter's LargestStrain, the cells beyond 10 % / 50 % strain (small strain for the
 linear model, Green-Lagrange for the large-deformation one), the smallest volume ratio and the
 Newton iterations where the model reports them, and how far the bone moved.
 """
+import argparse
 import os
 import sys
 import time
@@ -22,10 +25,18 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import faceplan_pipeline  # noqa: E402
 import tet_strain  # noqa: E402
 
-plugin, data_dir = sys.argv[1], sys.argv[2]
-LoadPlugin(plugin)
-tissue_proxy, _, _, cut, fem = faceplan_pipeline.build(data_dir)
+parser = argparse.ArgumentParser()
+parser.add_argument("plugin")
+parser.add_argument("data_dir")
+parser.add_argument("--contact", choices=("Tied", "Sliding"), default="Tied")
+parser.add_argument("--release", type=float, default=0.0, help="ReleaseDistance (mm)")
+args = parser.parse_args()
+LoadPlugin(args.plugin)
+tissue_proxy, _, _, cut, fem = faceplan_pipeline.build(args.data_dir)
 fem.OutputMode = "Volume"
+fem.ContactModel = args.contact
+fem.ReleaseDistance = args.release
+print("ContactModel %s, ReleaseDistance %g mm" % (args.contact, args.release))
 tissue = servermanager.Fetch(tissue_proxy)
 xyz = vtk_to_numpy(tissue.GetPoints().GetData()).astype(float)
 conn = vtk_to_numpy(tissue.GetCells().GetConnectivityArray()).reshape(-1, 4)
