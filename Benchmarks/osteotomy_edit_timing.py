@@ -16,7 +16,7 @@ for name, origin, normal in (("maxilla", [80, 0, 113], [0, 0, -1]), ("mandible",
     reader.UpdatePipeline()
     first, edit = [], []
     for k in range(repeats):
-        f = Osteotomy(Input=reader, Translation=[-5, 0, 0])
+        f = Osteotomy(Input=reader, Operation="Custom", Translation=[-5, 0, 0])
         f.CutPlane1.Origin, f.CutPlane1.Normal = origin, normal
         start = time.perf_counter()
         f.UpdatePipeline()

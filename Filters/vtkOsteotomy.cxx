@@ -1,9 +1,11 @@
 #include "vtkOsteotomy.h"
 
 #include "FacePlanDataStamp.h"
+#include "FacePlanFieldData.h"
 #include "FacePlanGather.h"
 #include "FacePlanVTKConvert.h"
 #include "Osteotomy/CutPlanes.h"
+#include "Osteotomy/OperationPresets.h"
 #include "Osteotomy/Osteotomy.h"
 #include "OsteotomyClipping.h"
 #include "OsteotomyConvert.h"
@@ -16,10 +18,13 @@
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkMultiProcessController.h>
+#include <vtkNew.h>
 #include <vtkObjectFactory.h>
+#include <vtkPointData.h>
 #include <vtkPointSet.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
+#include <vtkUnsignedCharArray.h>
 
 #include <algorithm>
 #include <array>
@@ -36,9 +41,11 @@ class vtkOsteotomy::vtkInternals {
 public:
   bool valid = false;
   faceplan::DataStamp input;
-  std::vector<double> key; // InsideOut, plane origins and normals
+  std::vector<double> key; // Operation, axes, InsideOut, plane origins and normals
   vtkSmartPointer<vtkPolyData> split;
   std::vector<std::uint8_t> moves;
+  std::vector<faceplan::CutPlane> planes;      // the planes the split used
+  std::vector<std::uint8_t> released, sliding; // a preset's approach, on the split's points
   faceplan::OsteotomyBone bone;
   unsigned long splits = 0;
 };
@@ -118,15 +125,31 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
                output, planesOutput);
     return;
   }
-  std::vector<vtkImplicitFunction*> functions{this->CutPlane1};
-  if (this->UseSecondPlane)
-    functions.push_back(this->CutPlane2);
+  if (this->Operation < CUSTOM || this->Operation > GENIOPLASTY) {
+    this->Fail("Operation must be 0 (Custom), 1 (LeFortI), 2 (BSSO) or 3 (Genioplasty), not " +
+                   std::to_string(this->Operation),
+               output, planesOutput);
+    return;
+  }
+  const bool preset = this->Operation != CUSTOM;
+  const bool insideOut = !preset && this->InsideOut != 0;
+  faceplan::AnatomicalAxes axes;
+  axes.anterior = Eigen::Vector3d(this->AnteriorDirection);
+  axes.superior = Eigen::Vector3d(this->SuperiorDirection);
+  std::vector<double> key{static_cast<double>(this->Operation), insideOut ? 1.0 : 0.0};
+  key.insert(key.end(), this->AnteriorDirection, this->AnteriorDirection + 3);
+  key.insert(key.end(), this->SuperiorDirection, this->SuperiorDirection + 3);
   std::vector<faceplan::CutPlane> planes;
-  const faceplan::Status planesStatus = of::ToCutPlanes(functions, planes);
-  std::vector<double> key{this->InsideOut ? 1.0 : 0.0};
-  for (const faceplan::CutPlane& p : planes) {
-    key.insert(key.end(), p.origin.data(), p.origin.data() + 3);
-    key.insert(key.end(), p.normal.data(), p.normal.data() + 3);
+  faceplan::Status planesStatus = faceplan::Status::Ok();
+  if (!preset) {
+    std::vector<vtkImplicitFunction*> functions{this->CutPlane1};
+    if (this->UseSecondPlane)
+      functions.push_back(this->CutPlane2);
+    planesStatus = of::ToCutPlanes(functions, planes);
+    for (const faceplan::CutPlane& p : planes) {
+      key.insert(key.end(), p.origin.data(), p.origin.data() + 3);
+      key.insert(key.end(), p.normal.data(), p.normal.data() + 3);
+    }
   }
   vtkInternals& cache = *this->Internals;
   auto* pointSet = vtkPointSet::SafeDownCast(data);
@@ -135,7 +158,7 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
     stamp = faceplan::StampOf(pointSet);
   if (!(cache.valid && planesStatus && pointSet && stamp == cache.input && key == cache.key)) {
     // Validate (the input, the planes, and that the cut leaves vertices on both sides) and split:
-    // only when the input, the planes or the sides changed.
+    // only when the input, the operation, the planes or the sides changed.
     cache.valid = false;
     if (failed(of::ValidateInput(data)) || failed(planesStatus))
       return;
@@ -147,22 +170,40 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
       this->Fail(why, output, planesOutput);
       return;
     }
+    faceplan::OperationGeometry geometry;
+    if (preset) {
+      // Core: the operation's planes from the bone's geometry.
+      const faceplan::Status placed = faceplan::PlaceOperationCut(
+          static_cast<faceplan::Operation>(this->Operation), inputMesh.points, axes, geometry);
+      if (!placed) {
+        this->Fail(faceplan::OperationName(static_cast<faceplan::Operation>(this->Operation)) +
+                       " preset: " + placed.message,
+                   output, planesOutput);
+        return;
+      }
+      planes = geometry.planes;
+    }
     std::vector<std::uint8_t> inputSides;
-    if (failed(
-            faceplan::ClassifyCutSides(inputMesh.points, planes, this->InsideOut != 0, inputSides)))
+    if (failed(faceplan::ClassifyCutSides(inputMesh.points, planes, insideOut, inputSides)))
       return;
     // Convert: split the bone with VTK's clipping, both sides capped, the bookkeeping
     // interpolated.
-    cache.split =
-        of::ClipIntoPieces(of::BookkeepingBone(input),
-                           faceplan::ConvexPiecesOfCut(planes, this->InsideOut != 0), cache.moves);
+    cache.split = of::ClipIntoPieces(of::BookkeepingBone(input),
+                                     faceplan::ConvexPiecesOfCut(planes, insideOut), cache.moves);
     if (failed(of::ToOsteotomyBone(cache.split, cache.moves, input->GetFieldData(), cache.bone)))
       return;
+    cache.released.clear();
+    cache.sliding.clear();
+    if (preset)
+      faceplan::MarkOperationApproach(geometry, cache.bone.mesh.points, cache.moves, cache.released,
+                                      cache.sliding);
+    cache.planes = planes;
     cache.input = std::move(stamp);
     cache.key = std::move(key);
     cache.valid = true;
     ++cache.splits;
   }
+  planes = cache.planes;
   vtkPolyData* input = vtkPolyData::SafeDownCast(data);
   const faceplan::OsteotomyBone& bone = cache.bone;
   faceplan::OsteotomyMove move;
@@ -180,6 +221,22 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
 
   // Outputs.
   of::BuildBoneOutput(result, cache.split, input->GetFieldData(), output);
+  if (preset) {
+    // The operation's approach replaces the flags the input may carry.
+    for (const auto& [name, flags] :
+         {std::make_pair("Released", &cache.released), std::make_pair("Sliding", &cache.sliding)}) {
+      vtkNew<vtkUnsignedCharArray> array;
+      array->SetName(name);
+      array->SetNumberOfValues(static_cast<vtkIdType>(flags->size()));
+      for (std::size_t i = 0; i < flags->size(); ++i)
+        array->SetValue(static_cast<vtkIdType>(i), (*flags)[i]);
+      output->GetPointData()->RemoveArray(name);
+      output->GetPointData()->AddArray(array);
+    }
+    faceplan::fielddata::AddString(
+        output->GetFieldData(), "Operation",
+        faceplan::OperationName(static_cast<faceplan::Operation>(this->Operation)));
+  }
   std::array<double, 6> box;
   input->GetBounds(box.data());
   of::BuildCutPlaneOutput(planes, box, planesOutput);
@@ -187,6 +244,13 @@ void vtkOsteotomy::Cut(vtkDataSet* data, vtkPolyData* output, vtkPolyData* plane
 
 void vtkOsteotomy::PrintSelf(ostream& os, vtkIndent indent) {
   this->Superclass::PrintSelf(os, indent);
+  os << indent
+     << "Operation: " << faceplan::OperationName(static_cast<faceplan::Operation>(this->Operation))
+     << " (" << this->Operation << ")\n";
+  os << indent << "AnteriorDirection: " << this->AnteriorDirection[0] << " "
+     << this->AnteriorDirection[1] << " " << this->AnteriorDirection[2] << "\n";
+  os << indent << "SuperiorDirection: " << this->SuperiorDirection[0] << " "
+     << this->SuperiorDirection[1] << " " << this->SuperiorDirection[2] << "\n";
   os << indent << "CutPlane1: " << this->CutPlane1 << "\n";
   os << indent << "CutPlane2: " << this->CutPlane2 << "\n";
   os << indent << "UseSecondPlane: " << this->UseSecondPlane << "\n";

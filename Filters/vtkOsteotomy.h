@@ -19,6 +19,13 @@
  * one-component point arrays (labels, flags such as CondensedFEMDeform's Released and Sliding) are
  * passed on, interpolated at the points the cut adds; vectors and normals are not, since the move
  * would invalidate them.
+ * Operation picks where the cut goes: CUSTOM uses CutPlane1/CutPlane2/UseSecondPlane/InsideOut;
+ * LE_FORT_I, BSSO and GENIOPLASTY place the planes from the bone's geometry in the frame given by
+ * AnteriorDirection and SuperiorDirection (Core/Osteotomy/OperationPresets.h says how) and mark the
+ * operation's standard approach on the output: point arrays `Released` (uint8, 1 = degloved bone)
+ * and `Sliding` (uint8, 1 = the teeth), replacing the input's, and field data `Operation` (the
+ * preset's name). The proxy (Plugin/Osteotomy.xml) starts with LE_FORT_I, so a new filter cuts
+ * where the operation does in the GUI and in pvpython alike.
  * Output port 1: the cut plane(s) clipped to the input's bounds (cell array `CutPlane`: 1 or 2).
  * Errors (vtkErrorMacro, empty outputs): input not a triangle surface, NaN coordinates,
  * non-finite planes or move, a cut with no vertex on one of its sides. The input is not modified.
@@ -41,6 +48,23 @@ public:
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
   enum PivotModeType { SEGMENT_CENTROID = 0, CUSTOM_PIVOT = 1 };
+  enum OperationType { CUSTOM = 0, LE_FORT_I = 1, BSSO = 2, GENIOPLASTY = 3 };
+
+  ///@{
+  /// The operation: CUSTOM (the cut planes as set) or a preset that places them from the bone
+  /// (Core/Osteotomy/OperationPresets.h). Other values are kept and rejected by RequestData.
+  vtkSetMacro(Operation, int);
+  vtkGetMacro(Operation, int);
+  ///@}
+
+  ///@{
+  /// The bone's anatomical frame for the presets: out of the face, and up (the bundled face: -x
+  /// and +z).
+  vtkSetVector3Macro(AnteriorDirection, double);
+  vtkGetVector3Macro(AnteriorDirection, double);
+  vtkSetVector3Macro(SuperiorDirection, double);
+  vtkGetVector3Macro(SuperiorDirection, double);
+  ///@}
 
   ///@{
   /// The cut planes (vtkPlane or a subclass such as ParaView's vtkPVPlane).
@@ -58,7 +82,7 @@ public:
   ///@}
 
   ///@{
-  /// Move the other side instead.
+  /// Move the other side instead (Operation CUSTOM only: a preset moves its segment).
   vtkSetMacro(InsideOut, vtkTypeBool);
   vtkGetMacro(InsideOut, vtkTypeBool);
   vtkBooleanMacro(InsideOut, vtkTypeBool);
@@ -102,6 +126,9 @@ protected:
   vtkImplicitFunction* CutPlane2 = nullptr;
   vtkTypeBool UseSecondPlane = false;
   vtkTypeBool InsideOut = false;
+  int Operation = CUSTOM;
+  double AnteriorDirection[3] = {-1.0, 0.0, 0.0};
+  double SuperiorDirection[3] = {0.0, 0.0, 1.0};
   double Translation[3] = {0.0, 0.0, 0.0};
   double Rotation[3] = {0.0, 0.0, 0.0};
   double Pivot[3] = {0.0, 0.0, 0.0};

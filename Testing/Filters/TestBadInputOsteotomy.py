@@ -30,7 +30,7 @@ P = vtk_to_numpy(BONE.GetPoints().GetData()).astype(float)
 
 
 def osteotomy_on(dataset, **props):
-    f = Osteotomy(Input=producer(dataset))
+    f = Osteotomy(Input=producer(dataset), Operation="Custom")
     f.CutPlane1 = "Plane"
     f.CutPlane1.Origin = [1, 0, 0]
     f.CutPlane1.Normal = [1, 0, 0]
@@ -80,6 +80,21 @@ bad = copy(BONE)
 bad.GetPolys().GetConnectivityArray().SetValue(4, len(P) + 2)
 f, c = osteotomy_on(bad)
 cases.error("triangle id past the end", f, c, str(len(P) + 2), ports=PORTS)
+# The operation presets' properties.
+for value in (4, -1):
+    f, c = osteotomy_on(BONE, Operation=value)
+    cases.error("Operation %d" % value, f, c, "Operation", str(value), ports=PORTS)
+for prop, value, text in (("AnteriorDirection", [0, 0, 0], "zero length"),
+                          ("AnteriorDirection", [float("nan"), 0, 0], "not finite"),
+                          ("SuperiorDirection", [float("inf"), 0, 0], "not finite"),
+                          ("SuperiorDirection", [-2, 0, 0.1], "parallel")):
+    f, c = osteotomy_on(BONE, Operation=1, **{prop: value})
+    cases.error("%s %s with a preset" % (prop, value), f, c, text, ports=PORTS)
+f, c = osteotomy_on(BONE, Operation=2)  # a sphere has no ramus above its crest
+cases.error("BSSO on a bone without a ramus", f, c, "ramus", ports=PORTS)
+f, c = osteotomy_on(polydata(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, 0]], float),
+                             polys=[[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]), Operation=1)
+cases.error("LeFortI on a flat bone", f, c, "flat", ports=PORTS)
 check(np.array_equal(vtk_to_numpy(BONE.GetPoints().GetData()), P), "Osteotomy: input not modified")
 
 print("Osteotomy bad-input cases: %d" % cases.count)

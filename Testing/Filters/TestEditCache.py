@@ -145,7 +145,7 @@ changed_in_place("ROIMask changed", shrink_roi)
 changed_in_place("points changed", lift_points)
 
 # --------------------------------------------------------------------------------- Osteotomy
-ost = Osteotomy(Input=shift)
+ost = Osteotomy(Input=shift, Operation="Custom")
 ost.CutPlane1.Origin = [97.0, 0.0, 80.0]
 ost.CutPlane1.Normal = [-1.0, 0.0, 0.0]
 ost.Translation = [-6.0, 0.0, 0.0]
@@ -154,7 +154,7 @@ splits = count(ost, "SplitCount")
 
 
 def fresh_osteotomy():
-    f = Osteotomy(Input=shift)
+    f = Osteotomy(Input=shift, Operation="Custom")
     f.CutPlane1.Origin, f.CutPlane1.Normal = list(ost.CutPlane1.Origin), list(ost.CutPlane1.Normal)
     f.UseSecondPlane = ost.UseSecondPlane
     f.CutPlane2.Origin, f.CutPlane2.Normal = list(ost.CutPlane2.Origin), list(ost.CutPlane2.Normal)

@@ -141,7 +141,7 @@ def on_planes(X):
 sphere_data = sphere_polydata()
 sphere_before = points(sphere_data).copy()
 sphere = producer(sphere_data)
-ost = Osteotomy(Input=sphere)
+ost = Osteotomy(Input=sphere, Operation="Custom")
 check(np.allclose(ost.CutPlane1.Origin, [0, 0, 0], atol=1e-12), "default plane through the input's centre")
 ost.CutPlane1.Origin = [0.1, 0.2, 0.3]
 ost.CutPlane1.Normal = [0, 0, 2]  # not unit: the filter normalises
@@ -239,7 +239,7 @@ ost.UseSecondPlane = 0
 # ------------------------------------------------------------- chained osteotomies compose
 ost.Translation = [0.0, 0.0, 1.0]
 ost.Rotation = [10, 0, 0]
-second = Osteotomy(Input=ost)
+second = Osteotomy(Input=ost, Operation="Custom")
 second.CutPlane1.Origin = [0, 0, 1.6]
 second.CutPlane1.Normal = [0.2, 0, 1]  # cuts the moved segment only
 second.Rotation = [0, 15, -5]
@@ -271,7 +271,7 @@ ost.Translation = [0.0, 0.0, 1.2]
 second.Translation = [0.1, 0.2, 0.3]
 second.UpdatePipeline()
 o4b = fetch(second)
-fresh = Osteotomy(Input=ost)
+fresh = Osteotomy(Input=ost, Operation="Custom")
 fresh.CutPlane1.Origin, fresh.CutPlane1.Normal = second.CutPlane1.Origin, second.CutPlane1.Normal
 fresh.Rotation, fresh.Translation = second.Rotation, second.Translation
 fresh.UpdatePipeline()
@@ -297,7 +297,7 @@ cut = BezierCut(Input=roi, Operation="Cut", FlipNormal=0)
 z = 0.8
 cut.CurveU = [-1, -1, z, -1 / 3, -1, z, 1 / 3, -1, z, 1, -1, z]
 cut.CurveV = [-1, -1, z, -1, -1 / 3, z, -1, 1 / 3, z, -1, 1, z]
-after = Osteotomy(Input=cut)
+after = Osteotomy(Input=cut, Operation="Custom")
 after.CutPlane1.Origin = [0, 0, 0.5]
 after.CutPlane1.Normal = [0, 0, 1]
 after.Translation = [0, 0, 2]
@@ -324,7 +324,7 @@ check(Tf is not None and len(Tf) == 12 and np.all(np.isfinite(Tf)), "bezier: an 
 check(field(o6, "SegmentNote") == [""], "bezier: no note for a rigid segment")
 
 # ------------------------------------------------------------- ParaView's plane offset moves the cut
-shifted = Osteotomy(Input=sphere, Translation=[0, 0, 1])
+shifted = Osteotomy(Input=sphere, Operation="Custom", Translation=[0, 0, 1])
 shifted.CutPlane1.Origin, shifted.CutPlane1.Normal, shifted.CutPlane1.Offset = [0, 0, 0.1], [0, 0, 1], 0.2
 shifted.UpdatePipeline()
 o8 = fetch(shifted)
@@ -339,7 +339,7 @@ mandible = XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.
 mandible.UpdatePipeline()
 bounds = mandible.GetDataInformation().GetBounds()
 centre = [(bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, (bounds[4] + bounds[5]) / 2]
-default = Osteotomy(Input=mandible)
+default = Osteotomy(Input=mandible, Operation="Custom")
 check(np.allclose(default.CutPlane1.Origin, centre, atol=1e-9), "face: default plane through the mandible's centre")
 default.Translation = [-2, 0, 0]
 default.UpdatePipeline()
@@ -351,7 +351,7 @@ check(o7.GetNumberOfPoints() > 0 and boundary_edge_count(o7) == 0, "face: the cu
 
 # ------------------------------------------------------------- bad input
 def expect_error(label, source, text, **props):
-    f = Osteotomy(Input=source)
+    f = Osteotomy(Input=source, Operation="Custom")
     for k, v in props.items():
         if k.startswith("plane_"):
             setattr(f.CutPlane1, k[6:], v)
@@ -397,7 +397,7 @@ box.SetInputConnection(quads.GetOutputPort())
 box.SetScaleFactor(1.0)
 box.CappingOn()
 box.Update()
-qb = Osteotomy(Input=producer(box.GetOutput()))
+qb = Osteotomy(Input=producer(box.GetOutput()), Operation="Custom")
 qb.CutPlane1.Origin = [0.1, 0, 0]
 qb.Translation = [1, 0, 0]
 qb.UpdatePipeline()
@@ -417,7 +417,7 @@ for name, values in (("Released", flag_values), ("Weight", weight_values),
     a = numpy_to_vtk(values, deep=1)
     a.SetName(name)
     flagged.GetPointData().AddArray(a)
-carry = Osteotomy(Input=producer(flagged))
+carry = Osteotomy(Input=producer(flagged), Operation="Custom")
 carry.CutPlane1.Origin = [0.1, 0.2, 0.3]
 carry.CutPlane1.Normal = [0, 0, 1]
 carry.Translation = [1.0, 2.0, 3.0]

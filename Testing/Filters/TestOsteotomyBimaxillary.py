@@ -33,10 +33,10 @@ BSSO = np.array([-6.0, 0.0, 0.0])
 tissue = XMLUnstructuredGridReader(FileName=[os.path.join(data_dir, "face", "face_tissue.vtu")])
 maxilla = XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "maxilla.vtp")])
 mandible = XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")])
-lefort = Osteotomy(Input=maxilla)
+lefort = Osteotomy(Input=maxilla, Operation="Custom")
 lefort.CutPlane1.Origin = [80.0, 0.0, 110.0]
 lefort.CutPlane1.Normal = [0.0, 0.0, -1.0]  # the tooth-bearing part below the cut moves
-bsso = Osteotomy(Input=mandible)
+bsso = Osteotomy(Input=mandible, Operation="Custom")
 bsso.CutPlane1.Origin = [97.0, 0.0, 80.0]
 bsso.CutPlane1.Normal = [-1.0, 0.0, 0.0]  # the body in front of both rami moves
 bone = AppendGeometry(Input=[lefort, bsso])

@@ -20,11 +20,11 @@ from faceplan_test_util import ErrorCatcher, check, fetch, finish, point_array
 tissue = XMLUnstructuredGridReader(FileName=[os.path.join(data_dir, "face", "face_tissue.vtu")])
 maxilla = XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "maxilla.vtp")])
 mandible = XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")])
-lefort = Osteotomy(Input=maxilla)
+lefort = Osteotomy(Input=maxilla, Operation="Custom")
 lefort.CutPlane1.Origin = [80.0, 0.0, 113.0]
 lefort.CutPlane1.Normal = [0.0, 0.0, -1.0]
 lefort.Translation = [-5.0, 0.0, 0.0]
-bsso = Osteotomy(Input=mandible)
+bsso = Osteotomy(Input=mandible, Operation="Custom")
 bsso.CutPlane1.Origin = [97.0, 0.0, 80.0]
 bsso.CutPlane1.Normal = [-1.0, 0.0, 0.0]
 bsso.Translation = [-6.0, 0.0, 0.0]

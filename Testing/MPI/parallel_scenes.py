@@ -207,12 +207,11 @@ def build(scene, split, data_dir, work_dir):
             cut.CurveV = lower(faceplan_pipeline.CURVE_V)
     elif scene == "osteotomy":  # BSSO: the mandible's body moved, maxilla and cranium fixed
         import osteotomy_scenes
-        _, planes, translation, _ = osteotomy_scenes.SCENES["bsso"]
+        _, operation, translation, _ = osteotomy_scenes.SCENES["bsso"]
         mandible = simple.XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")])
         if split != "none":  # Osteotomy takes triangles as vtkPolyData
             mandible = simple.ExtractSurface(Input=_split(mandible, split))
-        osteotomy = simple.Osteotomy(Input=mandible)
-        osteotomy.CutPlane1.Origin, osteotomy.CutPlane1.Normal = planes[0]
+        osteotomy = simple.Osteotomy(Input=mandible, Operation=operation)
         osteotomy.Translation = translation
         fixed = [osteotomy_scenes.unmoved(simple.XMLPolyDataReader(
             FileName=[os.path.join(data_dir, "face", name + ".vtp")])) for name in ("maxilla", "cranium")]
