@@ -19,7 +19,7 @@ for f in .devcarry/debs/*.deb; do dpkg -x "$f" "$DC"; done
 tar -xzf .devcarry/eigen3.tar.gz -C "$DC"
 LIB=$DC/usr/lib/x86_64-linux-gnu
 RUNLIBS=$LIB:$LIB/openblas-pthread
-# zlib (Benchmarks/VtuReader): the machine's own libz.so.1 with the carried header when it has no
+# zlib (Testing/Support/VtuReader): the machine's own libz.so.1 with the carried header when it has no
 # zlib development files.
 ZLIBARGS=()
 if [ ! -e /usr/include/zlib.h ]; then

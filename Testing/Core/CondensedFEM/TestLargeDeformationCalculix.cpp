@@ -10,9 +10,9 @@
 // below 1e-7 of the increment (job.cvg), and tightening the tolerances (ours to 1e-13, ccx's to
 // 1e-11) leaves the differences unchanged, so what remains is the printed digits. 2e-6 is that
 // floor with a margin; the linear model must differ by more than 5000 times as much.
-#include "CalculixRunner.h"
 #include "Common/RelativeDifference.h"
 #include "CondensedFEM/LargeDeformation.h"
+#include "Support/CalculixRunner.h"
 #include "Support/FEMTestScenes.h"
 
 #include <cstdio>

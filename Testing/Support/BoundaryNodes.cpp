@@ -1,4 +1,4 @@
-#include "BoundaryNodes.h"
+#include "Support/BoundaryNodes.h"
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "VtuReader.h"
+#include "Support/VtuReader.h"
 
 #include <cstdint>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "CalculixRunner.h"
+#include "Support/CalculixRunner.h"
 
 #include "Common/StageTimings.h"
 
