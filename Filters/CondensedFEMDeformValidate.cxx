@@ -124,8 +124,11 @@ Status ValidateProperties(const Settings& s) {
     return Error(
         "ElementOrder must be 0 (Linear), 1 (Quadratic) or 2 (QuadraticNodalPressure), not ",
         s.elementOrder);
-  if (s.model < 0 || s.model > 1)
-    return Error("Model must be 0 (LinearElastic) or 1 (NeoHookean), not ", s.model);
+  if (s.model < 0 || s.model > 2)
+    return Error("Model must be 0 (LinearElastic), 1 (NeoHookean) or 2 (Auto), not ", s.model);
+  if (s.largeDeformationSolver < 0 || s.largeDeformationSolver > 1)
+    return Error("LargeDeformationSolver must be 0 (Precomputed) or 1 (Newton), not ",
+                 s.largeDeformationSolver);
   if (s.largeDeformation() && s.elementOrder != 0)
     return Error("Model NeoHookean supports ElementOrder Linear only");
   if (s.largeDeformation() && s.verify)

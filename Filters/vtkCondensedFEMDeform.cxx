@@ -342,6 +342,7 @@ Settings vtkCondensedFEMDeform::CurrentSettings() const {
   s.method = this->Method;
   s.elementOrder = this->ElementOrder;
   s.model = this->Model;
+  s.largeDeformationSolver = this->LargeDeformationSolver;
   s.liftOff = this->LiftOff;
   s.verify = this->Verify;
   return s;
@@ -365,6 +366,7 @@ void vtkCondensedFEMDeform::PrintSelf(ostream& os, vtkIndent indent) {
      << indent << "Method: " << this->Method << "\n"
      << indent << "ElementOrder: " << this->ElementOrder << "\n"
      << indent << "Model: " << this->Model << "\n"
+     << indent << "LargeDeformationSolver: " << this->LargeDeformationSolver << "\n"
      << indent << "LiftOff: " << this->LiftOff << "\n"
      << indent << "Verify: " << this->Verify << "\n";
 }

@@ -26,6 +26,10 @@ const char* MethodName(SolveMethod method) {
     return "RigidSegments";
   case SolveMethod::FullReference:
     return "FullReference";
+  case SolveMethod::LargeDeformationNewton:
+    return "LargeDeformationNewton";
+  case SolveMethod::LargeDeformationPrecomputed:
+    return "LargeDeformationPrecomputed";
   }
   return "?";
 }

@@ -30,10 +30,15 @@ enum class SolveMethod {
   DenseResponse, // precompute kept x ROI response; an edit is one matrix-vector product
   CachedFactor,  // keep the sparse Cholesky factor of the free block; an edit is one solve
   FullReference, // no condensation, no cache: assemble and factor everything on every solve
-  RigidSegments  // precompute the kept response to 12 affine motions per rigid segment (plus the
+  RigidSegments, // precompute the kept response to 12 affine motions per rigid segment (plus the
                  // general response to the ROI DOFs of segment-0 nodes); an edit is one product
                  // with the 12 s segment parameters and the general part. Auto picks it when
                  // NodeSets::movableSegment names segments and the response fits the budget.
+  // The neo-Hookean model's results (LargeDeformation.h, PrecomputedLargeDeformation.h): Newton's
+  // method with a factorization per iteration, and the solve with the precomputed factor. Never
+  // chosen by Auto, and not a precompute's method.
+  LargeDeformationNewton,
+  LargeDeformationPrecomputed
 };
 const char* MethodName(SolveMethod method);
 
