@@ -185,7 +185,11 @@ void MarkOperationApproach(const OperationGeometry& g, const RowVectors3d& point
     bool r = false, t = false;
     switch (g.operation) {
     case Operation::LeFortI:
-      r = !moving;
+      // Degloved from the vestibular incision (the top of the teeth band) up to the infraorbital
+      // foramina, about a third of the crest-to-cut height above the cut, on both sides of it:
+      // the nasal base and the piriform rim's tissue are freed from the segment too, while the
+      // nasal dorsum above stays on its bones.
+      r = s > g.crestS + 0.4 * H && s <= g.cutS + 0.3 * (g.cutS - g.crestS);
       t = s <= g.crestS + 0.4 * H && a >= g.frontA - 0.5 * (g.frontA - g.backA);
       break;
     case Operation::BSSO:

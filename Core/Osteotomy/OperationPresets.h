@@ -68,11 +68,12 @@ Status PlaceOperationCut(Operation operation, const RowVectors3d& points,
 
 // The standard approach on the split bone (`points` before the move, `segment` 1 on the moving
 // side), one value per point:
-//  - released: LeFortI, the whole maxilla above the cut (degloved through the vestibular incision
-//    up to the infraorbital rims); BSSO, the bone within 0.3 H either side of the cut, both sides
-//    (the ramus and body exposed along the external oblique ridge); Genioplasty, the fixed anterior
-//    mandible above the cut, up to the canine roots (0.25 H below the crest) and back to 0.2 H
-//    behind the chin's back plane.
+//  - released: LeFortI, the maxilla from the vestibular incision (the top of the teeth band) up to
+//    the infraorbital foramina (0.3 of the crest-to-cut height above the cut), both sides of the
+//    cut (the nasal base is freed from the segment as well; the nasal dorsum stays attached); BSSO,
+//    the bone within 0.3 H either side of the cut, both sides (the ramus and body exposed along the
+//    external oblique ridge); Genioplasty, the fixed anterior mandible above the cut, up to the
+//    canine roots (0.25 H below the crest) and back to 0.2 H behind the chin's back plane.
 //  - sliding: the teeth, where the lips and cheeks rest on the jaw: maxilla, within 0.4 of the
 //    crest-ANS height above the crest and in the front half; mandible, within 0.25 H below the
 //    crest and in front of the BSSO cut's position.

@@ -58,8 +58,12 @@ if a is not None:
     frac = (cut_z - crest[2]) / (top[2] - crest[2])
     check(0.3 < frac < 0.8, "Le Fort I: the cut lies between the alveolar process and the orbits (%.2f of the height)" % frac)
     check(a["Operation"] == "LeFortI", "Le Fort I: field data Operation names the preset")
-    check(a["Released"] is not None and a["Released"][~a["seg"]].all() and not a["Released"][a["seg"]].any(),
-          "Le Fort I: the bone above the cut is degloved (Released), the segment is not")
+    check(a["Released"] is not None and a["Released"][~a["seg"]].any() and a["Released"][a["seg"]].any()
+          and not a["Released"][a["pre"][:, 2] > top[2] - 5].any()
+          and not a["Released"][a["seg"] & (a["pre"][:, 2] < crest[2] + 5)].any(),
+          "Le Fort I: the bone above the vestibular incision is degloved (Released) on both sides of the cut, "
+          "the alveolar process and the top of the maxilla are not")
+    check(not (a["Released"] & a["Sliding"]).any(), "Le Fort I: the teeth are not degloved")
     s = a["Sliding"]
     check(s is not None and s.any() and np.all(a["pre"][s][:, 2] < cut_z) and a["pre"][s][:, 0].min() <= crest[0] + 1e-6,
           "Le Fort I: the teeth (Sliding) are on the segment's front, at the crest")
