@@ -62,9 +62,9 @@ struct PrecomputeOptions {
   double memoryBudgetBytes = 0.0;
   // Compute backend for element stiffness, assembly and the dense per-edit update; null = CPU.
   std::shared_ptr<ComputeBackend> backend;
-  // Columns of the response solved per block (bounds the precompute's transient memory). Large
-  // enough that the solve's gathered rows stay in cache, small enough to halve the transient
-  // memory of 256 (the measurement is in BENCHMARKS.md).
+  // Columns of the response solved per block (bounds the precompute's transient memory): large
+  // enough that the solve's gathered rows stay in cache, small enough to keep the transient memory
+  // at half of what 256 columns take (BENCHMARKS.md, "Figures behind design choices in Core").
   int responseBlockColumns = 128;
 
   // Element order and stability options (all optional; the defaults are linear elements).
