@@ -32,7 +32,7 @@ enum class SolveMethod {
   FullReference, // no condensation, no cache: assemble and factor everything on every solve
   RigidSegments  // precompute the kept response to 12 affine motions per rigid segment (plus the
                  // general response to the ROI DOFs of segment-0 nodes); an edit is one product
-                 // with the 12 s segment parameters and the general part. Auto picks it when
+                 // with the 12 parameters per segment and the general part. Auto picks it when
                  // NodeSets::movableSegment names segments and the response fits the budget.
 };
 const char* MethodName(SolveMethod method);
