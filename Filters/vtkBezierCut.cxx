@@ -346,8 +346,14 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
 
 void vtkBezierCut::PrintSelf(ostream& os, vtkIndent indent) {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "CurveU points: " << this->GetNumberOfCurveUPoints() << "\n";
-  os << indent << "CurveV points: " << this->GetNumberOfCurveVPoints() << "\n";
+  auto printCurve = [&os, indent](const char* name, const std::vector<double>& values) {
+    os << indent << name << ": " << values.size() / 3 << " points";
+    for (size_t k = 0; k + 2 < values.size(); k += 3)
+      os << " (" << values[k] << ", " << values[k + 1] << ", " << values[k + 2] << ")";
+    os << "\n";
+  };
+  printCurve("CurveU", this->CurveU);
+  printCurve("CurveV", this->CurveV);
   os << indent << "Operation: " << (this->Operation == FILL ? "Fill" : "Cut") << "\n";
   os << indent << "FlipNormal: " << this->FlipNormal << "\n";
   os << indent << "SurfaceResolution: " << this->SurfaceResolution << "\n";
