@@ -72,7 +72,8 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
     if (n < 4 || (n - 1) % 3 != 0)
       return Status::Error("invalid control points: " + std::string(names[c]) + " has " +
                            std::to_string(n) +
-                           " points; a composite cubic Bezier curve needs 3k+1 (4, 7, 10, ...)");
+                           " points; a composite cubic Bezier curve needs 3k+1 (4, 7, 10, ...): "
+                           "add or remove points three at a time, one Bezier segment each");
     for (std::size_t i = 0; i < n; ++i)
       if (!(*curves[c])[i].allFinite())
         return Status::Error("invalid control points: " + std::string(names[c]) + " point " +
