@@ -1,5 +1,6 @@
 #include "CondensedFEM/PrecomputedLargeDeformation.h"
 
+#include "Common/BlasThreads.h"
 #include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/LargeDeformationProblem.h"
 #include "Mesh/InputValidation.h"
@@ -278,7 +279,10 @@ private:
   Eigen::VectorXd applyFactor(const Eigen::VectorXd& r) {
     StageClock clock;
     Eigen::MatrixXd x;
-    const Status solved = factor_->factor.solve(r, x);
+    // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
+    // whose thread hand-offs cost more than they save (most of all on a loaded machine).
+    ScopedBlasThreads serial(1, BlasScope::Pinned);
+    const Status solved = factor_->factor.solveConcurrently(r, x);
     ++report_.factorSolves;
     timings_[Stage::Solve].ms += clock.lapMs();
     if (!solved)
