@@ -154,23 +154,30 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
     return r
 
 
-results, histories = {}, []
-for name in args.scenes.split(","):
-    fem, bone, move, full = cut_scene() if name == "cut" else osteotomy_scene(name)
-    scene = {}
-    scene["Precomputed"] = measure(name, fem, bone, move, full, "Precomputed", args.repeats, None,
-                                   histories)
-    scene["Newton"] = measure(name, fem, bone, move, full, "Newton", args.newton_repeats, None,
-                              histories)
-    p, n = scene["Precomputed"], scene["Newton"]
-    scene["speedup_full_move"] = n["full_move_ms"] / p["full_move_ms"]
-    scene["speedup_drag_step"] = n["drag_step_ms"] / p["drag_step_ms"]
-    print("  %-11s Newton / Precomputed: full move %.1fx, drag step %.1fx"
-          % (name, scene["speedup_full_move"], scene["speedup_drag_step"]), flush=True)
-    results[name] = scene
-    for proxy in list(simple.GetSources().values()):
-        simple.Delete(proxy)
+def run_scenes():
+    # In a function: the programmable filters of the scenes run their scripts in this module's
+    # globals (numpy_interface's algorithms: max, full, ...), which would shadow top-level names.
+    results, histories = {}, []
+    for name in args.scenes.split(","):
+        fem, bone, move, full = cut_scene() if name == "cut" else osteotomy_scene(name)
+        scene = {}
+        scene["Precomputed"] = measure(name, fem, bone, move, full, "Precomputed", args.repeats, None,
+                                       histories)
+        scene["Newton"] = measure(name, fem, bone, move, full, "Newton", args.newton_repeats, None,
+                                  histories)
+        p, n = scene["Precomputed"], scene["Newton"]
+        scene["speedup_full_move"] = n["full_move_ms"] / p["full_move_ms"]
+        scene["speedup_drag_step"] = n["drag_step_ms"] / p["drag_step_ms"]
+        print("  %-11s Newton / Precomputed: full move %.1fx, drag step %.1fx"
+              % (name, scene["speedup_full_move"], scene["speedup_drag_step"]), flush=True)
+        results[name] = scene
+        for proxy in list(simple.GetSources().values()):
+            simple.Delete(proxy)
 
+    return results, histories
+
+
+results, histories = run_scenes()
 if args.json:
     with open(args.json, "w") as f:
         json.dump(results, f, indent=1)

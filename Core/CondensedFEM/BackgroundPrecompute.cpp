@@ -45,6 +45,13 @@ BackgroundPrecompute::~BackgroundPrecompute() {
 void BackgroundPrecompute::stopForExit() {
   cancel();
   joinWorker();
+  std::shared_ptr<LargeDeformationSystem> large;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    large = large_;
+  }
+  if (large)
+    StopRefactorization(*large);
 }
 
 void BackgroundPrecompute::joinWorker() {

@@ -1,5 +1,6 @@
 #include "CondensedFEM/PrecomputedLargeDeformation.h"
 
+#include "Common/BlasThreads.h"
 #include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/LargeDeformationProblem.h"
 #include "Mesh/InputValidation.h"
@@ -67,13 +68,19 @@ Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
 
 class LargeDeformationSystem {
 public:
-  ~LargeDeformationSystem() {
+  ~LargeDeformationSystem() { stopWorker(); }
+
+  // Ends the background refactorization for good (joins the worker, which finishes a running
+  // factorization first).
+  void stopWorker() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       stop_ = true;
+      pending_ = false;
     }
     wake_.notify_all();
-    if (worker_.joinable())
+    idle_.notify_all();
+    if (worker_.joinable() && worker_.get_id() != std::this_thread::get_id())
       worker_.join();
   }
 
@@ -97,6 +104,8 @@ public:
   void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      if (stop_)
+        return;
       pendingU_ = u;
       pendingPrescribed_ = prescribed;
       pending_ = true;
@@ -110,7 +119,7 @@ public:
 
   void waitIdle() {
     std::unique_lock<std::mutex> lock(mutex_);
-    idle_.wait(lock, [this] { return !pending_ && !busy_; });
+    idle_.wait(lock, [this] { return (!pending_ && !busy_) || stop_; });
   }
   int backgroundCount() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -278,7 +287,10 @@ private:
   Eigen::VectorXd applyFactor(const Eigen::VectorXd& r) {
     StageClock clock;
     Eigen::MatrixXd x;
-    const Status solved = factor_->factor.solve(r, x);
+    // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
+    // whose thread hand-offs cost more than they save (most of all on a loaded machine).
+    ScopedBlasThreads serial(1, BlasScope::Pinned);
+    const Status solved = factor_->factor.solveConcurrently(r, x);
     ++report_.factorSolves;
     timings_[Stage::Solve].ms += clock.lapMs();
     if (!solved)
@@ -582,6 +594,10 @@ Status SolvePrecomputedLargeDeformation(LargeDeformationSystem& system, const So
 
 void WaitForRefactorization(LargeDeformationSystem& system) {
   system.waitIdle();
+}
+
+void StopRefactorization(LargeDeformationSystem& system) {
+  system.stopWorker();
 }
 
 StageTimings PrecomputeTimings(const LargeDeformationSystem& system) {

@@ -113,6 +113,9 @@ Status SolvePrecomputedLargeDeformation(LargeDeformationSystem& system, const So
 
 // Blocks until no background refactorization is running or queued (benchmarks and tests).
 void WaitForRefactorization(LargeDeformationSystem& system);
+// Ends the background refactorization for good (before the process exits: a factorization must
+// not run while the libraries it uses are torn down). Solves go on with the factor they have.
+void StopRefactorization(LargeDeformationSystem& system);
 // The precompute's stage times (Reordering, ElementStiffness, Assembly, Factorization, Total).
 StageTimings PrecomputeTimings(const LargeDeformationSystem& system);
 // Refactorizations completed in the background so far.

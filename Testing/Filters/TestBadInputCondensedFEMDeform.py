@@ -26,7 +26,7 @@ TETS = tets_of(TISSUE)
 
 
 def fem_on(tissue=TISSUE, bone=BONE, **props):
-    f = CondensedFEMDeform(Input=producer(tissue), Bone=producer(bone))
+    f = CondensedFEMDeform(Model="LinearElastic", Input=producer(tissue), Bone=producer(bone))
     f.ContactDistance = 0.5
     for k, v in props.items():
         f.SetPropertyWithName(k, v)
@@ -67,7 +67,9 @@ for prop, value, words in (("YoungsModulus", 0.0, ("YoungsModulus",)), ("YoungsM
                            ("OutputMode", 7, ("OutputMode", "7")), ("Backend", 5, ("Backend", "5")),
                            ("Method", 9, ("Method", "9")), ("Method", -1, ("Method", "-1")),
                            ("ElementOrder", 99, ("ElementOrder", "99")), ("Model", 7, ("Model", "7")),
-                           ("Model", -1, ("Model", "-1"))):
+                           ("Model", -1, ("Model", "-1")), ("Model", 3, ("Model", "3")),
+                           ("LargeDeformationSolver", 2, ("LargeDeformationSolver", "2")),
+                           ("LargeDeformationSolver", -1, ("LargeDeformationSolver", "-1"))):
     f, c = fem_on(**{prop: value})
     cases.error("%s = %s" % (prop, value), f, c, *words, ports=PORTS)
 f, c = fem_on(UseGravity=1, Density=-1100.0)

@@ -39,7 +39,7 @@ def curves(dz):
 
 cut.CurveU, cut.CurveV = curves(0.0)
 cut.FlipNormal = 1
-fem = CondensedFEMDeform(Input=tissue, Bone=cut)
+fem = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=cut)
 fem.OutputMode = "Surface"
 fem.Backend = "CPU"
 
@@ -85,7 +85,7 @@ check(edit["PrecomputeTotal"][1] == 1 and abs(edit["PrecomputeTotal"][0] - first
 check(edit["Total"][0] < edit["PrecomputeTotal"][0], "an edit's Total is the solve alone")
 u_edit = displacement(fem)
 check(np.abs(u_edit - u0).max() > 1e-3, "the edits changed the result")
-fresh = CondensedFEMDeform(Input=tissue, Bone=cut, OutputMode="Surface", Backend="CPU")
+fresh = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=cut, OutputMode="Surface", Backend="CPU")
 fresh.UpdatePipeline()
 u_fresh = displacement(fresh)
 check(u_fresh.shape == u_edit.shape and np.abs(u_edit - u_fresh).max() <= 1e-10 * np.abs(u_fresh).max(),
@@ -146,7 +146,7 @@ tissue.MarkModified(tissue)
 n6 = updated_count()
 check(n6 == n5 + 1, "YoungsModulus values changed in place start a new precompute (%d -> %d)" % (n5, n6))
 u_stiff = displacement(fem)
-fresh = CondensedFEMDeform(Input=tissue, Bone=cut, OutputMode="Surface", Backend="CPU")
+fresh = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=cut, OutputMode="Surface", Backend="CPU")
 fresh.UpdatePipeline()
 check(np.abs(u_stiff - displacement(fresh)).max() <= 1e-10 * np.abs(u_stiff).max(),
       "after the changes the result equals a fresh filter's")
@@ -185,7 +185,7 @@ smaller[np.flatnonzero(smaller)[::2]] = 0
 replace_array("ROIMask", smaller)
 n8 = updated_count()
 check(n8 == n7 + 1, "a new ROIMask array with other values starts a new precompute (%d -> %d)" % (n7, n8))
-fresh = CondensedFEMDeform(Input=tissue, Bone=bone_source, OutputMode="Surface", Backend="CPU")
+fresh = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bone_source, OutputMode="Surface", Backend="CPU")
 fresh.UpdatePipeline()
 check(np.abs(displacement(fem) - displacement(fresh)).max() <= 1e-10 * np.abs(displacement(fresh)).max(),
       "after the new ROIMask the result equals a fresh filter's")
@@ -214,7 +214,7 @@ n10, c10 = updated_count(), contact_builds()
 check(c10 == c9 + 1, "a Released array with other values rebuilds the contact (%d -> %d)" % (c9, c10))
 check(n10 == n9 + 1, "and frees other nodes: a new precompute (%d -> %d)" % (n9, n10))
 check(np.abs(displacement(fem) - u_zero_flags).max() > 0.0, "and changes the result")
-fresh = CondensedFEMDeform(Input=tissue, Bone=bone_source, OutputMode="Surface", Backend="CPU")
+fresh = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bone_source, OutputMode="Surface", Backend="CPU")
 fresh.UpdatePipeline()
 check(np.abs(displacement(fem) - displacement(fresh)).max() <= 1e-10 * np.abs(displacement(fresh)).max(),
       "after the new Released flags the result equals a fresh filter's")

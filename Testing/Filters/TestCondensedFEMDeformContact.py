@@ -73,7 +73,7 @@ def bone(surface, transform=None, segment=True, sliding=None, below=None, releas
 
 
 def run(bones, **properties):
-    fem = CondensedFEMDeform(Input=tissue, Bone=bones)
+    fem = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bones)
     fem.ContactDistance = 1.0
     fem.OutputMode = "Surface"
     for key, value in properties.items():

@@ -1,8 +1,10 @@
-"""Contract tests of CondensedFEMDeform's Model and LiftOff (pvpython, headless), on the Le Fort I
-scene of scripts/osteotomy_scenes.py: the default is the linear model; NeoHookean agrees with it for
-a small move and differs for a large one, reports its solve in the field data and leaves the linear
-precompute alone; LiftOff frees sliding nodes with NeoHookean and is ignored, with a warning, by the
-linear model; bad combinations are errors with an empty output. argv[1] is the plugin, argv[2] the
+"""Contract tests of CondensedFEMDeform's Model, LargeDeformationSolver and LiftOff (pvpython,
+headless), on the Le Fort I scene of scripts/osteotomy_scenes.py: the default, Auto, runs the linear
+model for a small move and NeoHookean for a large one, and says why; NeoHookean agrees with the
+linear model for a small move and differs for a large one, reports its solve in the field data and
+leaves the linear precompute alone; the Precomputed solver equals Newton (with and without LiftOff);
+LiftOff frees sliding nodes with NeoHookean and is ignored, with a warning, by the linear model; bad
+combinations are errors with an empty output. argv[1] is the plugin, argv[2] the
 Data folder.
 """
 import os
@@ -33,23 +35,33 @@ def run(**properties):
     return point_array(out, "Displacement"), fields, errors, warnings
 
 
+def other_warnings(warnings):
+    """Warnings other than the count of released tied nodes (the scene's own, not the model's)."""
+    return [m for m in warnings.messages if "tied nodes released" not in m]
+
+
 def rel(a, b):
     return np.linalg.norm(a - b, axis=1).max() / np.linalg.norm(b, axis=1).max()
 
 
-# 1. The default is the linear model.
-check(fem.Model == "LinearElastic" and int(fem.LiftOff) == 0, "defaults: LinearElastic, no lift-off")
+# 1. The default is Auto: a small move runs the linear model, and the note says why.
+check(fem.Model == "Auto" and int(fem.LiftOff) == 0 and fem.LargeDeformationSolver == "Precomputed",
+      "defaults: Auto, Precomputed, no lift-off")
 osteotomy.Translation = [-0.05, 0.0, 0.0]
-u_linear, f, errors, _ = run()
-check(not errors.messages and f.get("Model") == "LinearElastic", "linear model by default (%s)" % f.get("Model"))
+u_linear, f, errors, warnings = run()
+check(not errors.messages and not other_warnings(warnings) and f.get("Model") == "LinearElastic",
+      "Auto: the linear model for a small move (%s), no warning" % f.get("Model"))
+check("within the small-strain limit" in f.get("ModelNote", ""), "ModelNote says why (%s)" % f.get("ModelNote"))
 precomputes = fem.GetPropertyValue("PrecomputeCount")
 
 # 2. A 0.05 mm move: the large-deformation result is the linear one to first order.
 u_small, f, errors, _ = run(Model="NeoHookean")
 check(not errors.messages, "NeoHookean runs: %s" % errors.messages)
-check(f.get("Model") == "NeoHookean" and f.get("Method") == "LargeDeformation",
-      "field data Model/Method say NeoHookean/LargeDeformation (%s, %s)" % (f.get("Model"), f.get("Method")))
-for name in ("LoadSteps", "NewtonIterations", "SmallestVolumeRatio", "RelativeResidual"):
+check(f.get("Model") == "NeoHookean" and f.get("Method") == "LargeDeformationPrecomputed",
+      "field data Model/Method say NeoHookean/LargeDeformationPrecomputed (%s, %s)" % (f.get("Model"), f.get("Method")))
+check(f.get("LargeDeformationSolver") == "Precomputed" and "SolverNote" not in f,
+      "LargeDeformationSolver Precomputed ran (%s)" % f.get("LargeDeformationSolver"))
+for name in ("QuasiNewtonIterations", "FactorSolves", "SmallestVolumeRatio", "RelativeResidual", "ModelNote"):
     check(name in f, "field data %s present" % name)
 check(float(f["RelativeResidual"]) <= 1e-9, "converged (%s)" % f["RelativeResidual"])
 d_small = rel(u_small, u_linear)
@@ -60,6 +72,15 @@ check(fem.GetPropertyValue("PrecomputeCount") == precomputes, "NeoHookean starts
 osteotomy.Translation = [-5.0, 0.0, 0.0]
 u_large, f, errors, warnings = run()
 check(not errors.messages and not warnings.contains("small-strain"), "NeoHookean 5 mm: no error, no small-strain warning")
+u_newton, f, errors, _ = run(LargeDeformationSolver="Newton")
+check(not errors.messages and f.get("Method") == "LargeDeformationNewton" and "NewtonIterations" in f,
+      "LargeDeformationSolver Newton ran (%s)" % f.get("Method"))
+check(rel(u_large, u_newton) <= 1e-8, "5 mm: Precomputed equals Newton (%.1e)" % rel(u_large, u_newton))
+u_auto, f, errors, warnings = run(Model="Auto", LargeDeformationSolver="Precomputed")
+check(not errors.messages and not other_warnings(warnings) and f.get("Model") == "NeoHookean"
+      and "beyond the small-strain limit" in f.get("ModelNote", ""),
+      "Auto: NeoHookean for the 5 mm move, no warning (%s: %s)" % (f.get("Model"), f.get("ModelNote")))
+check(rel(u_auto, u_large) <= 1e-8, "Auto's result is NeoHookean's (%.1e)" % rel(u_auto, u_large))
 u_linear_large, f_lin, _, lin_warnings = run(Model="LinearElastic")
 check(lin_warnings.contains("Model NeoHookean solves for large deformations"),
       "the linear model's strain warning points to NeoHookean")
@@ -73,6 +94,11 @@ u_lift, f, errors, _ = run(Model="NeoHookean", LiftOff=1)
 check(not errors.messages and float(f.get("LiftedNodes", 0)) > 0,
       "LiftOff lifts sliding nodes (%s)" % f.get("LiftedNodes"))
 check(rel(u_lift, u_large) > 1e-3, "lift-off changes the result")
+u_lift_newton, f_newton, errors, _ = run(LargeDeformationSolver="Newton")
+check(not errors.messages and f_newton.get("LiftedNodes") == f.get("LiftedNodes"),
+      "LiftOff: Newton lifts the same nodes (%s, %s)" % (f_newton.get("LiftedNodes"), f.get("LiftedNodes")))
+check(rel(u_lift, u_lift_newton) <= 1e-8, "LiftOff: Precomputed equals Newton (%.1e)" % rel(u_lift, u_lift_newton))
+fem.LargeDeformationSolver = "Precomputed"
 u_lin_lift, _, _, warnings = run(Model="LinearElastic")
 check(warnings.contains("LiftOff applies to Model NeoHookean only"), "LinearElastic warns that LiftOff is ignored")
 check(rel(u_lin_lift, u_linear_large) == 0.0, "and its result is unchanged")
@@ -84,7 +110,7 @@ check(rel(u_cuda, u_large) <= 1e-12, "and the same result (%.1e)" % rel(u_cuda, 
 fem.Backend = "Auto"
 
 # 5. Bad values and combinations: an error naming the property, and an empty output.
-for properties, words in (({"Model": 7}, "Model must be"),
+for properties, words in (({"Model": 7}, "Model must be"), ({"LargeDeformationSolver": 5}, "LargeDeformationSolver must be"),
                           ({"Model": "NeoHookean", "ElementOrder": "Quadratic"}, "ElementOrder Linear only"),
                           ({"Model": "NeoHookean", "ElementOrder": "Linear", "Verify": 1}, "Verify")):
     u, _, errors, _ = run(**properties)
@@ -93,5 +119,6 @@ for properties, words in (({"Model": 7}, "Model must be"),
     fem.Verify = 0
     fem.ElementOrder = "Linear"
     fem.Model = "LinearElastic"
+    fem.LargeDeformationSolver = "Precomputed"
 
 finish("TestCondensedFEMDeformLargeDeformation")

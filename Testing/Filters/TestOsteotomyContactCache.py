@@ -42,7 +42,7 @@ def precomputes(fem):
 
 def fresh_result(bone):
     """The displacement a new filter (no cache) computes for the current bone."""
-    fresh = CondensedFEMDeform(Input=tissue, Bone=bone, ContactDistance=1.0, OutputMode="Surface",
+    fresh = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bone, ContactDistance=1.0, OutputMode="Surface",
                                ReleaseDistance=3.0)
     fresh.UpdatePipeline()
     u = point_array(fetch(fresh), "Displacement").copy()
@@ -57,7 +57,7 @@ for label, bone in (("direct", [lefort]), ("two connections", [lefort, bsso])):
     lefort.Rotation = [0.0, 0.0, 0.0]
     lefort.CutPlane1.Origin = [80.0, 0.0, 113.0]
     lefort.InsideOut = 0
-    fem = CondensedFEMDeform(Input=tissue, Bone=bone, ContactDistance=1.0, OutputMode="Surface",
+    fem = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bone, ContactDistance=1.0, OutputMode="Surface",
                              ReleaseDistance=3.0)
     errors = ErrorCatcher(fem)
     fem.UpdatePipeline()

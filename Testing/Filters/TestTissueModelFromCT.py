@@ -81,7 +81,7 @@ cut = BezierCut(Input=roi)
 CUT_Z = 129.0
 cut.CurveU = [70, 30, CUT_Z, 85, 30, CUT_Z, 100, 30, CUT_Z, 115, 30, CUT_Z]
 cut.CurveV = [70, 30, CUT_Z, 70, 45, CUT_Z, 70, 60, CUT_Z, 70, 75, CUT_Z]
-fem = CondensedFEMDeform(Input=OutputPort(model, 0), Bone=cut)
+fem = CondensedFEMDeform(Model="LinearElastic", Input=OutputPort(model, 0), Bone=cut)
 fem.ContactDistance = 0.01
 fem_warnings = WarningCatcher(fem)
 fem_errors = ErrorCatcher(fem)

@@ -72,6 +72,7 @@ try:
         raise RuntimeError("QCoreApplication::processEvents not found: the paint cannot be timed")
     simple.LoadPlugin(os.environ["FACEPLAN_GUI_PLUGIN"])  # into paraview.simple
     tissue, mandible, roi, cut, fem = faceplan_pipeline.build(os.environ["FACEPLAN_GUI_DATA"])
+    fem.Model = "LinearElastic"  # the linear model's contract (its baseline, its edit timings)
     fem.OutputMode = "Surface"
     fem.Backend = "CPU"
 

@@ -30,6 +30,7 @@ try:
 
     simple.LoadPlugin(os.environ["FACEPLAN_GUI_PLUGIN"])
     tissue, maxilla, osteotomy, skeleton, fem = osteotomy_scenes.build(os.environ["FACEPLAN_GUI_DATA"], "lefort1")
+    fem.Model = "LinearElastic"  # the linear model's contract (its baseline, its edit timings)
     move0 = list(osteotomy.Translation)
 
     view = simple.GetActiveViewOrCreate("RenderView")

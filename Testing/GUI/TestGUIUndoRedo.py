@@ -41,6 +41,7 @@ try:
     result["info"]["fromGUI"] = bool(getattr(__import__("paraview"), "fromGUI", False))
     simple.LoadPlugin(os.environ["FACEPLAN_GUI_PLUGIN"])  # into paraview.simple
     tissue, mandible, roi, cut, fem = faceplan_pipeline.build(os.environ["FACEPLAN_GUI_DATA"])
+    fem.Model = "LinearElastic"  # the linear model's contract (its baseline, its edit timings)
 
     view = simple.GetActiveViewOrCreate("RenderView")
     check(view is not None, "the GUI has a render view")

@@ -146,6 +146,7 @@ def main():
 
     LoadPlugin(o["plugin"])  # into paraview.simple, where faceplan_pipeline finds the filters
     tissue, mandible, roi, cut, fem = faceplan_pipeline.build(o["data"])
+    fem.Model = "LinearElastic"  # the linear model's contract (its baseline, its edit timings)
     fem.UpdatePipeline()
     view = white_render_view(IMAGE_SIZE)
     render_case(o["case"], cut, fem, view)

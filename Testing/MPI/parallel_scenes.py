@@ -228,6 +228,6 @@ def build(scene, split, data_dir, work_dir):
 
         def edit():
             scaled.Function = "0.5*Displacement"
-    fem = simple.CondensedFEMDeform(Input=tissue, Bone=bone)
+    fem = simple.CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bone)
     fem.ContactDistance = 1.0
     return fem, bone, edit
