@@ -4,10 +4,10 @@
 //   faceplan_benchmark --subdivisions S --layers L [--edits N] [--precompute-repeats N]
 //                      [--reference-repeats N] [--method Auto|DenseResponse|CachedFactor]
 //                      [--ccx WORKDIR] [--ccx-repeats N] [--json FILE]
-#include "CalculixRunner.h"
 #include "Common/BlasKernels.h"
 #include "Common/RelativeDifference.h"
 #include "CondensedFEM/CondensedFEM.h"
+#include "Support/CalculixRunner.h"
 #include "Support/ShellMeshGenerator.h"
 
 #include <algorithm>

@@ -7,19 +7,19 @@
 //                 [--data Data]
 //
 // The organ cases read Data/organs/*.vtu (kidney 1.9k, heart 6.6k, mandible 10.6k tetrahedra) with
-// Benchmarks/VtuReader (no VTK needed), with faceplan_report's node sets; when a file cannot be
-// read a generated shell of similar size stands in (said in the output). The 10k, 100k and 1M cases
-// are Core's MakeFaceLikeScene shells. Without a GPU it still runs the CPU columns (GPU columns
-// empty).
+// Testing/Support/VtuReader (no VTK needed), with faceplan_report's node sets; when a file cannot
+// be read a generated shell of similar size stands in (said in the output). The 10k, 100k and 1M
+// cases are Core's MakeFaceLikeScene shells. Without a GPU it still runs the CPU columns (GPU
+// columns empty).
 #include "Backend/ComputeBackend.h"
-#include "BoundaryNodes.h"
 #include "Common/RelativeDifference.h"
 #include "Common/StageTimings.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "CondensedFEM/CondensedSystem.h"
 #include "Element/StiffnessAssembly.h"
+#include "Support/BoundaryNodes.h"
 #include "Support/ShellMeshGenerator.h"
-#include "VtuReader.h"
+#include "Support/VtuReader.h"
 #if FACEPLAN_HAS_CUDA
 #include "CudaBackend.h"
 #include "CudaDenseResponse.h"

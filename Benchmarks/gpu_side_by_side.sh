@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# On the lent GPU machine: a base commit's tree and the working tree, each built and tested with
+# On a GPU host: a base commit's tree and the working tree, each built and tested with
 # Cuda/tools/gpu_machine_run.sh, then their gpu_benchmark binaries run alternately (base, new,
 # base, new, ...) so that both see the same card and the same machine state. Timings of different
 # machines are not comparable (BENCHMARKS.md); this gives a ratio measured in one run.
-# Prepare here:  git archive --format=tar.gz -o .devcarry/base.tar.gz <base commit>
-# Run there:     OUT=<dir> Benchmarks/gpu_side_by_side.sh .devcarry/base.tar.gz ROUNDS [gpu_benchmark args]
+# Prepare:  git archive --format=tar.gz -o base.tar.gz <base commit>
+# Run:      OUT=<dir> [FACEPLAN_DEPS=<dir>] Benchmarks/gpu_side_by_side.sh base.tar.gz ROUNDS [gpu_benchmark args]
 # Writes $OUT/side_by_side.txt (the precompute lines of every run) and $OUT/side_by_side.tar.gz
 # (every log, JSON and stdout).
 set -uo pipefail
@@ -14,7 +14,7 @@ shift 2
 work=/tmp/faceplan-side-by-side
 rm -rf "$work" && mkdir -p "$work/base-src"
 tar -xzf "$base_tar" -C "$work/base-src"
-ln -s "$root/.devcarry" "$work/base-src/.devcarry"
+[ -n "${FACEPLAN_DEPS:-}" ] && export FACEPLAN_DEPS=$(cd "$FACEPLAN_DEPS" && pwd)
 # The base builds with this tree's runner (same configure flags; its own may lack BUILD).
 cp "$root/Cuda/tools/gpu_machine_run.sh" "$work/base-src/Cuda/tools/gpu_machine_run.sh"
 for which in base new; do

@@ -1,6 +1,6 @@
-// The machine's ceilings behind the ~100k precompute (BENCHMARKS.md, session 12): the BLAS's DGEMM
-// and DTRSM rates on the shapes the response's substitutions use, and the cost of touching fresh
-// memory (page faults) against populating it in one call.
+// The machine's ceilings behind the ~100k precompute: the BLAS's DGEMM and DTRSM rates on the
+// shapes the response's substitutions use, and the cost of touching fresh memory (page faults)
+// against populating it in one call.
 //   kernel_probe [--threads N]   (BLAS threads for the rates; default 1, then 2)
 #include "Common/BlasThreads.h"
 #include "SparseSolver/Blas.h"

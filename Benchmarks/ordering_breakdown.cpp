@@ -1,5 +1,5 @@
-// Where the ordering of K_FF spends its time (issue 14 §2: the ordering thread is the precompute's
-// longest CPU path at 1M cells): the calls StartEarlyOrdering makes, timed one by one on one
+// Where the ordering of K_FF spends its time (the ordering thread is the precompute's longest CPU
+// path on the largest meshes): the calls StartEarlyOrdering makes, timed one by one on one
 // thread, each the median of --repeats runs, on MakeFaceLikeScene(subdivisions, layers). Also the
 // analysed factor's supernodal structure as the GPU response's backward sweep meets it: its flops
 // (diagonal- block solves, off-diagonal products) and the least row traffic of its gathers.

@@ -4,9 +4,9 @@
 //
 //   rigid_segment_benchmark [--mesh Data/face/face_tissue.vtu] [--precompute-repeats N]
 //                           [--edits N] [--json FILE]
-#include "BoundaryNodes.h"
 #include "CondensedFEM/CondensedFEM.h"
-#include "VtuReader.h"
+#include "Support/BoundaryNodes.h"
+#include "Support/VtuReader.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

@@ -184,21 +184,67 @@ public:
   }
 
 private:
+  // One assembly's sizes and sources, handed from stage to stage.
+  struct AssemblyCall {
+    long long m = 0, n = 0, nnz = 0; // cells, points, nonzeros of the upper triangle
+    size_t nE = 0, nNu = 0;          // Young's moduli and Poisson ratios (1 or one per cell)
+    size_t packedCount = 0;
+    size_t tetBytes = 0, gatherBytes = 0, indexBytes = 0, pointBytes = 0, elementBytes = 0,
+           valueBytes = 0;
+    PatternKey key;
+    bool reuse = false; // the cells and gather map on the device are this pattern's
+    const double* srcPoints = nullptr;
+    const double* srcYoungs = nullptr;
+    const double* srcPoisson = nullptr;
+    double* dstValues = nullptr; // where the values come back (the staging buffer or the matrix)
+    double uploaded = 0.0;       // bytes
+  };
+
+  // The element stiffness and gather assembly on the GPU, in stages: check the inputs, find
+  // whether the cached pattern is this one, size the device buffers, stage and upload, run the
+  // kernels, copy the values back, and report.
   bool assemble(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
                 AssemblyTimings& timings, AssemblyDetail& detail, std::string& error) {
-    const long long m = mesh.numTets();
-    const long long n = mesh.numPoints();
-    const long long nnz = pattern.upper.nonZeros();
-    if (static_cast<long long>(pattern.gatherStart.size()) != nnz + 1) {
+    AssemblyCall call;
+    bool empty = false;
+    if (!checkAssemblyInputs(mesh, materials, pattern, call, empty, error))
+      return false;
+    if (empty) {
+      std::fill(pattern.upper.valuePtr(), pattern.upper.valuePtr() + call.nnz, 0.0);
+      timings = AssemblyTimings{};
+      return true;
+    }
+    FP_CUDA_TRY(cudaSetDevice(0));
+    identifyPattern(mesh, pattern, call);
+    if (!checkCellIndices(mesh, call, error) || !allocateBuffers(call, error) ||
+        !stageInputs(mesh, materials, pattern, call, error) ||
+        !uploadInputs(mesh, pattern, call, error) || !runKernels(call, error) ||
+        !downloadValues(pattern, call, error) || !reportAssembly(call, timings, detail, error))
+      return false;
+    key_ = call.key;
+    cachedValid_ = true;
+    return true;
+  }
+
+  // Sizes and materials against the pattern; `empty` when there is nothing to assemble.
+  static bool checkAssemblyInputs(const TetMesh& mesh, const Materials& materials,
+                                  const AssemblyPattern& pattern, AssemblyCall& call, bool& empty,
+                                  std::string& error) {
+    call.m = mesh.numTets();
+    call.n = mesh.numPoints();
+    call.nnz = pattern.upper.nonZeros();
+    if (static_cast<long long>(pattern.gatherStart.size()) != call.nnz + 1) {
       error = "assembly pattern: gatherStart does not match the number of nonzeros";
       return false;
     }
-    if (m > std::numeric_limits<int>::max() / kPackedElementSize) {
+    if (call.m > std::numeric_limits<int>::max() / kPackedElementSize) {
       error = "mesh too large for 32-bit packed indices";
       return false;
     }
-    const auto nE = materials.youngsModulus.size(), nNu = materials.poissonRatio.size();
-    if ((nE != 1 && nE != m) || (nNu != 1 && nNu != m)) {
+    call.nE = materials.youngsModulus.size();
+    call.nNu = materials.poissonRatio.size();
+    if ((call.nE != 1 && call.nE != static_cast<size_t>(call.m)) ||
+        (call.nNu != 1 && call.nNu != static_cast<size_t>(call.m))) {
       error = "materials: Young's modulus and Poisson ratio need one value or one per cell";
       return false;
     }
@@ -206,40 +252,42 @@ private:
       error = "assembly pattern: packedIndex does not match gatherStart";
       return false;
     }
-    if (m == 0 || nnz == 0) {
-      std::fill(pattern.upper.valuePtr(), pattern.upper.valuePtr() + nnz, 0.0);
-      timings = AssemblyTimings{};
-      return true;
-    }
-    FP_CUDA_TRY(cudaSetDevice(0));
+    empty = call.m == 0 || call.nnz == 0;
+    return true;
+  }
 
-    PatternKey key;
+  // The pattern's identity (PatternKey) and the call's buffer sizes.
+  void identifyPattern(const TetMesh& mesh, const AssemblyPattern& pattern,
+                       AssemblyCall& call) const {
+    PatternKey& key = call.key;
     key.pattern = &pattern;
     key.gatherStart = pattern.gatherStart.data();
     key.packedIndex = pattern.packedIndex.data();
     key.tets = mesh.tets.data();
     key.gatherCount = pattern.gatherStart.size();
     key.packedCount = pattern.packedIndex.size();
-    key.numTets = m;
+    key.numTets = call.m;
     key.fingerprint = Fingerprint(pattern.gatherStart.data(), pattern.gatherStart.size(), 1) ^
                       Fingerprint(pattern.packedIndex.data(), pattern.packedIndex.size(), 2) ^
-                      Fingerprint(mesh.tets.data(), static_cast<size_t>(4 * m), 3);
-    const bool reuse = cachedValid_ && key == key_;
+                      Fingerprint(mesh.tets.data(), static_cast<size_t>(4 * call.m), 3);
+    call.reuse = cachedValid_ && key == key_;
 
-    const size_t packedCount = pattern.packedIndex.size();
-    const size_t tetBytes = sizeof(int) * 4 * static_cast<size_t>(m);
-    const size_t gatherBytes = sizeof(int) * pattern.gatherStart.size();
-    const size_t indexBytes = sizeof(int) * std::max<size_t>(packedCount, 1);
-    const size_t pointBytes = sizeof(double) * 3 * static_cast<size_t>(n);
-    const size_t elementBytes = sizeof(double) * kPackedElementSize * static_cast<size_t>(m);
-    const size_t valueBytes = sizeof(double) * static_cast<size_t>(nnz);
+    call.packedCount = pattern.packedIndex.size();
+    call.tetBytes = sizeof(int) * 4 * static_cast<size_t>(call.m);
+    call.gatherBytes = sizeof(int) * pattern.gatherStart.size();
+    call.indexBytes = sizeof(int) * std::max<size_t>(call.packedCount, 1);
+    call.pointBytes = sizeof(double) * 3 * static_cast<size_t>(call.n);
+    call.elementBytes = sizeof(double) * kPackedElementSize * static_cast<size_t>(call.m);
+    call.valueBytes = sizeof(double) * static_cast<size_t>(call.nnz);
+  }
 
-    if (!reuse) {
+  // Cell indices are checked once per pattern: a bad index would fault the kernel.
+  bool checkCellIndices(const TetMesh& mesh, const AssemblyCall& call, std::string& error) {
+    if (!call.reuse) {
       releasePattern();
-      // Cell indices are checked once per pattern: a bad index would fault the kernel.
       const int* t = mesh.tets.data();
       int maxNode = -1;
-      for (size_t i = 0; i < 4 * static_cast<size_t>(m); ++i) {
+      for (size_t i = 0; i < 4 * static_cast<size_t>(call.m); ++i) {
         if (t[i] < 0) {
           error = "mesh: negative node index in a cell";
           return false;
@@ -248,67 +296,88 @@ private:
       }
       maxNode_ = maxNode;
     }
-    if (maxNode_ >= n) {
+    if (maxNode_ >= call.n) {
       error = "mesh: a cell refers to a node beyond the point array";
       return false;
     }
-    if (!tets_.ensure(tetBytes, error) || !gatherStart_.ensure(gatherBytes, error) ||
-        !packedIndex_.ensure(indexBytes, error) || !points_.ensure(pointBytes, error) ||
-        !youngs_.ensure(sizeof(double) * nE, error) ||
-        !poisson_.ensure(sizeof(double) * nNu, error) || !packed_.ensure(elementBytes, error) ||
-        !values_.ensure(valueBytes, error))
-      return false;
+    return true;
+  }
 
-    // Points and materials go through page-locked staging (a parallel host copy, then a copy at
-    // full link speed) unless pinned transfers are off; likewise the values on the way back.
-    const double* srcPoints = mesh.points.data();
-    const double* srcYoungs = materials.youngsModulus.data();
-    const double* srcPoisson = materials.poissonRatio.data();
+  bool allocateBuffers(const AssemblyCall& call, std::string& error) {
+    return tets_.ensure(call.tetBytes, error) && gatherStart_.ensure(call.gatherBytes, error) &&
+           packedIndex_.ensure(call.indexBytes, error) && points_.ensure(call.pointBytes, error) &&
+           youngs_.ensure(sizeof(double) * call.nE, error) &&
+           poisson_.ensure(sizeof(double) * call.nNu, error) &&
+           packed_.ensure(call.elementBytes, error) && values_.ensure(call.valueBytes, error);
+  }
+
+  // Points and materials go through page-locked staging (a parallel host copy, then a copy at
+  // full link speed) unless pinned transfers are off; likewise the values on the way back.
+  bool stageInputs(const TetMesh& mesh, const Materials& materials, AssemblyPattern& pattern,
+                   AssemblyCall& call, std::string& error) {
+    call.srcPoints = mesh.points.data();
+    call.srcYoungs = materials.youngsModulus.data();
+    call.srcPoisson = materials.poissonRatio.data();
     if (pinnedTransfers_) {
-      const size_t inBytes = pointBytes + sizeof(double) * (nE + nNu);
-      if (!stageIn_.ensure(inBytes, error) || !stageOut_.ensure(valueBytes, error))
+      const size_t inBytes = call.pointBytes + sizeof(double) * (call.nE + call.nNu);
+      if (!stageIn_.ensure(inBytes, error) || !stageOut_.ensure(call.valueBytes, error))
         return false;
       double* stage = stageIn_.as<double>();
-      ParallelCopy(stage, srcPoints, pointBytes);
-      ParallelCopy(stage + 3 * n, srcYoungs, sizeof(double) * nE);
-      ParallelCopy(stage + 3 * n + nE, srcPoisson, sizeof(double) * nNu);
-      srcPoints = stage;
-      srcYoungs = stage + 3 * n;
-      srcPoisson = stage + 3 * n + nE;
+      ParallelCopy(stage, call.srcPoints, call.pointBytes);
+      ParallelCopy(stage + 3 * call.n, call.srcYoungs, sizeof(double) * call.nE);
+      ParallelCopy(stage + 3 * call.n + call.nE, call.srcPoisson, sizeof(double) * call.nNu);
+      call.srcPoints = stage;
+      call.srcYoungs = stage + 3 * call.n;
+      call.srcPoisson = stage + 3 * call.n + call.nE;
     }
-    double* dstValues = pinnedTransfers_ ? stageOut_.as<double>() : pattern.upper.valuePtr();
+    call.dstValues = pinnedTransfers_ ? stageOut_.as<double>() : pattern.upper.valuePtr();
+    return true;
+  }
 
-    double uploaded = 0.0;
+  // Cells and gather map (when not cached), points and materials; between events 0 and 1.
+  bool uploadInputs(const TetMesh& mesh, const AssemblyPattern& pattern, AssemblyCall& call,
+                    std::string& error) {
     FP_CUDA_TRY(cudaEventRecord(events_[0], stream_));
-    if (!reuse) {
-      FP_CUDA_TRY(cudaMemcpyAsync(tets_.as<int>(), mesh.tets.data(), tetBytes,
+    if (!call.reuse) {
+      FP_CUDA_TRY(cudaMemcpyAsync(tets_.as<int>(), mesh.tets.data(), call.tetBytes,
                                   cudaMemcpyHostToDevice, stream_));
-      FP_CUDA_TRY(cudaMemcpyAsync(gatherStart_.as<int>(), pattern.gatherStart.data(), gatherBytes,
-                                  cudaMemcpyHostToDevice, stream_));
-      if (packedCount > 0)
+      FP_CUDA_TRY(cudaMemcpyAsync(gatherStart_.as<int>(), pattern.gatherStart.data(),
+                                  call.gatherBytes, cudaMemcpyHostToDevice, stream_));
+      if (call.packedCount > 0)
         FP_CUDA_TRY(cudaMemcpyAsync(packedIndex_.as<int>(), pattern.packedIndex.data(),
-                                    sizeof(int) * packedCount, cudaMemcpyHostToDevice, stream_));
-      uploaded += static_cast<double>(tetBytes + gatherBytes + sizeof(int) * packedCount);
+                                    sizeof(int) * call.packedCount, cudaMemcpyHostToDevice,
+                                    stream_));
+      call.uploaded +=
+          static_cast<double>(call.tetBytes + call.gatherBytes + sizeof(int) * call.packedCount);
     }
-    FP_CUDA_TRY(cudaMemcpyAsync(points_.as<double>(), srcPoints, pointBytes, cudaMemcpyHostToDevice,
-                                stream_));
-    FP_CUDA_TRY(cudaMemcpyAsync(youngs_.as<double>(), srcYoungs, sizeof(double) * nE,
+    FP_CUDA_TRY(cudaMemcpyAsync(points_.as<double>(), call.srcPoints, call.pointBytes,
                                 cudaMemcpyHostToDevice, stream_));
-    FP_CUDA_TRY(cudaMemcpyAsync(poisson_.as<double>(), srcPoisson, sizeof(double) * nNu,
+    FP_CUDA_TRY(cudaMemcpyAsync(youngs_.as<double>(), call.srcYoungs, sizeof(double) * call.nE,
                                 cudaMemcpyHostToDevice, stream_));
-    uploaded += static_cast<double>(pointBytes + sizeof(double) * (nE + nNu));
+    FP_CUDA_TRY(cudaMemcpyAsync(poisson_.as<double>(), call.srcPoisson, sizeof(double) * call.nNu,
+                                cudaMemcpyHostToDevice, stream_));
+    call.uploaded += static_cast<double>(call.pointBytes + sizeof(double) * (call.nE + call.nNu));
     FP_CUDA_TRY(cudaEventRecord(events_[1], stream_));
+    return true;
+  }
 
+  // Element stiffness (events 1 to 2), then the gather into the matrix's values (2 to 3).
+  bool runKernels(const AssemblyCall& call, std::string& error) {
     FP_CUDA_TRY(detail::LaunchElementStiffness(
-        points_.as<double>(), tets_.as<int>(), m, youngs_.as<double>(), nE == 1 ? 0 : 1,
-        poisson_.as<double>(), nNu == 1 ? 0 : 1, packed_.as<double>(), stream_));
+        points_.as<double>(), tets_.as<int>(), call.m, youngs_.as<double>(), call.nE == 1 ? 0 : 1,
+        poisson_.as<double>(), call.nNu == 1 ? 0 : 1, packed_.as<double>(), stream_));
     FP_CUDA_TRY(cudaEventRecord(events_[2], stream_));
     FP_CUDA_TRY(detail::LaunchGather(gatherStart_.as<int>(), packedIndex_.as<int>(),
-                                     packed_.as<double>(), static_cast<int>(nnz),
+                                     packed_.as<double>(), static_cast<int>(call.nnz),
                                      values_.as<double>(), stream_));
     FP_CUDA_TRY(cudaEventRecord(events_[3], stream_));
-    // The values come back in a few chunks, each copied out of the staging buffer while the next
-    // one is still on the link.
+    return true;
+  }
+
+  // The values come back in a few chunks, each copied out of the staging buffer while the next
+  // one is still on the link (events 3 to 4).
+  bool downloadValues(AssemblyPattern& pattern, const AssemblyCall& call, std::string& error) {
+    const size_t valueBytes = call.valueBytes;
     const int chunks =
         pinnedTransfers_ ? static_cast<int>(std::min<size_t>(4, 1 + valueBytes / (size_t(8) << 20)))
                          : 1;
@@ -317,7 +386,7 @@ private:
       const size_t from = std::min(valueBytes, c * chunkBytes),
                    to = std::min(valueBytes, (c + 1) * chunkBytes);
       if (to > from)
-        FP_CUDA_TRY(cudaMemcpyAsync(reinterpret_cast<char*>(dstValues) + from,
+        FP_CUDA_TRY(cudaMemcpyAsync(reinterpret_cast<char*>(call.dstValues) + from,
                                     reinterpret_cast<const char*>(values_.as<double>()) + from,
                                     to - from, cudaMemcpyDeviceToHost, stream_));
       FP_CUDA_TRY(cudaEventRecord(chunkDone_[c], stream_));
@@ -330,11 +399,16 @@ private:
                      to = std::min(valueBytes, (c + 1) * chunkBytes);
         if (to > from)
           ParallelCopy(reinterpret_cast<char*>(pattern.upper.valuePtr()) + from,
-                       reinterpret_cast<const char*>(dstValues) + from, to - from);
+                       reinterpret_cast<const char*>(call.dstValues) + from, to - from);
       }
     }
     FP_CUDA_TRY(cudaStreamSynchronize(stream_));
+    return true;
+  }
 
+  // Device times between the events, bytes moved, and the stage times Core books.
+  bool reportAssembly(const AssemblyCall& call, AssemblyTimings& timings, AssemblyDetail& detail,
+                      std::string& error) const {
     float ms[4] = {0, 0, 0, 0};
     for (int i = 0; i < 4; ++i)
       FP_CUDA_TRY(cudaEventElapsedTime(&ms[i], events_[i], events_[i + 1]));
@@ -342,19 +416,17 @@ private:
     detail.stiffnessKernelMs = ms[1];
     detail.gatherKernelMs = ms[2];
     detail.downloadMs = ms[3];
-    detail.patternReused = reuse;
-    detail.bytesUploaded = uploaded;
-    detail.bytesDownloaded = static_cast<double>(valueBytes);
-    detail.kernelBytes = static_cast<double>(tetBytes) + static_cast<double>(pointBytes) +
-                         sizeof(double) * static_cast<double>(nE + nNu) +
-                         2.0 * static_cast<double>(elementBytes) + // packed: written, read back
-                         sizeof(int) * static_cast<double>(packedCount) +
-                         static_cast<double>(gatherBytes) + static_cast<double>(valueBytes);
+    detail.patternReused = call.reuse;
+    detail.bytesUploaded = call.uploaded;
+    detail.bytesDownloaded = static_cast<double>(call.valueBytes);
+    detail.kernelBytes =
+        static_cast<double>(call.tetBytes) + static_cast<double>(call.pointBytes) +
+        sizeof(double) * static_cast<double>(call.nE + call.nNu) +
+        2.0 * static_cast<double>(call.elementBytes) + // packed: written, read back
+        sizeof(int) * static_cast<double>(call.packedCount) +
+        static_cast<double>(call.gatherBytes) + static_cast<double>(call.valueBytes);
     timings.elementStiffnessMs = ms[0] + ms[1];
     timings.assemblyMs = ms[2] + ms[3];
-
-    key_ = key;
-    cachedValid_ = true;
     return true;
   }
 
@@ -413,9 +485,9 @@ bool InitDevice(std::string& error) {
 
 namespace {
 
-// Page-locked staging buffers, kept for the process once made: allocating two 64 MB buffers took
-// ~70 ms per copy on the GPU machine (host_transfer_probe). A copy takes a set and gives it back;
-// two copies at once (the factor's and the response's) take two sets.
+// Page-locked staging buffers, kept for the process once made: allocating them per copy would
+// cost about as much as the copy (Cuda/tools/host_transfer_probe). A copy takes a set and gives it
+// back; two copies at once (the factor's and the response's) take two sets.
 constexpr size_t kStageBytes = size_t(64) << 20;
 constexpr int kStageBuffers = 3;
 struct StagingSet {

@@ -449,31 +449,61 @@ bool Elapsed(cudaEvent_t a, cudaEvent_t b, double& accumulate, std::string& erro
   return true;
 }
 
-// `prepared`: K_perm already made (FactorAndBuildResponse makes it while the GPU factorizes), or
-// null to make it here.
-bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseMatrix& kfr,
-           Eigen::Index keptRowsIn, Eigen::MatrixXd* responseHost,
-           std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail, std::string& error,
-           int maxColumnsPerPass, PermutedCsr* prepared) {
-  StageClock hostClock;
-  const int n = L.n;
-  if (n <= 0 || !L.super || !L.pi || !L.px || !L.s || !(L.x || L.deviceX) || !L.perm) {
-    error = "BuildDenseResponse: no supernodal factor";
-    return false;
+// The dense response on the GPU, in stages: check the inputs, plan the forward sweep's reach and
+// the backward sweep's streams, upload the fixed data, size the passes, then per pass of columns
+// scatter the right-hand sides, sweep forward and backward, extract the kept rows (and copy them
+// to the host beside the rest), check the residual and collect the pass's device times; finally
+// hand the response to its operator. Members are declared in the order they must outlive each
+// other: the host copy (`download`), declared last, is waited for first.
+class ResponseBuilder {
+public:
+  ResponseBuilder(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseMatrix& kfr,
+                  Eigen::MatrixXd* responseHost, std::unique_ptr<ResponseOperator>* op,
+                  DenseResponseDetail& detail, std::string& error)
+      : L(L), kff(kff), kfr(kfr), responseHost(responseHost), op(op), detail(detail), error(error) {
   }
-  if (kfr.rows() != n || keptRowsIn < 0 || keptRowsIn > n || !kfr.isCompressed() ||
-      (kff && (kff->rows() != n || kff->cols() != n || !kff->isCompressed()))) {
-    error = "BuildDenseResponse: the matrices do not match the factor";
-    return false;
-  }
-  const int keptRows = static_cast<int>(keptRowsIn);
-  const int roi = static_cast<int>(kfr.cols());
-  if (!detail::InitDevice(error))
-    return false;
 
-  if (responseHost)
-    responseHost->resize(keptRows, roi);
-  auto finishEmpty = [&]() -> bool {
+  // `prepared`: K_perm already made (FactorAndBuildResponse makes it while the GPU factorizes),
+  // or null to make it here.
+  bool run(Eigen::Index keptRowsIn, int maxColumnsPerPass, PermutedCsr* prepared) {
+    if (!checkInputs(keptRowsIn))
+      return false;
+    if (responseHost)
+      responseHost->resize(keptRows, roi);
+    if (keptRows == 0 || roi == 0)
+      return finishEmpty();
+    startHostPageTouch();
+    if (!planForwardSweep() || !createResources() || !planSweepStreams() ||
+        !uploadFixedData(prepared) || !sizePasses(maxColumnsPerPass))
+      return false;
+    for (int c0 = 0; c0 < roi; c0 += nbMax) {
+      const int nb = std::min(nbMax, roi - c0);
+      ++detail.blocks;
+      if (!scatterRightHandSides(c0, nb) || !forwardSweep(nb) || !backwardSweep(nb) ||
+          !extractAndDownload(c0, nb) || !checkResidual(c0, nb) || !collectPass(c0, nb))
+        return false;
+    }
+    return finish();
+  }
+
+private:
+  bool checkInputs(Eigen::Index keptRowsIn) {
+    n = L.n;
+    if (n <= 0 || !L.super || !L.pi || !L.px || !L.s || !(L.x || L.deviceX) || !L.perm) {
+      error = "BuildDenseResponse: no supernodal factor";
+      return false;
+    }
+    if (kfr.rows() != n || keptRowsIn < 0 || keptRowsIn > n || !kfr.isCompressed() ||
+        (kff && (kff->rows() != n || kff->cols() != n || !kff->isCompressed()))) {
+      error = "BuildDenseResponse: the matrices do not match the factor";
+      return false;
+    }
+    keptRows = static_cast<int>(keptRowsIn);
+    roi = static_cast<int>(kfr.cols());
+    return detail::InitDevice(error);
+  }
+
+  bool finishEmpty() {
     if (responseHost)
       responseHost->setZero();
     if (op) {
@@ -483,61 +513,62 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       *op = std::move(cudaOp);
     }
     return true;
-  };
-  if (keptRows == 0 || roi == 0)
-    return finishEmpty();
+  }
+
   // The host response's pages are first touched here, on every core, while the GPU sweeps run:
-  // faulted in by the download itself, 4.6 GB at 1M cells made the copy run at a third of the
-  // link's rate. The future waits in its destructor, so no exit path leaves it running.
-  std::shared_future<void> hostPagesTouched;
-  if (responseHost)
-    hostPagesTouched = std::async(std::launch::async, [responseHost]() {
-                         detail::TouchPagesInParallel(
-                             responseHost->data(), static_cast<std::int64_t>(responseHost->size()));
-                       }).share();
-
-  // Host-side structure: inverse permutation, largest off-diagonal block, flops.
-  const std::vector<int> pinv = InversePermutation(L.perm, n);
-  detail.supernodes = L.nsuper;
-
-  // The forward sweep visits only the supernodes that L^-1 K_FR can be non-zero on: those of the
-  // rows K_FR touches and the ones above them. With the ROI-coupled DOFs ordered last that is the
-  // trailing block alone.
-  const SupernodalStructure tree{n, L.nsuper, L.super, L.pi, L.s};
-  std::vector<int> coupledRows(kfr.innerIndexPtr(), kfr.innerIndexPtr() + kfr.nonZeros());
-  for (int& row : coupledRows)
-    row = pinv[row];
-  std::vector<char> reached;
-  if (const Status marked = MarkSupernodesAbove(tree, coupledRows, reached); !marked) {
-    error = marked.message;
-    return false;
-  }
-  int maxOff = 0;
-  double flopsPerColumn = 0.0; // the backward sweep everywhere, the forward one where it runs
-  for (int s = 0; s < L.nsuper; ++s) {
-    const SupernodeShape shape = tree.shape(s);
-    maxOff = std::max(maxOff, shape.offDiagonal);
-    flopsPerColumn += (reached[s] ? 2.0 : 1.0) * shape.flops();
+  // faulted in by the download itself, the copy of a response of several GB ran at a fraction of
+  // the link's rate. The future waits in its destructor, so no exit path leaves it running.
+  void startHostPageTouch() {
+    if (responseHost)
+      hostPagesTouched =
+          std::async(std::launch::async, [host = responseHost]() {
+            detail::TouchPagesInParallel(host->data(), static_cast<std::int64_t>(host->size()));
+          }).share();
   }
 
-  Resources r;
-  FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.stream, cudaStreamNonBlocking));
-  FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.download, cudaStreamNonBlocking));
-  for (cudaEvent_t& e : r.ev)
-    FP_CUDA_TRY(cudaEventCreate(&e));
-  FP_CUBLAS_TRY(cublasCreate(&r.blas));
-  FP_CUBLAS_TRY(cublasSetStream(r.blas, r.stream));
-  FP_CUBLAS_TRY(cublasSetPointerMode(r.blas, CUBLAS_POINTER_MODE_HOST));
+  // Host-side structure: inverse permutation, largest off-diagonal block, flops. The forward
+  // sweep visits only the supernodes that L^-1 K_FR can be non-zero on: those of the rows K_FR
+  // touches and the ones above them. With the ROI-coupled DOFs ordered last that is the trailing
+  // block alone.
+  bool planForwardSweep() {
+    pinv = InversePermutation(L.perm, n);
+    detail.supernodes = L.nsuper;
+    std::vector<int> coupledRows(kfr.innerIndexPtr(), kfr.innerIndexPtr() + kfr.nonZeros());
+    for (int& row : coupledRows)
+      row = pinv[row];
+    if (const Status marked = MarkSupernodesAbove(tree, coupledRows, reached); !marked) {
+      error = marked.message;
+      return false;
+    }
+    for (int s = 0; s < L.nsuper; ++s) {
+      const SupernodeShape shape = tree.shape(s);
+      maxOff = std::max(maxOff, shape.offDiagonal);
+      flopsPerColumn += (reached[s] ? 2.0 : 1.0) * shape.flops();
+    }
+    return true;
+  }
 
-  // The backward sweep's subtrees on streams: each supernode's parent is the supernode of its first
-  // off-diagonal row; going down from the roots, a supernode's first child keeps its stream and the
-  // others take the next stream in turn. A supernode waits for its parent's event only when the
-  // parent ran on another stream (the parent's own wait covers the ancestors above it).
-  const int streamCount = SweepStreamCount();
-  const std::vector<int> parentOf = SupernodeParents(tree, SupernodeOfColumns(tree));
-  std::vector<int> sweepStream(L.nsuper, 0);
-  std::vector<char> parentHasChild(L.nsuper, 0), needsEvent(L.nsuper, 0);
-  {
+  bool createResources() {
+    FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.stream, cudaStreamNonBlocking));
+    FP_CUDA_TRY(cudaStreamCreateWithFlags(&r.download, cudaStreamNonBlocking));
+    for (cudaEvent_t& e : r.ev)
+      FP_CUDA_TRY(cudaEventCreate(&e));
+    FP_CUBLAS_TRY(cublasCreate(&r.blas));
+    FP_CUBLAS_TRY(cublasSetStream(r.blas, r.stream));
+    FP_CUBLAS_TRY(cublasSetPointerMode(r.blas, CUBLAS_POINTER_MODE_HOST));
+    return true;
+  }
+
+  // The backward sweep's subtrees on streams: each supernode's parent is the supernode of its
+  // first off-diagonal row; going down from the roots, a supernode's first child keeps its stream
+  // and the others take the next stream in turn. A supernode waits for its parent's event only
+  // when the parent ran on another stream (the parent's own wait covers the ancestors above it).
+  bool planSweepStreams() {
+    streamCount = SweepStreamCount();
+    parentOf = SupernodeParents(tree, SupernodeOfColumns(tree));
+    sweepStream.assign(L.nsuper, 0);
+    needsEvent.assign(L.nsuper, 0);
+    std::vector<char> parentHasChild(L.nsuper, 0);
     int nextStream = 0;
     for (int s = L.nsuper - 1; s >= 0; --s) {
       const int p = parentOf[s];
@@ -555,143 +586,123 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
           needsEvent[p] = 1;
       }
     }
+    sweep.stream.assign(streamCount, nullptr);
+    sweep.blas.assign(streamCount, nullptr);
+    sweep.streamDone.assign(streamCount, nullptr);
+    sweep.done.assign(L.nsuper, nullptr);
+    for (int q = 1; q < streamCount; ++q) {
+      FP_CUDA_TRY(cudaStreamCreateWithFlags(&sweep.stream[q], cudaStreamNonBlocking));
+      FP_CUBLAS_TRY(cublasCreate(&sweep.blas[q]));
+      FP_CUBLAS_TRY(cublasSetStream(sweep.blas[q], sweep.stream[q]));
+      FP_CUBLAS_TRY(cublasSetPointerMode(sweep.blas[q], CUBLAS_POINTER_MODE_HOST));
+      FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.streamDone[q], cudaEventDisableTiming));
+    }
+    for (int s = 0; s < L.nsuper; ++s)
+      if (needsEvent[s])
+        FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.done[s], cudaEventDisableTiming));
+    return true;
   }
-  SweepStreams sweep;
-  sweep.stream.assign(streamCount, nullptr);
-  sweep.blas.assign(streamCount, nullptr);
-  sweep.streamDone.assign(streamCount, nullptr);
-  sweep.done.assign(L.nsuper, nullptr);
-  for (int q = 1; q < streamCount; ++q) {
-    FP_CUDA_TRY(cudaStreamCreateWithFlags(&sweep.stream[q], cudaStreamNonBlocking));
-    FP_CUBLAS_TRY(cublasCreate(&sweep.blas[q]));
-    FP_CUBLAS_TRY(cublasSetStream(sweep.blas[q], sweep.stream[q]));
-    FP_CUBLAS_TRY(cublasSetPointerMode(sweep.blas[q], CUBLAS_POINTER_MODE_HOST));
-    FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.streamDone[q], cudaEventDisableTiming));
-  }
-  for (int s = 0; s < L.nsuper; ++s)
-    if (needsEvent[s])
-      FP_CUDA_TRY(cudaEventCreateWithFlags(&sweep.done[s], cudaEventDisableTiming));
-  auto streamFor = [&](int q) { return q == 0 ? r.stream : sweep.stream[q]; };
-  auto blasFor = [&](int q) { return q == 0 ? r.blas : sweep.blas[q]; };
+  cudaStream_t streamFor(int q) const { return q == 0 ? r.stream : sweep.stream[q]; }
+  cublasHandle_t blasFor(int q) const { return q == 0 ? r.blas : sweep.blas[q]; }
 
-  // Fixed device data: factor, permutation, K_FR, K_perm (for the residual), the response.
-  DeviceArray dLx, dLs, dPinv, dFrStart, dFrRow, dFrVal, dKStart, dKCol, dKVal, dResponse, dY, dT,
-      dR, dSums, dSpmmBuffer;
-  const size_t lxCount = static_cast<size_t>(L.px[L.nsuper]);
-  const size_t lsCount = static_cast<size_t>(L.pi[L.nsuper]);
-  PermutedCsr madeHere;
-  PermutedCsr& kPerm = prepared ? *prepared : madeHere;
-  if (kff && !prepared)
-    PermutedFullCsr(*kff, pinv, madeHere);
-  if (kff && kPerm.rowStart.size() != static_cast<size_t>(n) + 1) {
-    error = "internal: the prepared K_perm does not match the factor";
-    return false;
-  }
-  const std::vector<int>& kStart = kPerm.rowStart;
-  const std::vector<int>& kCol = kPerm.col;
-  const std::vector<double>& kVal = kPerm.val;
-  detail.hostPrepareMs = hostClock.lapMs();
-
-  FP_CUDA_TRY(cudaEventRecord(r.ev[0], r.stream));
-  if ((!L.deviceX && !Upload(dLx, L.x, lxCount, r.stream, error)) ||
-      !Upload(dLs, L.s, lsCount, r.stream, error) ||
-      !Upload(dPinv, pinv.data(), pinv.size(), r.stream, error) ||
-      !Upload(dFrStart, kfr.outerIndexPtr(), static_cast<size_t>(roi) + 1, r.stream, error) ||
-      !Upload(dFrRow, kfr.innerIndexPtr(), static_cast<size_t>(kfr.nonZeros()), r.stream, error) ||
-      !Upload(dFrVal, kfr.valuePtr(), static_cast<size_t>(kfr.nonZeros()), r.stream, error))
-    return false;
-  if (kff && (!Upload(dKStart, kStart.data(), kStart.size(), r.stream, error) ||
-              !Upload(dKCol, kCol.data(), kCol.size(), r.stream, error) ||
-              !Upload(dKVal, kVal.data(), kVal.size(), r.stream, error)))
-    return false;
-  FP_CUDA_TRY(cudaEventRecord(r.ev[1], r.stream));
-  hostClock.lapMs();
-  if (!dResponse.ensure(sizeof(double) * static_cast<size_t>(keptRows) * roi, error))
-    return false;
-
-  // Columns per pass: Y (n x nb) and T (maxOff x nb per sweep stream); R is fixed (n x 512).
-  size_t freeBytes = 0, totalBytes = 0;
-  FP_CUDA_TRY(cudaMemGetInfo(&freeBytes, &totalBytes));
-  // T: one workspace of maxOff rows per sweep stream.
-  // The residual is checked in chunks of kResidualColumns columns through one n x chunk buffer:
-  // with one n x nb buffer the 1M case needed two passes on an 80 GB card (7,601 + 16 columns),
-  // and each pass walks every supernode.
-  constexpr int kResidualColumns = 512;
-  const int residualColumns = std::min(kResidualColumns, roi);
-  const double perColumn = 8.0 * (double(n) + double(streamCount) * double(maxOff)) + 8.0;
-  const double usable = double(freeBytes) * 0.9 - 512.0 * 1024 * 1024 -
-                        (kff ? 8.0 * double(n) * double(residualColumns) : 0.0);
-  const long long fit = usable > 0 ? static_cast<long long>(usable / perColumn) : 0;
-  if (fit < 1) {
-    error = "not enough GPU memory for the dense response's right-hand sides";
-    return false;
-  }
-  int nbMax = static_cast<int>(std::min<long long>(roi, fit));
-  if (maxColumnsPerPass > 0)
-    nbMax = std::min(nbMax, maxColumnsPerPass);
-  detail.columnsPerBlock = nbMax;
-  const size_t yCount = static_cast<size_t>(n) * nbMax;
-  if (!dY.ensure(sizeof(double) * yCount, error) ||
-      !dT.ensure(sizeof(double) *
-                     std::max<size_t>(static_cast<size_t>(streamCount) * maxOff * nbMax, 1),
-                 error) ||
-      !dSums.ensure(sizeof(double) * nbMax, error))
-    return false;
-  if (kff) {
-    if (!dR.ensure(sizeof(double) * static_cast<size_t>(n) * std::min(residualColumns, nbMax),
-                   error))
+  // Fixed device data: factor, permutation, K_FR, K_perm (for the residual); between events 0
+  // and 1.
+  bool uploadFixedData(PermutedCsr* prepared) {
+    const size_t lxCount = static_cast<size_t>(L.px[L.nsuper]);
+    const size_t lsCount = static_cast<size_t>(L.pi[L.nsuper]);
+    kPerm = prepared ? prepared : &madeHere;
+    if (kff && !prepared)
+      PermutedFullCsr(*kff, pinv, madeHere);
+    if (kff && kPerm->rowStart.size() != static_cast<size_t>(n) + 1) {
+      error = "internal: the prepared K_perm does not match the factor";
       return false;
-    FP_CUSPARSE_TRY(cusparseCreate(&r.sparse));
-    FP_CUSPARSE_TRY(cusparseSetStream(r.sparse, r.stream));
-    FP_CUSPARSE_TRY(cusparseCreateCsr(&r.K, n, n, static_cast<int64_t>(kCol.size()),
-                                      dKStart.as<int>(), dKCol.as<int>(), dKVal.as<double>(),
-                                      CUSPARSE_INDEX_32I, CUSPARSE_INDEX_32I,
-                                      CUSPARSE_INDEX_BASE_ZERO, CUDA_R_64F));
+    }
+    detail.hostPrepareMs = hostClock.lapMs();
+
+    FP_CUDA_TRY(cudaEventRecord(r.ev[0], r.stream));
+    if ((!L.deviceX && !Upload(dLx, L.x, lxCount, r.stream, error)) ||
+        !Upload(dLs, L.s, lsCount, r.stream, error) ||
+        !Upload(dPinv, pinv.data(), pinv.size(), r.stream, error) ||
+        !Upload(dFrStart, kfr.outerIndexPtr(), static_cast<size_t>(roi) + 1, r.stream, error) ||
+        !Upload(dFrRow, kfr.innerIndexPtr(), static_cast<size_t>(kfr.nonZeros()), r.stream,
+                error) ||
+        !Upload(dFrVal, kfr.valuePtr(), static_cast<size_t>(kfr.nonZeros()), r.stream, error))
+      return false;
+    if (kff && (!Upload(dKStart, kPerm->rowStart.data(), kPerm->rowStart.size(), r.stream, error) ||
+                !Upload(dKCol, kPerm->col.data(), kPerm->col.size(), r.stream, error) ||
+                !Upload(dKVal, kPerm->val.data(), kPerm->val.size(), r.stream, error)))
+      return false;
+    FP_CUDA_TRY(cudaEventRecord(r.ev[1], r.stream));
+    hostClock.lapMs();
+    return dResponse.ensure(sizeof(double) * static_cast<size_t>(keptRows) * roi, error);
   }
 
-  // Norms of the right-hand sides (columns of K_FR) for the relative residual.
-  std::vector<double> rhsNorm(roi, 0.0);
-  for (int c = 0; c < roi; ++c)
-    for (int p = kfr.outerIndexPtr()[c]; p < kfr.outerIndexPtr()[c + 1]; ++p)
-      rhsNorm[c] += kfr.valuePtr()[p] * kfr.valuePtr()[p];
+  // Columns per pass: Y (n x nb) and T (maxOff x nb per sweep stream); R is fixed (n x chunk).
+  // The residual is checked in chunks of kResidualColumns columns through one n x chunk buffer:
+  // one n x nb buffer could cost a second pass on the largest meshes, and each pass walks every
+  // supernode.
+  bool sizePasses(int maxColumnsPerPass) {
+    size_t freeBytes = 0, totalBytes = 0;
+    FP_CUDA_TRY(cudaMemGetInfo(&freeBytes, &totalBytes));
+    constexpr int kResidualColumns = 512;
+    residualColumns = std::min(kResidualColumns, roi);
+    const double perColumn = 8.0 * (double(n) + double(streamCount) * double(maxOff)) + 8.0;
+    const double usable = double(freeBytes) * 0.9 - 512.0 * 1024 * 1024 -
+                          (kff ? 8.0 * double(n) * double(residualColumns) : 0.0);
+    const long long fit = usable > 0 ? static_cast<long long>(usable / perColumn) : 0;
+    if (fit < 1) {
+      error = "not enough GPU memory for the dense response's right-hand sides";
+      return false;
+    }
+    nbMax = static_cast<int>(std::min<long long>(roi, fit));
+    if (maxColumnsPerPass > 0)
+      nbMax = std::min(nbMax, maxColumnsPerPass);
+    detail.columnsPerBlock = nbMax;
+    const size_t yCount = static_cast<size_t>(n) * nbMax;
+    if (!dY.ensure(sizeof(double) * yCount, error) ||
+        !dT.ensure(sizeof(double) *
+                       std::max<size_t>(static_cast<size_t>(streamCount) * maxOff * nbMax, 1),
+                   error) ||
+        !dSums.ensure(sizeof(double) * nbMax, error))
+      return false;
+    if (kff) {
+      if (!dR.ensure(sizeof(double) * static_cast<size_t>(n) * std::min(residualColumns, nbMax),
+                     error))
+        return false;
+      FP_CUSPARSE_TRY(cusparseCreate(&r.sparse));
+      FP_CUSPARSE_TRY(cusparseSetStream(r.sparse, r.stream));
+      FP_CUSPARSE_TRY(cusparseCreateCsr(&r.K, n, n, static_cast<int64_t>(kPerm->col.size()),
+                                        dKStart.as<int>(), dKCol.as<int>(), dKVal.as<double>(),
+                                        CUSPARSE_INDEX_32I, CUSPARSE_INDEX_32I,
+                                        CUSPARSE_INDEX_BASE_ZERO, CUDA_R_64F));
+    }
 
-  detail.allocateMs = hostClock.lapMs();
-  double* Y = dY.as<double>();
-  double* T = dT.as<double>();
-  const double* Lx = L.deviceX ? L.deviceX : dLx.as<double>();
-  const int* Ls = dLs.as<int>();
-  const double one = 1.0, minusOne = -1.0, zero = 0.0;
-  std::vector<double> sums(nbMax);
-  // Each pass's response columns go to the host on their own stream and thread as soon as they
-  // are extracted, while the GPU checks that pass's residual (and runs the next pass): at 1M cells
-  // the 4.6 GB copy took 0.3-0.4 s after a 0.17 s residual check. One copy at a time; declared
-  // after every buffer and stream it uses, so its destructor (which waits) runs first.
-  std::string downloadError;
-  double downloadOwnMs = 0.0, hostTouchWaitMs = 0.0;
-  std::future<bool> download;
-  auto startDownload = [&](int c0, int nb) {
-    const size_t offset = static_cast<size_t>(keptRows) * c0;
-    const size_t bytes = sizeof(double) * static_cast<size_t>(keptRows) * nb;
-    download = std::async(std::launch::async, [&, offset, bytes]() {
-      StageClock own;
-      hostPagesTouched.wait();
-      hostTouchWaitMs += own.lapMs();
-      const bool ok =
-          detail::DownloadLarge(responseHost->data() + offset, dResponse.as<double>() + offset,
-                                bytes, r.download, downloadError);
-      downloadOwnMs += own.lapMs();
-      return ok;
-    });
-  };
-  for (int c0 = 0; c0 < roi; c0 += nbMax) {
-    const int nb = std::min(nbMax, roi - c0);
-    ++detail.blocks;
-    // Y = P K_FR(:, c0 : c0 + nb), row-major.
+    // Norms of the right-hand sides (columns of K_FR) for the relative residual.
+    rhsNorm.assign(roi, 0.0);
+    for (int c = 0; c < roi; ++c)
+      for (int p = kfr.outerIndexPtr()[c]; p < kfr.outerIndexPtr()[c + 1]; ++p)
+        rhsNorm[c] += kfr.valuePtr()[p] * kfr.valuePtr()[p];
+
+    detail.allocateMs = hostClock.lapMs();
+    Y = dY.as<double>();
+    T = dT.as<double>();
+    Lx = L.deviceX ? L.deviceX : dLx.as<double>();
+    Ls = dLs.as<int>();
+    sums.resize(nbMax);
+    return true;
+  }
+
+  // Y = P K_FR(:, c0 : c0 + nb), row-major; event 2 marks the forward sweep's start.
+  bool scatterRightHandSides(int c0, int nb) {
     FP_CUDA_TRY(cudaMemsetAsync(Y, 0, sizeof(double) * static_cast<size_t>(n) * nb, r.stream));
     FP_CUDA_TRY(detail::LaunchScatterCsc(dFrStart.as<int>(), dFrRow.as<int>(), dFrVal.as<double>(),
                                          dPinv.as<int>(), c0, nb, 1.0, Y, r.stream));
     FP_CUDA_TRY(cudaEventRecord(r.ev[2], r.stream));
-    // Forward: L Z = Y. Rows of a supernode are columns of the cuBLAS view (nb x n, ld nb).
+    return true;
+  }
+
+  // Forward: L Z = Y. Rows of a supernode are columns of the cuBLAS view (nb x n, ld nb).
+  bool forwardSweep(int nb) {
     for (int s = 0; s < L.nsuper; ++s) {
       if (!reached[s])
         continue; // Y stays zero there
@@ -709,7 +720,11 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       }
     }
     FP_CUDA_TRY(cudaEventRecord(r.ev[3], r.stream));
-    // Backward: L^T X = Z, the subtrees on their streams (SweepStreams).
+    return true;
+  }
+
+  // Backward: L^T X = Z, the subtrees on their streams (SweepStreams); event 4 at its end.
+  bool backwardSweep(int nb) {
     for (int q = 1; q < streamCount; ++q)
       FP_CUDA_TRY(cudaStreamWaitEvent(sweep.stream[q], r.ev[3], 0));
     for (int s = L.nsuper - 1; s >= 0; --s) {
@@ -738,6 +753,29 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       FP_CUDA_TRY(cudaStreamWaitEvent(r.stream, sweep.streamDone[q], 0));
     }
     FP_CUDA_TRY(cudaEventRecord(r.ev[4], r.stream));
+    return true;
+  }
+
+  // Each pass's response columns go to the host on their own stream and thread as soon as they
+  // are extracted, while the GPU checks that pass's residual (and runs the next pass). One copy
+  // at a time.
+  void startDownload(int c0, int nb) {
+    const size_t offset = static_cast<size_t>(keptRows) * c0;
+    const size_t bytes = sizeof(double) * static_cast<size_t>(keptRows) * nb;
+    download = std::async(std::launch::async, [this, offset, bytes]() {
+      StageClock own;
+      hostPagesTouched.wait();
+      hostTouchWaitMs += own.lapMs();
+      const bool ok =
+          detail::DownloadLarge(responseHost->data() + offset, dResponse.as<double>() + offset,
+                                bytes, r.download, downloadError);
+      downloadOwnMs += own.lapMs();
+      return ok;
+    });
+  }
+
+  // The kept rows into the response (events 4 to 5), then their copy to the host.
+  bool extractAndDownload(int c0, int nb) {
     FP_CUDA_TRY(detail::LaunchExtractResponse(Y, dPinv.as<int>(), keptRows, nb, c0,
                                               dResponse.as<double>(), keptRows, r.stream));
     FP_CUDA_TRY(cudaEventRecord(r.ev[5], r.stream));
@@ -749,7 +787,12 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
       FP_CUDA_TRY(cudaStreamWaitEvent(r.download, r.ev[5], 0)); // enqueued before the copies
       startDownload(c0, nb);
     }
-    // Residual in the permuted numbering: R = K_perm Y - P b (norms are permutation-invariant).
+    return true;
+  }
+
+  // Residual in the permuted numbering: R = K_perm Y - P b (norms are permutation-invariant),
+  // column sums of squares into `sums`; event 6 at its end.
+  bool checkResidual(int c0, int nb) {
     if (kff) {
       FP_CUDA_TRY(cudaMemsetAsync(dSums.as<double>(), 0, sizeof(double) * nb, r.stream));
       for (int j0 = 0; j0 < nb; j0 += residualColumns) {
@@ -788,6 +831,11 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
                                   cudaMemcpyDeviceToHost, r.stream));
     }
     FP_CUDA_TRY(cudaEventRecord(r.ev[6], r.stream));
+    return true;
+  }
+
+  // Waits for the pass, adds its device times and its columns' relative residuals.
+  bool collectPass(int c0, int nb) {
     FP_CUDA_TRY(cudaStreamSynchronize(r.stream));
     if (c0 == 0 && !Elapsed(r.ev[0], r.ev[1], detail.uploadMs, error))
       return false;
@@ -805,36 +853,86 @@ bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseM
         if (!std::isfinite(sums[c]))
           detail.worstRelativeResidual = INFINITY;
       }
+    return true;
   }
-  detail.flops = flopsPerColumn * roi;
-  if (!std::isfinite(detail.worstRelativeResidual)) {
-    error = "the GPU response has non-finite values";
-    return false;
-  }
-  if (responseHost) {
-    StageClock clock;
-    const bool downloaded = download.get();
-    detail.downloadWaitMs = clock.lapMs();
-    detail.downloadMs = downloadOwnMs;
-    detail.hostTouchWaitMs = hostTouchWaitMs;
-    if (!downloaded) {
-      error = downloadError;
+
+  // Waits for the host copy, frees the work buffers (after the copy: a free waits for the
+  // device) and hands the device response to the operator.
+  bool finish() {
+    detail.flops = flopsPerColumn * roi;
+    if (!std::isfinite(detail.worstRelativeResidual)) {
+      error = "the GPU response has non-finite values";
       return false;
     }
+    if (responseHost) {
+      StageClock clock;
+      const bool downloaded = download.get();
+      detail.downloadWaitMs = clock.lapMs();
+      detail.downloadMs = downloadOwnMs;
+      detail.hostTouchWaitMs = hostTouchWaitMs;
+      if (!downloaded) {
+        error = downloadError;
+        return false;
+      }
+    }
+    dY.release();
+    dT.release();
+    dR.release();
+    dLx.release();
+    if (op) {
+      auto cudaOp = std::make_unique<CudaResponse>();
+      if (!cudaOp->adopt(keptRows, roi, std::move(dResponse), error))
+        return false;
+      *op = std::move(cudaOp);
+    }
+    return true;
   }
-  // Free the work buffers (after the copy: a free waits for the device) before the operator
-  // keeps the response.
-  dY.release();
-  dT.release();
-  dR.release();
-  dLx.release();
-  if (op) {
-    auto cudaOp = std::make_unique<CudaResponse>();
-    if (!cudaOp->adopt(keptRows, roi, std::move(dResponse), error))
-      return false;
-    *op = std::move(cudaOp);
-  }
-  return true;
+
+  static constexpr double one = 1.0, minusOne = -1.0, zero = 0.0;
+
+  const SupernodalFactorView& L;
+  const SparseMatrix* kff;
+  const SparseMatrix& kfr;
+  Eigen::MatrixXd* responseHost;
+  std::unique_ptr<ResponseOperator>* op;
+  DenseResponseDetail& detail;
+  std::string& error;
+  StageClock hostClock;
+
+  int n = 0, keptRows = 0, roi = 0;
+  const SupernodalStructure tree{L.n, L.nsuper, L.super, L.pi, L.s};
+  std::vector<int> pinv;
+  std::vector<char> reached; // supernodes the forward sweep visits
+  int maxOff = 0;
+  double flopsPerColumn = 0.0; // the backward sweep everywhere, the forward one where it runs
+  int streamCount = 1;
+  std::vector<int> parentOf, sweepStream;
+  std::vector<char> needsEvent;
+  int nbMax = 0, residualColumns = 0;
+  std::vector<double> rhsNorm, sums;
+
+  std::shared_future<void> hostPagesTouched;
+  Resources r;
+  SweepStreams sweep;
+  DeviceArray dLx, dLs, dPinv, dFrStart, dFrRow, dFrVal, dKStart, dKCol, dKVal, dResponse, dY, dT,
+      dR, dSums, dSpmmBuffer;
+  PermutedCsr madeHere;
+  PermutedCsr* kPerm = nullptr;
+  double* Y = nullptr;
+  double* T = nullptr;
+  const double* Lx = nullptr;
+  const int* Ls = nullptr;
+  std::string downloadError;
+  double downloadOwnMs = 0.0, hostTouchWaitMs = 0.0;
+  std::future<bool> download; // last: destroyed (waited for) first
+};
+
+bool Build(const SupernodalFactorView& L, const SparseMatrix* kff, const SparseMatrix& kfr,
+           Eigen::Index keptRows, Eigen::MatrixXd* responseHost,
+           std::unique_ptr<ResponseOperator>* op, DenseResponseDetail& detail, std::string& error,
+           int maxColumnsPerPass, PermutedCsr* prepared) {
+  ResponseBuilder builder(L, kff, kfr, responseHost, op, detail, error);
+  return builder.run(keptRows, maxColumnsPerPass, prepared);
 }
 
 } // namespace
@@ -863,7 +961,7 @@ Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& 
     return Status::Error("FactorAndBuildResponse: the factor has not been analysed");
   detail.factorNonzeros = factor.factorNonzeros();
   // K_perm for the response's residual check depends only on K_FF and the ordering: made on the
-  // host while the GPU factorizes (0.2-0.3 s at 1M cells).
+  // host while the GPU factorizes.
   const int n = static_cast<int>(L->n);
   std::future<PermutedCsr> kPermMade = std::async(
       std::launch::async,
@@ -878,8 +976,8 @@ Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& 
   std::string error;
   double unused = 0.0;
   // The host factor is allocated first and its pages touched on every core while the GPU
-  // factorizes (which reads only the factor's structure): faulted in by the copy below, 4.2 GB at
-  // 1M cells made that copy take 1-2 s and crowd the response's own download.
+  // factorizes (which reads only the factor's structure): faulted in by the copy below, a factor
+  // of several GB would slow that copy and crowd the response's own download.
   if (!detail::AllocateHostFactor(L, factor.cholmodCommon(), error))
     return Status::Error(error);
   std::future<void> hostFactorTouched = std::async(std::launch::async, [L]() {
@@ -891,8 +989,8 @@ Status FactorAndBuildResponse(const SparseMatrix& kffUpper, const SparseMatrix& 
   hostFactorTouched.get();
   // The factor's copy into CHOLMOD (for CPU solves) runs beside the response, on its own stream
   // and thread: both only read the device factor, and the copy's device-to-host traffic and host
-  // memcpy overlap the response's kernels (at 1M it took 0.61 s before the response). So does
-  // marking it factorized, which extracts the dense trailing block for CPU solves (0.25 s at 1M):
+  // memcpy overlap the response's kernels. So does marking it factorized, which extracts the
+  // dense trailing block for CPU solves:
   // the response reads only the factor's structure on the host, which neither step changes.
   std::future<Status> download = std::async(std::launch::async, [&]() -> Status {
     StageClock copyClock;

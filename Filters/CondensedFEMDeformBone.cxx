@@ -120,6 +120,19 @@ std::string AppendedSegmentsNote(vtkPointSet* bone, const RowVectors3d& undeform
 
 } // namespace
 
+vtkSmartPointer<vtkPointSet> WithZeroDisplacement(vtkPointSet* bone) {
+  vtkSmartPointer<vtkPointSet> fixed;
+  fixed.TakeReference(bone->NewInstance());
+  fixed->ShallowCopy(bone);
+  vtkNew<vtkDoubleArray> zero;
+  zero->SetName("Displacement");
+  zero->SetNumberOfComponents(3);
+  zero->SetNumberOfTuples(bone->GetNumberOfPoints());
+  zero->Fill(0.0);
+  fixed->GetPointData()->AddArray(zero);
+  return fixed;
+}
+
 vtkSmartPointer<vtkPointSet> MergeBones(const std::vector<vtkPointSet*>& bones) {
   if (bones.size() == 1)
     return vtkSmartPointer<vtkPointSet>(bones[0]);

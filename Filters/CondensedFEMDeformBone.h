@@ -16,6 +16,10 @@ class vtkPointSet;
 namespace faceplan {
 namespace fem_filter {
 
+// A fixed bone (a connection without the point array Displacement: bone that stays put) as a
+// shallow copy of `bone` with a zero 3-component Displacement. The input is not modified.
+vtkSmartPointer<vtkPointSet> WithZeroDisplacement(vtkPointSet* bone);
+
 // One bone from the connections: points and cells appended, SegmentId of each connection offset
 // by the segments of the ones before it, SegmentTransform concatenated in that order; a point
 // array one connection lacks is filled (ROIMask 1, SegmentId 0, Sliding 0, Released 0). One

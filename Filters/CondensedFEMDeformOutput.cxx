@@ -70,18 +70,43 @@ void AddFieldData(const SolveOutcome& outcome, const Settings& settings,
   AddScalar(fd, "SolveTimeMs", result.timings[Stage::Total].ms);
   AddScalar(fd, "PrecomputeTimeMs", outcome.precomputeMs);
   AddScalar(fd, "PrecomputeReused",
-            outcome.freshPrecompute || settings.fullReference() || outcome.largeDeformation ? 0.0
-                                                                                            : 1.0);
-  AddString(fd, "Method",
-            outcome.largeDeformation ? "LargeDeformation" : MethodName(result.method));
-  AddString(fd, "Model", outcome.largeDeformation ? "NeoHookean" : "LinearElastic");
+            outcome.freshPrecompute || settings.fullReference() || outcome.newton ? 0.0 : 1.0);
+  AddString(fd, "Method", MethodName(result.method));
+  AddString(fd, "Model", outcome.model);
+  AddString(fd, "ModelNote", outcome.modelNote);
   if (outcome.largeDeformation) {
-    const LargeDeformationReport& report = outcome.largeDeformationReport;
-    AddScalar(fd, "LoadSteps", report.loadSteps);
-    AddScalar(fd, "NewtonIterations", report.newtonIterations);
-    AddScalar(fd, "SmallestVolumeRatio", report.smallestVolumeRatio);
+    AddString(fd, "LargeDeformationSolver", outcome.newton ? "Newton" : "Precomputed");
+    if (!outcome.solverNote.empty())
+      AddString(fd, "SolverNote", outcome.solverNote);
+    double smallest = 0.0;
+    int lifted = 0;
+    if (outcome.newton) {
+      const LargeDeformationReport& report = outcome.largeDeformationReport;
+      AddScalar(fd, "LoadSteps", report.loadSteps);
+      AddScalar(fd, "NewtonIterations", report.newtonIterations);
+      smallest = report.smallestVolumeRatio;
+      lifted = report.liftedNodes;
+    } else {
+      const PrecomputedLargeDeformationReport& report = outcome.precomputedReport;
+      AddScalar(fd, "QuasiNewtonIterations", report.iterations);
+      AddScalar(fd, "FactorSolves", report.factorSolves);
+      AddScalar(fd, "Refactorizations", report.refactorizations);
+      AddScalar(fd, "WarmStarted", report.warmStarted ? 1.0 : 0.0);
+      smallest = report.smallestVolumeRatio;
+      lifted = report.liftedNodes;
+    }
+    AddScalar(fd, "SmallestVolumeRatio", smallest);
+    // The iterates' time (ms since the solve started) and relative residual, for plots.
+    const auto& history = outcome.newton ? outcome.largeDeformationReport.convergence
+                                         : outcome.precomputedReport.convergence;
+    vtkNew<vtkDoubleArray> convergence;
+    convergence->SetName("ConvergenceHistory");
+    convergence->SetNumberOfComponents(2);
+    for (const auto& [ms, residual] : history)
+      convergence->InsertNextTuple2(ms, residual);
+    fd->AddArray(convergence);
     if (settings.liftOff)
-      AddScalar(fd, "LiftedNodes", report.liftedNodes);
+      AddScalar(fd, "LiftedNodes", lifted);
   }
   AddString(fd, "Backend", result.backend);
   if (settings.verify)

@@ -10,7 +10,8 @@ enum class BackendChoice { Auto = 0, CPU = 1, CUDA = 2 };
 // The same values as Core's SolveMethod and ElementOrder.
 enum class MethodChoice { Auto = 0, DenseResponse = 1, CachedFactor = 2, FullReference = 3 };
 enum class ElementOrderChoice { Linear = 0, Quadratic = 1, QuadraticNodalPressure = 2 };
-enum class ModelChoice { LinearElastic = 0, NeoHookean = 1 };
+enum class ModelChoice { LinearElastic = 0, NeoHookean = 1, Auto = 2 };
+enum class LargeDeformationSolverChoice { Precomputed = 0, Newton = 1 };
 
 struct Settings {
   double youngsModulus = 15000.0; // Pa
@@ -25,14 +26,19 @@ struct Settings {
   double gravity[3] = {0.0, 0.0, -9.81};
   int outputMode = 0, backend = 0, method = 0, elementOrder = 0; // as set, validated before use
   bool verify = false;
-  int model = 0; // ModelChoice
+  int model = 2;                  // ModelChoice
+  int largeDeformationSolver = 0; // LargeDeformationSolverChoice
   bool liftOff = false;
 
   OutputMode output() const { return static_cast<OutputMode>(outputMode); }
   MethodChoice methodChoice() const { return static_cast<MethodChoice>(method); }
   bool fullReference() const { return methodChoice() == MethodChoice::FullReference; }
-  bool largeDeformation() const {
-    return static_cast<ModelChoice>(model) == ModelChoice::NeoHookean;
+  ModelChoice modelChoice() const { return static_cast<ModelChoice>(model); }
+  // Model NeoHookean as set (Auto decides per update).
+  bool largeDeformation() const { return modelChoice() == ModelChoice::NeoHookean; }
+  bool newtonSolver() const {
+    return static_cast<LargeDeformationSolverChoice>(largeDeformationSolver) ==
+           LargeDeformationSolverChoice::Newton;
   }
 };
 

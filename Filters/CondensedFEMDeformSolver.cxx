@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <sstream>
 #include <thread>
 
 namespace faceplan {
@@ -59,6 +60,70 @@ void Solver::chooseBackend(const Settings& settings, PrecomputeOptions& options,
     notes.push_back("Backend CUDA is not available (" + cudaUnavailable_ + "); using the CPU");
 }
 
+void Solver::startLargeDeformation(const PrecomputeRequest& given, const Settings& settings) {
+  if (haveLarge_ && largeLiftOff_ == settings.liftOff && SameInputs(given, largeRequest_))
+    return;
+  largeRequest_ = given;
+  largeRequest_.options = PrecomputeOptions(); // linear cells, CPU
+  PrecomputedLargeDeformationOptions options;
+  options.slidingLiftOff = settings.liftOff;
+  background_.startLargeDeformation(largeRequest_, options);
+  haveLarge_ = true;
+  largeLiftOff_ = settings.liftOff;
+  largeState_ = LargeDeformationState();
+}
+
+Status Solver::runLargeDeformation(const PrecomputeRequest& given, const PrecomputeOptions& options,
+                                   const SolveInput& input, const Settings& settings,
+                                   const std::function<void(double)>& progress,
+                                   SolveOutcome& outcome) {
+  outcome.largeDeformation = true;
+  outcome.model = "NeoHookean";
+  outcome.result = SolveResult();
+  if (settings.newtonSolver()) {
+    // Newton iterations on the whole mesh: no precompute to cache, nothing to hand to a worker.
+    outcome.newton = true;
+    PrecomputeRequest request = given;
+    request.options = options;
+    LargeDeformationOptions largeOptions;
+    largeOptions.slidingLiftOff = settings.liftOff;
+    largeOptions.progress = progress;
+    return SolveLargeDeformation(request, input, largeOptions, outcome.result,
+                                 outcome.largeDeformationReport);
+  }
+  startLargeDeformation(given, settings);
+  while (!background_.largeDeformationReady()) {
+    if (progress)
+      progress(0.5);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::shared_ptr<LargeDeformationSystem> system;
+  Status status = background_.waitLargeDeformation(system);
+  if (!status) {
+    haveLarge_ = false; // retried next time
+    return status;
+  }
+  const StageTimings precompute = PrecomputeTimings(*system);
+  if (largeState_.system != system.get())
+    largeState_ = LargeDeformationState();
+  const bool fresh = !largeState_.valid();
+  LargeDeformationState next;
+  status = SolvePrecomputedLargeDeformation(*system, input, &largeState_, outcome.result,
+                                            outcome.precomputedReport, &next);
+  largeState_ = next;
+  if (!status)
+    return status;
+  outcome.precomputeMs = precompute[Stage::Total].ms;
+  outcome.freshPrecompute = outcome.freshPrecompute || fresh;
+  if (outcome.precomputedReport.fellBack) {
+    outcome.newton = true;
+    outcome.largeDeformationReport = outcome.precomputedReport.newton;
+    outcome.solverNote = "the precomputed solve did not converge (" +
+                         outcome.precomputedReport.fallbackReason + "): solved by Newton";
+  }
+  return status;
+}
+
 Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
                    const Settings& settings, const std::function<void(double)>& progress,
                    SolveOutcome& outcome) {
@@ -70,7 +135,8 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
         "the FullReference method supports linear elements only: solved with linear elements");
     options.elementOrder = ElementOrder::Linear;
   }
-  if (settings.largeDeformation()) {
+  const ModelChoice model = settings.modelChoice();
+  if (model == ModelChoice::NeoHookean) {
     if (static_cast<BackendChoice>(settings.backend) == BackendChoice::CUDA)
       outcome.notes.push_back("Model NeoHookean runs on the CPU: Backend CUDA applies to the "
                               "linear model");
@@ -86,55 +152,84 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
     request.options = options;
     return request;
   };
-  if (settings.liftOff && !settings.largeDeformation())
+  if (settings.liftOff && model == ModelChoice::LinearElastic)
     outcome.notes.push_back("LiftOff applies to Model NeoHookean only: the linear model keeps "
                             "sliding tissue on the bone");
 
   Status status;
-  if (settings.largeDeformation()) {
-    // Newton iterations on the whole mesh: no precompute to cache, nothing to hand to a worker.
-    outcome.largeDeformation = true;
-    LargeDeformationOptions largeOptions;
-    largeOptions.slidingLiftOff = settings.liftOff;
-    largeOptions.progress = progress;
-    status = SolveLargeDeformation(withOptions(), input, largeOptions, outcome.result,
-                                   outcome.largeDeformationReport);
-  } else if (settings.fullReference()) {
-    status = SolveFullReference(withOptions(), input, outcome.result);
+  if (model == ModelChoice::NeoHookean) {
+    outcome.modelNote = "Model NeoHookean (as set)";
+    status = runLargeDeformation(given, options, input, settings, progress, outcome);
   } else {
-    auto fraction = std::make_shared<std::atomic<double>>(0.0);
-    if (!haveRequest_ || !SameOptions(options, lastRequest_.options) ||
-        !SameInputs(given, lastRequest_)) {
-      lastRequest_ = withOptions();
-      background_.start(lastRequest_, [fraction](double f, const char*) { fraction->store(f); });
-      haveRequest_ = true;
-      outcome.freshPrecompute = true;
-      ++precomputeCount_;
+    if (settings.fullReference()) {
+      status = SolveFullReference(withOptions(), input, outcome.result);
+    } else {
+      auto fraction = std::make_shared<std::atomic<double>>(0.0);
+      if (!haveRequest_ || !SameOptions(options, lastRequest_.options) ||
+          !SameInputs(given, lastRequest_)) {
+        lastRequest_ = withOptions();
+        background_.start(lastRequest_, [fraction](double f, const char*) { fraction->store(f); });
+        haveRequest_ = true;
+        outcome.freshPrecompute = true;
+        ++precomputeCount_;
+      }
+      // Auto may need the large-deformation model: its precompute runs beside the linear one.
+      if (model == ModelChoice::Auto && !settings.newtonSolver() &&
+          options.elementOrder == ElementOrder::Linear)
+        startLargeDeformation(given, settings);
+      // The worker's progress is reported from this (the pipeline's) thread.
+      while (!background_.ready()) {
+        if (progress)
+          progress(fraction->load());
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+      std::shared_ptr<const CondensedSystem> system;
+      status = background_.wait(system);
+      if (!status) {
+        haveRequest_ = false; // a failed precompute is retried next time
+        return status;
+      }
+      // The precompute's findings (slivers, fallbacks) are reported once, not again on every edit.
+      if (outcome.freshPrecompute)
+        for (const auto& w : status.warnings)
+          outcome.notes.push_back(w);
+      status = Solve(*system, input, outcome.result);
+      const SystemInfo info = Describe(*system);
+      outcome.precomputeMs = info.precomputeTimings[Stage::Total].ms;
+      if (outcome.freshPrecompute)
+        for (int k = 0; k < kNumStages; ++k)
+          if (info.precomputeTimings.stages[k].ms > 0.0)
+            outcome.result.timings.stages[k].reused = false;
+      outcome.result.timings[Stage::Total].reused = false;
     }
-    // The worker's progress is reported from this (the pipeline's) thread.
-    while (!background_.ready()) {
-      if (progress)
-        progress(fraction->load());
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (status && model == ModelChoice::Auto) {
+      // Linear while its largest strain is within the small-strain limit, else large deformation.
+      const double limit = options.strainWarningLimit, strain = outcome.result.largestStrain;
+      std::ostringstream why;
+      why << "Auto: the linear result's largest strain " << 100.0 * strain << " % is ";
+      if (!(limit > 0.0)) {
+        outcome.modelNote = "Auto: the small-strain check is off (StrainWarningLimit 0): linear";
+      } else if (strain <= limit && outcome.result.invertedCells == 0) {
+        why << "within the small-strain limit " << 100.0 * limit << " %: linear";
+        outcome.modelNote = why.str();
+      } else if (options.elementOrder != ElementOrder::Linear) {
+        why << "beyond the small-strain limit " << 100.0 * limit
+            << " %, but the neo-Hookean model takes ElementOrder Linear only: linear";
+        outcome.modelNote = why.str();
+      } else {
+        why << "beyond the small-strain limit " << 100.0 * limit << " %: NeoHookean";
+        if (settings.verify)
+          why << " (Verify compares linear results: not run)";
+        outcome.modelNote = why.str();
+        const bool freshLinear = outcome.freshPrecompute;
+        std::vector<std::string> notes = outcome.notes;
+        status = runLargeDeformation(given, options, input, settings, progress, outcome);
+        outcome.freshPrecompute = outcome.freshPrecompute || freshLinear;
+        outcome.notes = notes;
+      }
+    } else if (status) {
+      outcome.modelNote = "Model LinearElastic (as set)";
     }
-    std::shared_ptr<const CondensedSystem> system;
-    status = background_.wait(system);
-    if (!status) {
-      haveRequest_ = false; // a failed precompute is retried next time
-      return status;
-    }
-    // The precompute's findings (slivers, fallbacks) are reported once, not again on every edit.
-    if (outcome.freshPrecompute)
-      for (const auto& w : status.warnings)
-        outcome.notes.push_back(w);
-    status = Solve(*system, input, outcome.result);
-    const SystemInfo info = Describe(*system);
-    outcome.precomputeMs = info.precomputeTimings[Stage::Total].ms;
-    if (outcome.freshPrecompute)
-      for (int k = 0; k < kNumStages; ++k)
-        if (info.precomputeTimings.stages[k].ms > 0.0)
-          outcome.result.timings.stages[k].reused = false;
-    outcome.result.timings[Stage::Total].reused = false;
   }
   if (!status)
     return status;
@@ -143,7 +238,7 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
                                 ? w + " (Model NeoHookean solves for large deformations)"
                                 : w);
 
-  if (settings.verify) {
+  if (settings.verify && !outcome.largeDeformation) {
     const Status verified =
         VerifyAgainstReference(withOptions(), input, outcome.result, outcome.verifyError);
     if (!verified)

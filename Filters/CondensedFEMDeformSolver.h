@@ -7,6 +7,7 @@
 #include "CondensedFEM/BackgroundPrecompute.h"
 #include "CondensedFEM/CondensedFEM.h"
 #include "CondensedFEM/LargeDeformation.h"
+#include "CondensedFEM/PrecomputedLargeDeformation.h"
 
 #include <functional>
 #include <string>
@@ -21,8 +22,13 @@ struct SolveOutcome {
   double precomputeMs = 0.0;      // the cached precompute's total
   double verifyError = -1.0;      // with Verify: largest relative difference to the reference
   std::vector<std::string> notes; // warnings for the user (precompute findings once, then solve's)
-  bool largeDeformation = false;  // Model NeoHookean: solved by SolveLargeDeformation
-  LargeDeformationReport largeDeformationReport;
+  std::string model = "LinearElastic";                 // the model that ran
+  std::string modelNote;                               // why (Auto's choice, or as set)
+  bool largeDeformation = false;                       // the neo-Hookean model ran
+  bool newton = false;                                 // ... by Newton (as set, or as the fallback)
+  std::string solverNote;                              // why Newton ran when Precomputed was set
+  LargeDeformationReport largeDeformationReport;       // Newton's
+  PrecomputedLargeDeformationReport precomputedReport; // the precomputed solve's
 };
 
 class Solver {
@@ -37,11 +43,21 @@ public:
 private:
   void chooseBackend(const Settings& settings, PrecomputeOptions& options,
                      std::vector<std::string>& notes);
+  // Starts the large-deformation precompute for these inputs unless the one kept is for them.
+  void startLargeDeformation(const PrecomputeRequest& given, const Settings& settings);
+  Status runLargeDeformation(const PrecomputeRequest& given, const PrecomputeOptions& options,
+                             const SolveInput& input, const Settings& settings,
+                             const std::function<void(double)>& progress, SolveOutcome& outcome);
 
   BackgroundPrecompute background_;
   PrecomputeRequest lastRequest_;
   bool haveRequest_ = false;
   int precomputeCount_ = 0;
+  // The large-deformation precompute's request (linear options) and lift-off, and the last
+  // converged state, from which the next solve starts.
+  PrecomputeRequest largeRequest_;
+  bool haveLarge_ = false, largeLiftOff_ = false;
+  LargeDeformationState largeState_;
   std::shared_ptr<ComputeBackend> cudaBackend_;
   std::string cudaUnavailable_;
   bool cudaProbed_ = false;

@@ -124,8 +124,11 @@ Status ValidateProperties(const Settings& s) {
     return Error(
         "ElementOrder must be 0 (Linear), 1 (Quadratic) or 2 (QuadraticNodalPressure), not ",
         s.elementOrder);
-  if (s.model < 0 || s.model > 1)
-    return Error("Model must be 0 (LinearElastic) or 1 (NeoHookean), not ", s.model);
+  if (s.model < 0 || s.model > 2)
+    return Error("Model must be 0 (LinearElastic), 1 (NeoHookean) or 2 (Auto), not ", s.model);
+  if (s.largeDeformationSolver < 0 || s.largeDeformationSolver > 1)
+    return Error("LargeDeformationSolver must be 0 (Precomputed) or 1 (Newton), not ",
+                 s.largeDeformationSolver);
   if (s.largeDeformation() && s.elementOrder != 0)
     return Error("Model NeoHookean supports ElementOrder Linear only");
   if (s.largeDeformation() && s.verify)
@@ -174,8 +177,9 @@ Status ValidateTissue(vtkUnstructuredGrid* tissue, const Settings& settings) {
 
 Status ValidateBone(vtkPointSet* bone) {
   if (!bone)
-    return Error("no Bone input: connect the output of BezierCut or Osteotomy (a surface with a "
-                 "Displacement array)");
+    return Error("no Bone input: connect the operated bone (the output of BezierCut or "
+                 "Osteotomy) and the bones that stay put (any bone surface: without a "
+                 "Displacement array a bone is fixed)");
   if (bone->GetNumberOfPoints() == 0 || bone->GetNumberOfCells() == 0)
     return Error("the Bone input has no cells to make contact with");
   const vtkIdType n = bone->GetNumberOfPoints();
@@ -250,6 +254,26 @@ std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
   msg << "the bone moves (largest Displacement " << largest
       << ") but its ROIMask is 0 at every point where the tissue is tied to it, so the tissue does "
          "not move: check the ROI (ROI Extract) or the bone's ROIMask";
+  return msg.str();
+}
+
+std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement,
+                            double lengthUnit) {
+  double boneLargest = 0.0;
+  for (vtkIdType i = 0; boneDisplacement && i < boneDisplacement->GetNumberOfTuples(); ++i) {
+    double d[3];
+    boneDisplacement->GetTuple(i, d);
+    boneLargest = std::max(boneLargest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+  }
+  if (!(tissueLargest > kLooseTissueRatio * boneLargest) || !(tissueLargest > 0.0))
+    return std::string();
+  const char* unit = lengthUnit == 0.001 ? " mm" : lengthUnit == 1.0 ? " m" : " (mesh units)";
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << "the tissue moves " << tissueLargest << unit << " where no bone moves more than "
+      << boneLargest << unit
+      << ": is every bone connected? Connect the bones that stay put (the mandible, the cranium) "
+         "to the Bone port as well; a connection without a Displacement array is a fixed bone";
   return msg.str();
 }
 

@@ -29,5 +29,14 @@ Status ValidateBoneValues(vtkPointSet* bone);
 std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
                                  vtkDataArray* boneDisplacement);
 
+// After the solve: a warning when the tissue moves much farther than any bone (by more than
+// kLooseTissueRatio times the bone's largest Displacement), which is what a tissue held by too few
+// bones does (only the operated segment connected, the fixed mandible or cranium left out); ""
+// when there is nothing to say. `tissueLargest` is the largest displacement of the tissue's
+// surface, in mesh units; `lengthUnit` (metres per mesh unit) names the unit.
+constexpr double kLooseTissueRatio = 1.5;
+std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement,
+                            double lengthUnit);
+
 } // namespace fem_filter
 } // namespace faceplan

@@ -259,10 +259,12 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
   options.displayResolution = this->SurfaceResolution;
 
   // Core.
+  std::vector<double> curveU = this->CurveU, curveV = this->CurveV;
+  this->LinkFirstPoints(curveU, curveV);
   faceplan::BezierCutResult result;
   const faceplan::Status status =
       faceplan::BezierCut(cache.mesh(), cache.topology(), cache.mask(), cache.boundary(),
-                          ToCurve(this->CurveU), ToCurve(this->CurveV), options, result);
+                          ToCurve(curveU), ToCurve(curveV), options, result);
   if (!status) {
     this->Fail(status.message, output, surface);
     return false;
@@ -344,10 +346,47 @@ bool vtkBezierCut::Cut(vtkPointSet* input, vtkPointSet* output, vtkPolyData* sur
   return true;
 }
 
+bool vtkBezierCut::LinkFirstPoints(std::vector<double>& u, std::vector<double>& v) {
+  if (u.size() < 3 || v.size() < 3)
+    return false;
+  const auto same = [](const double* a, const double* b) {
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+  };
+  const double* shared = nullptr;
+  if (same(u.data(), v.data())) {
+    shared = u.data();
+  } else if (this->HaveFirstPoints) {
+    const bool uMoved = !same(u.data(), this->LastFirstU);
+    const bool vMoved = !same(v.data(), this->LastFirstV);
+    if (uMoved && !vMoved)
+      shared = u.data();
+    else if (vMoved && !uMoved)
+      shared = v.data();
+    else if (!uMoved && !vMoved)
+      shared = this->SharedFirst;
+  }
+  if (!shared)
+    return false;
+  std::copy(u.data(), u.data() + 3, this->LastFirstU);
+  std::copy(v.data(), v.data() + 3, this->LastFirstV);
+  const double p0[3] = {shared[0], shared[1], shared[2]};
+  std::copy(p0, p0 + 3, this->SharedFirst);
+  std::copy(p0, p0 + 3, u.data());
+  std::copy(p0, p0 + 3, v.data());
+  this->HaveFirstPoints = true;
+  return true;
+}
+
 void vtkBezierCut::PrintSelf(ostream& os, vtkIndent indent) {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "CurveU points: " << this->GetNumberOfCurveUPoints() << "\n";
-  os << indent << "CurveV points: " << this->GetNumberOfCurveVPoints() << "\n";
+  auto printCurve = [&os, indent](const char* name, const std::vector<double>& values) {
+    os << indent << name << ": " << values.size() / 3 << " points";
+    for (size_t k = 0; k + 2 < values.size(); k += 3)
+      os << " (" << values[k] << ", " << values[k + 1] << ", " << values[k + 2] << ")";
+    os << "\n";
+  };
+  printCurve("CurveU", this->CurveU);
+  printCurve("CurveV", this->CurveV);
   os << indent << "Operation: " << (this->Operation == FILL ? "Fill" : "Cut") << "\n";
   os << indent << "FlipNormal: " << this->FlipNormal << "\n";
   os << indent << "SurfaceResolution: " << this->SurfaceResolution << "\n";

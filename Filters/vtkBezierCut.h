@@ -109,6 +109,15 @@ protected:
   int SurfaceResolution = 16;
   std::string LastError;
   bool CurvesPlaced = false; // by the user; until then RequestData places them over the ROI
+  // The shared first point P0 as the curves were last received and as last used: a GUI drag moves
+  // one curve's first handle only, and P0 follows the one that moved (LinkFirstPoints).
+  bool HaveFirstPoints = false;
+  double LastFirstU[3] = {0, 0, 0}, LastFirstV[3] = {0, 0, 0}, SharedFirst[3] = {0, 0, 0};
+  // The curves to cut with: `u` and `v` start at one P0. When their first points differ, the one
+  // that changed since the last update moves P0 (the other follows); with neither changed the
+  // last P0 stays. False (curves as given) when both changed to different points or there is no
+  // earlier update to tell which moved: Core then names the unshared points.
+  bool LinkFirstPoints(std::vector<double>& u, std::vector<double>& v);
   // A unit square in z = 0, Plugin/BezierCut.xml's default_values digit for digit.
   static constexpr double InitialCurveU[12] = {-0.5,      -0.5, 0, -0.1666667, -0.5, 0,
                                                0.1666667, -0.5, 0, 0.5,        -0.5, 0};

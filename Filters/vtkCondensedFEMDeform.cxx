@@ -9,12 +9,15 @@
 #include "CondensedFEMDeformParallel.h"
 #include "CondensedFEMDeformSolver.h"
 #include "CondensedFEMDeformValidate.h"
+#include "FacePlanFieldData.h"
 #include "FacePlanGather.h"
 
 #include "vtkAlgorithmOutput.h"
 #include "vtkDataArray.h"
+#include "vtkFieldData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
+#include "vtkLogger.h"
 #include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
@@ -22,6 +25,9 @@
 #include "vtkPolyData.h"
 #include "vtkTable.h"
 #include "vtkUnstructuredGrid.h"
+
+#include <set>
+#include <string>
 
 vtkStandardNewMacro(vtkCondensedFEMDeform);
 
@@ -40,6 +46,7 @@ struct vtkCondensedFEMDeform::Cache {
   double contactRelease = -1.0; // the ReleaseDistance the contact was built with
   int contactBuilds = 0;        // updates that (re)built the contact
   Solver solver;
+  std::set<std::string> saidNotes; // the warnings of the last update, by NoteState
 };
 
 vtkCondensedFEMDeform::vtkCondensedFEMDeform() : State(new Cache) {
@@ -88,6 +95,34 @@ private:
   vtkTimeStamp started_;
 };
 
+// A warning's state: its words without the figures, so that an edit of the same situation (the
+// same strain warning with another percentage) is not said again.
+std::string NoteState(const std::string& note) {
+  std::string state;
+  for (char c : note)
+    if (!(c >= '0' && c <= '9') && c != '.' && c != '-')
+      state += c;
+  return state;
+}
+
+// Says each warning once per state: a warning whose state the last update also had is not
+// repeated (the Output Messages window would otherwise open at every edit of one plan). What this
+// update had becomes the next update's record, on every return path.
+class NoteLog {
+public:
+  explicit NoteLog(std::set<std::string>& said) : said_(said) {}
+  ~NoteLog() { said_.swap(now_); }
+  bool sayNow(const std::string& note) {
+    const std::string state = NoteState(note);
+    now_.insert(state);
+    return !said_.count(state);
+  }
+
+private:
+  std::set<std::string>& said_;
+  std::set<std::string> now_;
+};
+
 } // namespace
 
 vtkMTimeType vtkCondensedFEMDeform::GetMTime() {
@@ -125,6 +160,14 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
     bones.push_back(nullptr);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   vtkTable* table = vtkTable::GetData(outputVector, 1);
+  // A connection without Displacement is a fixed bone (ARCHITECTURE.md, "Fixed bone"): it gets a
+  // zero Displacement on a shallow copy, so every later step sees one kind of bone.
+  std::vector<vtkSmartPointer<vtkPointSet>> fixedBones;
+  for (vtkPointSet*& bone : bones)
+    if (bone && !bone->GetPointData()->GetArray("Displacement")) {
+      fixedBones.push_back(WithZeroDisplacement(bone));
+      bone = fixedBones.back();
+    }
   // Several connections (a bimaxillary plan) become one bone, each checked first.
   for (size_t c = 0; bones.size() > 1 && c < bones.size(); ++c) {
     const faceplan::Status status = ValidateBone(bones[c]);
@@ -151,6 +194,11 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   Cache& cache = *this->State;
   const Settings settings = this->CurrentSettings();
   const UpstreamEditWatch watch(this, this->InputsChangedWhileRunning);
+  NoteLog notes(cache.saidNotes);
+  auto warn = [this, &notes](const std::string& note) {
+    if (notes.sayNow(note))
+      vtkWarningMacro(<< note);
+  };
 
   // 1. validate and 2. convert: nothing below runs on malformed input. The tissue is validated and
   // converted again only when it or the material properties changed, the bone's cells only when
@@ -195,26 +243,29 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   const std::string unfollowed =
       UnfollowedBoneMotion(contact.movable, bone->GetPointData()->GetArray("Displacement"));
   if (!unfollowed.empty())
-    vtkWarningMacro(<< unfollowed);
+    warn(unfollowed);
   if (static_cast<ContactModelChoice>(settings.contactModel) == ContactModelChoice::ByArray &&
       !bone->GetPointData()->GetArray("Sliding")) {
     vtkErrorMacro("ContactModel ByArray needs a bone point array named Sliding (uint8, 1 = slide)");
-    return 1;
+    return false;
   }
   // Rigid segments: the bone's SegmentId and SegmentTransform, used when its Displacement follows
   // them; a node tied to a segment then moves with it as one body.
   const BoneSegments segments = ReadBoneSegments(bone);
   if (!segments.usable && bone->GetPointData()->GetArray("SegmentId"))
-    vtkWarningMacro(<< "rigid-segment path not used: " << segments.whyNot);
+    warn("rigid-segment path not used: " + segments.whyNot);
+  // Released tissue is what the surgeon asked for: information (field data ReleasedNodes and the
+  // log at INFO), not a warning.
   const bool releasedArray = bone->GetPointData()->GetArray("Released") != nullptr;
   if (settings.releaseDistance > 0.0 || releasedArray)
-    vtkWarningMacro(<< ReleasedCount(contact) << " tied nodes released "
-                    << (settings.releaseDistance > 0.0
-                            ? (releasedArray ? "within ReleaseDistance of a cut or the ROI's "
-                                               "boundary, or on bone points marked Released"
-                                             : "within ReleaseDistance of a cut or the ROI's "
-                                               "boundary")
-                            : "on bone points marked Released"));
+    vtkLog(INFO, << this->GetObjectDescription() << ": " << ReleasedCount(contact)
+                 << " tied nodes released "
+                 << (settings.releaseDistance > 0.0
+                         ? (releasedArray ? "within ReleaseDistance of a cut or the ROI's "
+                                            "boundary, or on bone points marked Released"
+                                          : "within ReleaseDistance of a cut or the ROI's "
+                                            "boundary")
+                         : "on bone points marked Released"));
   if (!cache.requestValid || cache.requestTissue != tissueGeneration) {
     cache.request = faceplan::PrecomputeRequest();
     cache.request.mesh = cache.tissue.mesh();
@@ -247,16 +298,27 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
       request, input, settings,
       [this](double fraction) { this->UpdateProgress(0.1 + 0.8 * fraction); }, outcome);
   for (const auto& note : outcome.notes)
-    vtkWarningMacro(<< note);
+    warn(note);
   if (!status) {
     vtkErrorMacro(<< status.message);
     return false;
+  }
+  // A tissue that moves far beyond every bone is held by too few bones (a fixed bone left out).
+  if (!settings.useGravity) {
+    const faceplan::RowVectors3d& tissueMoves = outcome.result.keptDisplacement;
+    const double tissueLargest = tissueMoves.rows() ? tissueMoves.rowwise().norm().maxCoeff() : 0.0;
+    const std::string loose = LooseTissueNote(
+        tissueLargest, bone->GetPointData()->GetArray("Displacement"), settings.lengthUnit);
+    if (!loose.empty())
+      warn(loose);
   }
   this->UpdateProgress(0.95);
 
   // 5. build output
   BuildDeformedTissue(tissue, boundary, request.mesh.points, outcome, settings.output(), output);
   AddFieldData(outcome, settings, output);
+  faceplan::fielddata::AddScalar(output->GetFieldData(), "ReleasedNodes",
+                                 static_cast<double>(ReleasedCount(contact)));
   BuildStageTable(outcome, table);
   this->UpdateProgress(1.0);
   return true;
@@ -280,6 +342,7 @@ Settings vtkCondensedFEMDeform::CurrentSettings() const {
   s.method = this->Method;
   s.elementOrder = this->ElementOrder;
   s.model = this->Model;
+  s.largeDeformationSolver = this->LargeDeformationSolver;
   s.liftOff = this->LiftOff;
   s.verify = this->Verify;
   return s;
@@ -289,13 +352,21 @@ void vtkCondensedFEMDeform::PrintSelf(ostream& os, vtkIndent indent) {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "YoungsModulus: " << this->YoungsModulus << "\n"
      << indent << "PoissonRatio: " << this->PoissonRatio << "\n"
+     << indent << "UseCellMaterials: " << this->UseCellMaterials << "\n"
+     << indent << "LengthUnit: " << this->LengthUnit << "\n"
      << indent << "ContactDistance: " << this->ContactDistance << "\n"
      << indent << "ContactModel: " << this->ContactModel << "\n"
      << indent << "ReleaseDistance: " << this->ReleaseDistance << "\n"
+     << indent << "UseGravity: " << this->UseGravity << "\n"
+     << indent << "Density: " << this->Density << "\n"
+     << indent << "Gravity: (" << this->Gravity[0] << ", " << this->Gravity[1] << ", "
+     << this->Gravity[2] << ")\n"
      << indent << "OutputMode: " << this->OutputMode << "\n"
      << indent << "Backend: " << this->Backend << "\n"
      << indent << "Method: " << this->Method << "\n"
      << indent << "ElementOrder: " << this->ElementOrder << "\n"
      << indent << "Model: " << this->Model << "\n"
-     << indent << "LiftOff: " << this->LiftOff << "\n";
+     << indent << "LargeDeformationSolver: " << this->LargeDeformationSolver << "\n"
+     << indent << "LiftOff: " << this->LiftOff << "\n"
+     << indent << "Verify: " << this->Verify << "\n";
 }

@@ -21,8 +21,11 @@
  * boundary triangles only, and interior displacements are never computed) with point array
  * `Displacement` and field data `RelativeResidual`, `SolveTimeMs`, `PrecomputeTimeMs`, `Method`,
  * `Backend` (and `VerifyMaxRelativeError` with Verify on), `ConditionEstimate`, `ElementOrder`,
- * `LargestStrain`, `InvertedCells` and `Model` (with Model NeoHookean also `LoadSteps`,
- * `NewtonIterations`, `SmallestVolumeRatio` and, with LiftOff, `LiftedNodes`). Precompute and solve
+ * `LargestStrain`, `InvertedCells`, `Model` (the model that ran) and `ModelNote` (why); when the
+ * neo-Hookean model ran also `LargeDeformationSolver` (`SolverNote` when it fell back to Newton),
+ * `SmallestVolumeRatio`, with Newton `LoadSteps` and `NewtonIterations`, with Precomputed
+ * `QuasiNewtonIterations`, `FactorSolves`, `Refactorizations` and `WarmStarted`, and with LiftOff
+ * `LiftedNodes`. Precompute and solve
  * warnings (slivers, strain above 10%, cells inverted by the displacement, single-precision
  * fallback) are reported with vtkWarningMacro. Output port 1: a vtkTable of stage timings (columns
  * `Stage`, `TimeMs`, `Reused`, `Backend`).
@@ -70,7 +73,8 @@ public:
   };
   enum ContactModels { CONTACT_TIED = 0, CONTACT_SLIDING = 1, CONTACT_BY_ARRAY = 2 };
   enum ElementOrders { LINEAR_ELEMENTS = 0, QUADRATIC_ELEMENTS = 1, QUADRATIC_NODAL_PRESSURE = 2 };
-  enum Models { LINEAR_ELASTIC = 0, NEO_HOOKEAN = 1 };
+  enum Models { LINEAR_ELASTIC = 0, NEO_HOOKEAN = 1, AUTO_MODEL = 2 };
+  enum LargeDeformationSolvers { PRECOMPUTED = 0, NEWTON = 1 };
 
   /// Connects the bone surface (port 1).
   void SetBoneConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
@@ -136,12 +140,21 @@ public:
   ///@}
 
   ///@{
-  /// Material model: LINEAR_ELASTIC (0, the default: small-strain linear elasticity, condensed and
-  /// precomputed, so an edit is a re-solve) or NEO_HOOKEAN (1: a compressible neo-Hookean material
-  /// with the same small-strain moduli, solved for large deformations by Newton's method on every
-  /// update, for moves whose strain the linear model warns about; linear elements only).
+  /// Material model: LINEAR_ELASTIC (0: small-strain linear elasticity, condensed and
+  /// precomputed, so an edit is a re-solve), NEO_HOOKEAN (1: a compressible neo-Hookean material
+  /// with the same small-strain moduli, for large deformations; linear elements only) or
+  /// AUTO_MODEL (2, the default: linear when the linear result's largest strain is within the
+  /// small-strain limit, NeoHookean otherwise).
   vtkSetMacro(Model, int);
   vtkGetMacro(Model, int);
+  ///@}
+
+  ///@{
+  /// How the neo-Hookean model is solved: PRECOMPUTED (0, the default: with a factor made on the
+  /// worker thread, warm-started from the last converged state; falls back to Newton when it does
+  /// not converge) or NEWTON (1: one numeric factorization per iteration, the reference).
+  vtkSetMacro(LargeDeformationSolver, int);
+  vtkGetMacro(LargeDeformationSolver, int);
   ///@}
 
   ///@{
@@ -153,9 +166,9 @@ public:
   ///@}
 
   ///@{
-  /// With Model NEO_HOOKEAN: sliding tissue may lift off the bone (unilateral contact: the normal
-  /// displacement only keeps the tissue out of the bone) instead of following the bone's normal
-  /// motion both ways. Off by default. The linear model keeps sliding nodes on the bone.
+  /// When the neo-Hookean model runs: sliding tissue may lift off the bone (unilateral contact: the
+  /// normal displacement only keeps the tissue out of the bone) instead of following the bone's
+  /// normal motion both ways. Off by default. The linear model keeps sliding nodes on the bone.
   vtkSetMacro(LiftOff, bool);
   vtkGetMacro(LiftOff, bool);
   ///@}
@@ -207,7 +220,8 @@ protected:
   int Method = METHOD_AUTO;
   bool Verify = false;
   int ElementOrder = LINEAR_ELEMENTS;
-  int Model = LINEAR_ELASTIC;
+  int Model = AUTO_MODEL;
+  int LargeDeformationSolver = PRECOMPUTED;
   bool LiftOff = false;
 
 private:

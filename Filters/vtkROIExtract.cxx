@@ -2,8 +2,10 @@
 
 #include "FacePlanGather.h"
 #include "FacePlanVTKConvert.h"
+#include "ROIExtract/DefaultRegion.h"
 #include "ROIExtract/ROIExtract.h"
 
+#include <vtkAlgorithmOutput.h>
 #include <vtkDataObject.h>
 #include <vtkImplicitFunction.h>
 #include <vtkInformation.h>
@@ -114,6 +116,34 @@ int vtkROIExtract::RequestDataObject(vtkInformation* request, vtkInformationVect
     return 1;
   }
   return this->Superclass::RequestDataObject(request, inputVector, outputVector);
+}
+
+// Asked while the proxy is created, before any Apply. Under MPI only rank 0 is asked and the
+// upstream update is collective, so the sphere then comes from what rank 0 already holds.
+double* vtkROIExtract::GetDefaultSphere() {
+  this->DefaultSphere[0] = this->DefaultSphere[1] = this->DefaultSphere[2] = 0.0;
+  this->DefaultSphere[3] = -1.0;
+  vtkAlgorithmOutput* connection =
+      this->GetNumberOfInputConnections(0) > 0 ? this->GetInputConnection(0, 0) : nullptr;
+  vtkAlgorithm* upstream = connection ? connection->GetProducer() : nullptr;
+  if (!upstream)
+    return this->DefaultSphere;
+  if (!faceplan::gather::DistributedController())
+    upstream->Update(connection->GetIndex());
+  auto* input = vtkPointSet::SafeDownCast(upstream->GetOutputDataObject(connection->GetIndex()));
+  if (!input || input->GetNumberOfPoints() == 0)
+    return this->DefaultSphere;
+  faceplan::RowVectors3d points(input->GetNumberOfPoints(), 3);
+  for (vtkIdType i = 0; i < input->GetNumberOfPoints(); ++i)
+    input->GetPoint(i, &points(i, 0));
+  Eigen::Vector3d centre;
+  double radius = -1.0;
+  if (faceplan::DefaultROISphere(points, centre, radius)) {
+    for (int c = 0; c < 3; ++c)
+      this->DefaultSphere[c] = centre[c];
+    this->DefaultSphere[3] = radius;
+  }
+  return this->DefaultSphere;
 }
 
 vtkMTimeType vtkROIExtract::GetMTime() {

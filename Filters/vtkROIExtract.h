@@ -50,6 +50,13 @@ public:
   vtkBooleanMacro(InsideOut, vtkTypeBool);
   ///@}
 
+  /// Where a new sphere Region starts, as centre x, y, z and radius: on the input where an
+  /// operation would be planned (Core's DefaultROISphere: the bone's most anterior point in the
+  /// face frame, a fifth of its extent), not over the whole bone; radius -1 without usable input.
+  /// Brings the upstream pipeline up to date, as ParaView's domains do for data information.
+  /// vtkROIExtractInitializationHelper places a new proxy's sphere here (GUI and pvpython).
+  double* GetDefaultSphere() VTK_SIZEHINT(4);
+
   /// Includes the Region's modification time.
   vtkMTimeType GetMTime() override;
 
@@ -62,6 +69,7 @@ protected:
   vtkImplicitFunction* Region = nullptr;
   std::vector<vtkIdType> PointIds;
   vtkTypeBool InsideOut = false;
+  double DefaultSphere[4] = {0.0, 0.0, 0.0, -1.0};
 
 private:
   vtkROIExtract(const vtkROIExtract&) = delete;

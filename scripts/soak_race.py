@@ -27,8 +27,8 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 parser = argparse.ArgumentParser()
 parser.add_argument("--plugin", required=True)
 parser.add_argument("--data", required=True)
-# Quadratic by default: the face's linear precompute takes about 0.5 s on an idle 2-core machine, too
-# short for a 2 s race window; the quadratic one lasts several seconds on any machine.
+# Quadratic by default: the face's linear precompute can end within the 2 s race window on a fast
+# machine; the quadratic one lasts several seconds on any machine.
 parser.add_argument("--element-order", type=int, default=1, help="CondensedFEMDeform ElementOrder of the edits case")
 parser.add_argument("--child", choices=("delete", "exit"))
 parser.add_argument("--child-timeout", type=float, default=120.0)

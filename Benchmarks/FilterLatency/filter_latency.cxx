@@ -1,7 +1,7 @@
 // Edit latency of the Condensed FEM Deform filter itself (the VTK algorithm ParaView's proxy runs),
-// on the ~100k shell scene of Benchmarks/pipeline_latency.py, with a chosen backend. Made for the
-// GPU machine, which has no ParaView: issue 14 §1 asks for the filter's update with Backend = CUDA
-// at ~100k cells, and pvpython cannot run there. The pipeline is pipeline_latency.py's shell scene
+// on the ~100k shell scene of Benchmarks/pipeline_latency.py, with a chosen backend. Made for GPU
+// hosts without ParaView, where pvpython cannot run: it measures the filter's update with
+// Backend = CUDA at ~100k cells with VTK alone. The pipeline is pipeline_latency.py's shell scene
 // built from VTK classes: legacy reader -> the inner sphere's boundary (point array Layer = 0) ->
 // vtkROIExtract (sphere over the pole) -> vtkBezierCut (a plane 5 mm into the cap) ->
 // vtkCondensedFEMDeform (Surface output). After the first, precomputing update each edit moves the

@@ -1,12 +1,12 @@
 #include "Common/RelativeDifference.h"
 #include "Report/Report.h"
 
-#include "CalculixRunner.h"
 #include "Comparison/ConjugateGradientSolve.h"
 #include "Comparison/MassSpringSolve.h"
 #include "Comparison/SinglePrecisionCholesky.h"
 #include "Comparison/TraditionalBandSolve.h"
 #include "CondensedFEM/CondensedSystem.h"
+#include "Support/CalculixRunner.h"
 
 #ifdef FACEPLAN_REPORT_WITH_CUDA
 #include "CudaBackend.h"

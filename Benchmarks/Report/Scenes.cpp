@@ -1,8 +1,8 @@
 #include "Report/Scenes.h"
 
-#include "BoundaryNodes.h"
+#include "Support/BoundaryNodes.h"
 #include "Support/ShellMeshGenerator.h"
-#include "VtuReader.h"
+#include "Support/VtuReader.h"
 
 #include <algorithm>
 #include <array>

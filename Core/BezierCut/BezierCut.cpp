@@ -108,7 +108,7 @@ Status CutOntoSurface(const SurfaceMesh& mesh, const CutMeshTopology& topology,
   for (std::int64_t i = 0; i < n; ++i) {
     if (!roiMask[i])
       continue;
-    const SurfaceProjection pr = surf.Project(mesh.points.row(i).transpose());
+    const SurfaceProjection pr = surf.project(mesh.points.row(i).transpose());
     foot[i] = Vector2d(pr.u, pr.v); // also for unmoved ROI vertices: relaxation boundary values
     if (!pr.inside)
       continue;
@@ -117,7 +117,7 @@ Status CutOntoSurface(const SurfaceMesh& mesh, const CutMeshTopology& topology,
         options.operation == CutOperation::Cut ? pr.signedDistance > 0 : pr.signedDistance < 0;
     if (side && !roiBoundary[i])
       moved[i] = 1;
-    if (side && roiBoundary[i] && std::abs(pr.signedDistance) > 1e-9 * surf.Size())
+    if (side && roiBoundary[i] && std::abs(pr.signedDistance) > 1e-9 * surf.size())
       boundaryOnSide.push_back(i);
   }
   if (inside == 0)
@@ -126,7 +126,7 @@ Status CutOntoSurface(const SurfaceMesh& mesh, const CutMeshTopology& topology,
 
   BezierCutResult r;
   r.numInsidePatch = inside;
-  surf.Tessellate(options.displayResolution, r.operativeSurface, &r.operativeParameters,
+  surf.tessellate(options.displayResolution, r.operativeSurface, &r.operativeParameters,
                   &r.operativeNormals);
   r.moved = moved;
   for (std::int64_t i = 0; i < n; ++i)
@@ -186,7 +186,7 @@ Status CutOntoSurface(const SurfaceMesh& mesh, const CutMeshTopology& topology,
     r.parameters[i] = uv[i];
     r.maxDistanceToSurface =
         std::max(r.maxDistanceToSurface,
-                 (P.row(i).transpose() - surf.Evaluate(uv[i].x(), uv[i].y())).norm());
+                 (P.row(i).transpose() - surf.evaluate(uv[i].x(), uv[i].y())).norm());
   }
   if (r.intermediarySteps > 0)
     r.mappingNote = "direct projection would fold the mesh (" + mapping.directProblem + ")";
@@ -220,7 +220,7 @@ Status BezierCut(const SurfaceMesh& mesh, const CutMeshTopology& topology,
   const Status s = ValidateCutInputs(mesh, topology, roiMask, roiBoundary);
   if (!s)
     return s;
-  if (!(surface.Size() > 0))
+  if (!(surface.size() > 0))
     return Status::Error("no surface: make it with BezierSurface::Create first");
   return CutOntoSurface(mesh, topology, roiMask, roiBoundary, surface, options, result);
 }

@@ -14,7 +14,7 @@ namespace faceplan {
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
-BezierSurface::CurveEval BezierSurface::EvalSegment(const std::vector<Vector3d>& P, int seg,
+BezierSurface::CurveEval BezierSurface::evalSegment(const std::vector<Vector3d>& P, int seg,
                                                     double t) {
   const Vector3d& p0 = P[3 * seg];
   const Vector3d& p1 = P[3 * seg + 1];
@@ -28,33 +28,33 @@ BezierSurface::CurveEval BezierSurface::EvalSegment(const std::vector<Vector3d>&
   return e;
 }
 
-BezierSurface::CurveEval BezierSurface::EvalCurve(const std::vector<Vector3d>& P, double u) {
+BezierSurface::CurveEval BezierSurface::evalCurve(const std::vector<Vector3d>& P, double u) {
   const int k = int(P.size() - 1) / 3;
   u = Clamp01(u);
   int seg = std::min(int(std::floor(u * k)), k - 1);
   const double t = u * k - seg;
-  CurveEval e = EvalSegment(P, seg, t);
+  CurveEval e = evalSegment(P, seg, t);
   e.d1 *= k;
   e.d2 *= double(k) * k;
   return e;
 }
 
-Vector3d BezierSurface::Evaluate(double u, double v) const {
-  return EvalCurve(U_, u).p + EvalCurve(V_, v).p - P0_;
+Vector3d BezierSurface::evaluate(double u, double v) const {
+  return evalCurve(curveU_, u).p + evalCurve(curveV_, v).p - p0_;
 }
 
-void BezierSurface::Derivatives(double u, double v, Vector3d& S, Vector3d& Su, Vector3d& Sv,
+void BezierSurface::derivatives(double u, double v, Vector3d& S, Vector3d& Su, Vector3d& Sv,
                                 Vector3d& Suu, Vector3d& Svv) const {
-  const CurveEval a = EvalCurve(U_, u), b = EvalCurve(V_, v);
-  S = a.p + b.p - P0_;
+  const CurveEval a = evalCurve(curveU_, u), b = evalCurve(curveV_, v);
+  S = a.p + b.p - p0_;
   Su = a.d1;
   Sv = b.d1;
   Suu = a.d2;
   Svv = b.d2;
 }
 
-Vector3d BezierSurface::UnitNormal(double u, double v) const {
-  Vector3d n = EvalCurve(U_, u).d1.cross(EvalCurve(V_, v).d1);
+Vector3d BezierSurface::unitNormal(double u, double v) const {
+  Vector3d n = evalCurve(curveU_, u).d1.cross(evalCurve(curveV_, v).d1);
   const double len = n.norm();
   if (len > 0)
     n /= len;
@@ -72,7 +72,8 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
     if (n < 4 || (n - 1) % 3 != 0)
       return Status::Error("invalid control points: " + std::string(names[c]) + " has " +
                            std::to_string(n) +
-                           " points; a composite cubic Bezier curve needs 3k+1 (4, 7, 10, ...)");
+                           " points; a composite cubic Bezier curve needs 3k+1 (4, 7, 10, ...): "
+                           "add or remove points three at a time, one Bezier segment each");
     for (std::size_t i = 0; i < n; ++i)
       if (!(*curves[c])[i].allFinite())
         return Status::Error("invalid control points: " + std::string(names[c]) + " point " +
@@ -104,9 +105,9 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
                              " (closer than 1e-9 times the control points' extent, " +
                              std::to_string(L) + ")");
 
-  out.U_ = curveU;
-  out.V_ = curveV;
-  out.P0_ = curveU[0];
+  out.curveU_ = curveU;
+  out.curveV_ = curveV;
+  out.p0_ = curveU[0];
   out.flip_ = flipNormal;
   out.size_ = L;
 
@@ -121,7 +122,7 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
     for (int seg = 0; seg < k; ++seg)
       for (int i = 0; i <= per; ++i) {
         const double t = double(i) / per;
-        s.push_back({(seg + t) / k, EvalSegment(P, seg, t).d1 * k});
+        s.push_back({(seg + t) / k, evalSegment(P, seg, t).d1 * k});
       }
     return s;
   };
@@ -168,7 +169,7 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
   {
     SurfaceMesh tess;
     std::vector<Vector2d> uv;
-    out.Tessellate(per, tess, &uv);
+    out.tessellate(per, tess, &uv);
     std::vector<Tri> tris = FanTriangles(tess);
     std::vector<std::int64_t> all(tris.size());
     for (std::size_t t = 0; t < tris.size(); ++t)
@@ -176,7 +177,7 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
     const TriangleBoxTree tree(tris, tess.points, all);
     std::vector<std::int64_t> cand;
     for (std::size_t a = 0; a < tris.size(); ++a) {
-      tree.Candidates(std::int64_t(a), cand);
+      tree.candidates(std::int64_t(a), cand);
       for (std::int64_t b : cand) {
         if (b <= std::int64_t(a))
           continue; // each pair once; the tree already left out pairs whose boxes are apart
@@ -198,18 +199,18 @@ Status BezierSurface::Create(const std::vector<Vector3d>& curveU,
     const int n = 8 * k;
     for (int i = 0; i <= n; ++i) {
       par.push_back(double(i) / n);
-      pts.push_back(EvalCurve(P, par.back()).p);
+      pts.push_back(evalCurve(P, par.back()).p);
     }
   };
-  grid(out.U_, out.gridU_, out.gridUP_);
-  grid(out.V_, out.gridV_, out.gridVP_);
+  grid(out.curveU_, out.gridU_, out.gridUPoints_);
+  grid(out.curveV_, out.gridV_, out.gridVPoints_);
   return Status::Ok();
 }
 
-SurfaceProjection BezierSurface::Finish(const Vector3d& x, double u, double v) const {
+SurfaceProjection BezierSurface::finish(const Vector3d& x, double u, double v) const {
   SurfaceProjection r;
   Vector3d S, Su, Sv, Suu, Svv;
-  Derivatives(u, v, S, Su, Sv, Suu, Svv);
+  derivatives(u, v, S, Su, Sv, Suu, Svv);
   r.u = u;
   r.v = v;
   r.point = S;
@@ -230,14 +231,14 @@ SurfaceProjection BezierSurface::Finish(const Vector3d& x, double u, double v) c
   return r;
 }
 
-SurfaceProjection BezierSurface::Newton(const Vector3d& x, double u, double v) const {
+SurfaceProjection BezierSurface::newton(const Vector3d& x, double u, double v) const {
   u = Clamp01(u);
   v = Clamp01(v);
-  auto f = [&](double uu, double vv) { return (Evaluate(uu, vv) - x).squaredNorm(); };
+  auto f = [&](double uu, double vv) { return (evaluate(uu, vv) - x).squaredNorm(); };
   double fc = f(u, v);
   for (int it = 0; it < 60; ++it) {
     Vector3d S, Su, Sv, Suu, Svv;
-    Derivatives(u, v, S, Su, Sv, Suu, Svv);
+    derivatives(u, v, S, Su, Sv, Suu, Svv);
     const Vector3d F = S - x;
     const Vector2d g(Su.dot(F), Sv.dot(F));
     Eigen::Matrix2d JtJ;
@@ -286,16 +287,16 @@ SurfaceProjection BezierSurface::Newton(const Vector3d& x, double u, double v) c
     if (change < 1e-15)
       break;
   }
-  return Finish(x, u, v);
+  return finish(x, u, v);
 }
 
-SurfaceProjection BezierSurface::Project(const Vector3d& x) const {
+SurfaceProjection BezierSurface::project(const Vector3d& x) const {
   double best = std::numeric_limits<double>::infinity();
   std::size_t bi = 0, bj = 0;
-  for (std::size_t i = 0; i < gridUP_.size(); ++i) {
-    const Vector3d a = gridUP_[i] - P0_ - x;
-    for (std::size_t j = 0; j < gridVP_.size(); ++j) {
-      const double d = (a + gridVP_[j]).squaredNorm();
+  for (std::size_t i = 0; i < gridUPoints_.size(); ++i) {
+    const Vector3d a = gridUPoints_[i] - p0_ - x;
+    for (std::size_t j = 0; j < gridVPoints_.size(); ++j) {
+      const double d = (a + gridVPoints_[j]).squaredNorm();
       if (d < best) {
         best = d;
         bi = i;
@@ -304,15 +305,15 @@ SurfaceProjection BezierSurface::Project(const Vector3d& x) const {
     }
   }
   if (gridU_.empty())
-    return Finish(x, 0, 0);
-  return Newton(x, gridU_[bi], gridV_[bj]);
+    return finish(x, 0, 0);
+  return newton(x, gridU_[bi], gridV_[bj]);
 }
 
-void BezierSurface::Tessellate(int perSegment, SurfaceMesh& out, std::vector<Vector2d>* uv,
+void BezierSurface::tessellate(int perSegment, SurfaceMesh& out, std::vector<Vector2d>* uv,
                                RowVectors3d* normals) const {
   out = SurfaceMesh{};
   perSegment = std::max(perSegment, 1);
-  const int nu = perSegment * SegmentsU(), nv = perSegment * SegmentsV();
+  const int nu = perSegment * segmentsU(), nv = perSegment * segmentsV();
   out.points.resize((nu + 1) * (nv + 1), 3);
   if (uv)
     uv->assign((nu + 1) * (nv + 1), Vector2d::Zero());
@@ -322,11 +323,11 @@ void BezierSurface::Tessellate(int perSegment, SurfaceMesh& out, std::vector<Vec
   for (int j = 0; j <= nv; ++j)
     for (int i = 0; i <= nu; ++i) {
       const double u = double(i) / nu, v = double(j) / nv;
-      out.points.row(id(i, j)) = Evaluate(u, v).transpose();
+      out.points.row(id(i, j)) = evaluate(u, v).transpose();
       if (uv)
         (*uv)[id(i, j)] = Vector2d(u, v);
       if (normals)
-        normals->row(id(i, j)) = UnitNormal(u, v).transpose();
+        normals->row(id(i, j)) = unitNormal(u, v).transpose();
     }
   for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; ++i) {

@@ -42,38 +42,38 @@ public:
                        const std::vector<Eigen::Vector3d>& curveV, bool flipNormal,
                        BezierSurface& out);
 
-  Eigen::Vector3d Evaluate(double u, double v) const;
+  Eigen::Vector3d evaluate(double u, double v) const;
   // S and its derivatives (Suv = 0 for a translational surface).
-  void Derivatives(double u, double v, Eigen::Vector3d& S, Eigen::Vector3d& Su, Eigen::Vector3d& Sv,
+  void derivatives(double u, double v, Eigen::Vector3d& S, Eigen::Vector3d& Su, Eigen::Vector3d& Sv,
                    Eigen::Vector3d& Suu, Eigen::Vector3d& Svv) const;
-  Eigen::Vector3d UnitNormal(double u, double v) const; // flip applied
+  Eigen::Vector3d unitNormal(double u, double v) const; // flip applied
   // Closest point of the patch to x (grid initialisation + projected Newton).
-  SurfaceProjection Project(const Eigen::Vector3d& x) const;
+  SurfaceProjection project(const Eigen::Vector3d& x) const;
   // Triangles over a regular grid with `perSegment` intervals per Bezier segment, oriented along
   // the (flipped) normal. uv receives the parameters of each point, normals its unit normal.
-  void Tessellate(int perSegment, SurfaceMesh& out, std::vector<Eigen::Vector2d>* uv = nullptr,
+  void tessellate(int perSegment, SurfaceMesh& out, std::vector<Eigen::Vector2d>* uv = nullptr,
                   RowVectors3d* normals = nullptr) const;
 
-  int SegmentsU() const { return int(U_.size() - 1) / 3; }
-  int SegmentsV() const { return int(V_.size() - 1) / 3; }
-  double Size() const { return size_; } // diagonal of the control points' bounding box
+  int segmentsU() const { return int(curveU_.size() - 1) / 3; }
+  int segmentsV() const { return int(curveV_.size() - 1) / 3; }
+  double size() const { return size_; } // diagonal of the control points' bounding box
 
 private:
   struct CurveEval {
     Eigen::Vector3d p, d1, d2;
   };
-  static CurveEval EvalCurve(const std::vector<Eigen::Vector3d>& P, double u);
-  static CurveEval EvalSegment(const std::vector<Eigen::Vector3d>& P, int seg, double t);
-  SurfaceProjection Finish(const Eigen::Vector3d& x, double u, double v) const;
-  SurfaceProjection Newton(const Eigen::Vector3d& x, double u, double v) const;
+  static CurveEval evalCurve(const std::vector<Eigen::Vector3d>& P, double u);
+  static CurveEval evalSegment(const std::vector<Eigen::Vector3d>& P, int seg, double t);
+  SurfaceProjection finish(const Eigen::Vector3d& x, double u, double v) const;
+  SurfaceProjection newton(const Eigen::Vector3d& x, double u, double v) const;
 
-  std::vector<Eigen::Vector3d> U_, V_;
-  Eigen::Vector3d P0_ = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> curveU_, curveV_;
+  Eigen::Vector3d p0_ = Eigen::Vector3d::Zero();
   bool flip_ = false;
   double size_ = 0;
   // Initialisation grid: samples of U and V.
   std::vector<double> gridU_, gridV_;
-  std::vector<Eigen::Vector3d> gridUP_, gridVP_;
+  std::vector<Eigen::Vector3d> gridUPoints_, gridVPoints_;
 };
 
 } // namespace faceplan

@@ -39,15 +39,15 @@ public:
   CutMapper(const BezierSurface& surf, const std::vector<Tri>& tris,
             const std::vector<std::vector<std::int64_t>>& nbrs, const RowVectors3d& X0,
             const std::vector<std::uint8_t>& moved, const std::vector<Vector2d>& foot)
-      : S_(surf), tris_(tris), nbrs_(nbrs), X0_(X0), moved_(moved), foot_(foot) {
+      : surface_(surf), tris_(tris), nbrs_(nbrs), original_(X0), moved_(moved), foot_(foot) {
     for (std::size_t t = 0; t < tris_.size(); ++t) {
       int m = 0;
       for (int k = 0; k < 3; ++k)
         m += moved_[tris_[t].v[k]];
       if (m > 0) {
         touched_.push_back(std::int64_t(t));
-        a0_.push_back(AreaVector(tris_[t], X0_));
-        q0_.push_back(Quality(tris_[t], X0_));
+        a0_.push_back(AreaVector(tris_[t], original_));
+        q0_.push_back(Quality(tris_[t], original_));
         full_.push_back(m == 3);
       }
     }
@@ -69,7 +69,7 @@ public:
       const Tri& t = tris_[touched_[k]];
       Vector3d n = Vector3d::Zero();
       for (int j = 0; j < 3; ++j)
-        n += S_.UnitNormal(foot_[t.v[j]].x(), foot_[t.v[j]].y());
+        n += surface_.unitNormal(foot_[t.v[j]].x(), foot_[t.v[j]].y());
       s += a0_[k].dot(n);
     }
     sigma_ = s < 0 ? -1.0 : 1.0;
@@ -87,44 +87,44 @@ public:
   }
 
   // Direct projection.
-  bool Direct(RowVectors3d& P, std::string& why) {
+  bool direct(RowVectors3d& P, std::string& why) {
     uv_ = foot_;
-    P = X0_;
+    P = original_;
     for (std::int64_t i : movedIds_)
-      P.row(i) = S_.Evaluate(uv_[i].x(), uv_[i].y()).transpose();
-    return FinalCheck(P, nullptr, why);
+      P.row(i) = surface_.evaluate(uv_[i].x(), uv_[i].y()).transpose();
+    return finalCheck(P, nullptr, why);
   }
 
   // Local repair on S itself: relax growing neighbourhoods of the bad triangles of the direct
   // projection (the rest keeps its direct projection).
-  bool LocalRepair(int maxRelax, RowVectors3d& P, std::string& why) {
+  bool localRepair(int maxRelax, RowVectors3d& P, std::string& why) {
     uv_ = foot_;
-    P = X0_;
-    ResetRegion();
+    P = original_;
+    resetRegion();
     for (std::int64_t i : movedIds_)
-      Place(P, i, 1.0);
+      place(P, i, 1.0);
     std::vector<std::int64_t> bad;
-    if (Untangle(P, 200) && FinalCheck(P, nullptr, why))
+    if (untangle(P, 200) && finalCheck(P, nullptr, why))
       return true;
     // Harmonic relaxation of growing neighbourhoods, each followed by untangling.
     uv_ = foot_;
     for (std::int64_t i : movedIds_)
-      Place(P, i, 1.0);
+      place(P, i, 1.0);
     for (int iter = 0; iter < maxRelax; ++iter) {
-      if (FinalCheck(P, &bad, why))
+      if (finalCheck(P, &bad, why))
         return true;
-      if (!Relax(P, bad, 1.0, 1 << std::min(iter, 20)))
+      if (!relax(P, bad, 1.0, 1 << std::min(iter, 20)))
         break;
-      Untangle(P, 100);
+      untangle(P, 100);
     }
-    return FinalCheck(P, nullptr, why);
+    return finalCheck(P, nullptr, why);
   }
 
   // Signed size of touched triangle k with its current points, relative to its original area:
   // for a triangle whose vertices all moved, sigma * (area vector . normal) / |a0|, with the unit
   // normal of S at the (u,v) of the vertex being optimised; for the others,
   // (area vector . a0) / |a0|^2. Positive = correctly oriented.
-  double SignedSize(std::size_t k, const RowVectors3d& P, const Vector3d& normal) const {
+  double signedSize(std::size_t k, const RowVectors3d& P, const Vector3d& normal) const {
     const double A0 = a0_[k].norm();
     if (!(A0 > 0))
       return 1.0;
@@ -141,7 +141,7 @@ public:
   // in the vertices they visit; after both, every later sweep would repeat them), or
   // kStagnantSweeps sweeps without fewer bad triangles than the fewest seen (the searches then
   // only shuffle vertices around the same tangle; relaxation or intermediary surfaces follow).
-  bool Untangle(RowVectors3d& P, int maxSweeps) {
+  bool untangle(RowVectors3d& P, int maxSweeps) {
     constexpr int kStagnantSweeps = 16;
     std::vector<std::int64_t> bad, verts;
     std::vector<std::uint8_t> mark(moved_.size(), 0);
@@ -149,7 +149,7 @@ public:
     int sinceFewest = 0;
     bool previousMovedNone = false;
     for (int sweep = 0; sweep < maxSweeps; ++sweep) {
-      CollectBad(P, a0_, false, true, bad);
+      collectBad(P, a0_, false, true, bad);
       if (bad.empty())
         return true;
       if (bad.size() < fewestBad) {
@@ -178,26 +178,26 @@ public:
       bool movedNone = true;
       for (std::int64_t v : verts) {
         mark[v] = 0;
-        if (OptimizeVertex(P, v))
+        if (optimizeVertex(P, v))
           movedNone = false;
       }
       if (movedNone && previousMovedNone)
         break;
       previousMovedNone = movedNone;
     }
-    CollectBad(P, a0_, false, true, bad);
+    collectBad(P, a0_, false, true, bad);
     return bad.empty();
   }
 
   // Returns true when the vertex moved.
-  bool OptimizeVertex(RowVectors3d& P, std::int64_t i) {
+  bool optimizeVertex(RowVectors3d& P, std::int64_t i) {
     ++vertexSearches_;
     // One normal per trial position, shared by the vertex's triangles.
     auto worst = [&]() {
-      const Vector3d normal = S_.UnitNormal(uv_[i].x(), uv_[i].y());
+      const Vector3d normal = surface_.unitNormal(uv_[i].x(), uv_[i].y());
       double w = std::numeric_limits<double>::infinity();
       for (std::int64_t k : incident_[i])
-        w = std::min(w, SignedSize(std::size_t(k), P, normal));
+        w = std::min(w, signedSize(std::size_t(k), P, normal));
       return w;
     };
     double h = 0;
@@ -222,7 +222,7 @@ public:
       const Vector2d base = bestUV;
       for (const auto& d : dirs) {
         uv_[i] = Vector2d(Clamp01(base.x() + h * d[0]), Clamp01(base.y() + h * d[1]));
-        Place(P, i, 1.0);
+        place(P, i, 1.0);
         const double w = worst();
         if (w > best) {
           best = w;
@@ -234,25 +234,25 @@ public:
         h *= 0.5;
     }
     uv_[i] = bestUV;
-    Place(P, i, 1.0);
+    place(P, i, 1.0);
     return bestUV != startUV;
   }
 
   // Mapping through T intermediary surfaces.
-  bool Intermediary(int T, int maxRelax, RowVectors3d& P, std::string& why) {
+  bool intermediary(int T, int maxRelax, RowVectors3d& P, std::string& why) {
     uv_ = foot_;
-    P = X0_;
-    ResetRegion();
+    P = original_;
+    resetRegion();
     std::vector<Vector3d> prev = a0_;
     std::vector<std::int64_t> bad;
     for (int s = 1; s <= T; ++s) {
       const double t = double(s) / T;
       for (std::int64_t i : movedIds_)
-        Place(P, i, t);
+        place(P, i, t);
       if (s < T) {
         for (int iter = 0; iter < maxRelax; ++iter) {
-          CollectBad(P, prev, true, false, bad);
-          if (bad.empty() || !Relax(P, bad, t, 1 << std::min(iter, 20)))
+          collectBad(P, prev, true, false, bad);
+          if (bad.empty() || !relax(P, bad, t, 1 << std::min(iter, 20)))
             break;
         }
         for (std::size_t k = 0; k < touched_.size(); ++k)
@@ -261,33 +261,33 @@ public:
     }
     // Last surface (t = 1): the final criteria, intersections included.
     for (int iter = 0; iter < maxRelax; ++iter) {
-      if (FinalCheck(P, &bad, why))
+      if (finalCheck(P, &bad, why))
         return true;
-      if (!Relax(P, bad, 1.0, 1 << std::min(iter, 20)))
+      if (!relax(P, bad, 1.0, 1 << std::min(iter, 20)))
         break;
     }
-    return FinalCheck(P, nullptr, why);
+    return finalCheck(P, nullptr, why);
   }
 
-  const std::vector<Vector2d>& Parameters() const { return uv_; }
-  std::int64_t VertexSearches() const { return vertexSearches_; }
+  const std::vector<Vector2d>& parameters() const { return uv_; }
+  std::int64_t vertexSearches() const { return vertexSearches_; }
 
-  void ResetRegion() {
+  void resetRegion() {
     region_.clear();
     inRegion_.assign(moved_.size(), 0);
     solvedOnce_ = false;
   }
 
 private:
-  void Place(RowVectors3d& P, std::int64_t i, double t) const {
-    const Vector3d s = S_.Evaluate(uv_[i].x(), uv_[i].y());
+  void place(RowVectors3d& P, std::int64_t i, double t) const {
+    const Vector3d s = surface_.evaluate(uv_[i].x(), uv_[i].y());
     if (t >= 1.0)
       P.row(i) = s.transpose();
     else
-      P.row(i) = ((1.0 - t) * X0_.row(i).transpose() + t * s).transpose();
+      P.row(i) = ((1.0 - t) * original_.row(i).transpose() + t * s).transpose();
   }
 
-  TriState State(std::size_t k, const RowVectors3d& P, const Vector3d& ref, bool finalStage,
+  TriState state(std::size_t k, const RowVectors3d& P, const Vector3d& ref, bool finalStage,
                  bool quality) const {
     const Tri& t = tris_[touched_[k]];
     const double A0 = a0_[k].norm();
@@ -299,7 +299,7 @@ private:
     if (finalStage && full_[k]) {
       Vector3d n = Vector3d::Zero();
       for (int j = 0; j < 3; ++j)
-        n += S_.UnitNormal(uv_[t.v[j]].x(), uv_[t.v[j]].y());
+        n += surface_.unitNormal(uv_[t.v[j]].x(), uv_[t.v[j]].y());
       if (!(sigma_ * a1.dot(n) > 0))
         return TriState::Flipped;
     } else if (!(a1.dot(ref) > 0)) {
@@ -310,27 +310,27 @@ private:
     return TriState::Ok;
   }
 
-  void CollectBad(const RowVectors3d& P, const std::vector<Vector3d>& ref, bool quality,
+  void collectBad(const RowVectors3d& P, const std::vector<Vector3d>& ref, bool quality,
                   bool finalStage, std::vector<std::int64_t>& bad) const {
     bad.clear();
     for (std::size_t k = 0; k < touched_.size(); ++k)
-      if (State(k, P, ref[k], finalStage, quality) != TriState::Ok)
+      if (state(k, P, ref[k], finalStage, quality) != TriState::Ok)
         bad.push_back(touched_[k]);
   }
 
-  bool FinalCheck(const RowVectors3d& P, std::vector<std::int64_t>* badOut,
+  bool finalCheck(const RowVectors3d& P, std::vector<std::int64_t>* badOut,
                   std::string& why) const {
     std::vector<std::int64_t> bad;
     std::int64_t flipped = 0, degenerate = 0;
     for (std::size_t k = 0; k < touched_.size(); ++k) {
-      const TriState s = State(k, P, a0_[k], true, false);
+      const TriState s = state(k, P, a0_[k], true, false);
       if (s == TriState::Ok)
         continue;
       bad.push_back(touched_[k]);
       (s == TriState::Degenerate ? degenerate : flipped)++;
     }
     if (bad.empty()) {
-      bad = NewIntersections(tris_, X0_, P, activeTri_);
+      bad = NewIntersections(tris_, original_, P, activeTri_);
       if (!bad.empty())
         why = std::to_string(bad.size()) +
               " triangles intersect other triangles (first: triangle " +
@@ -350,7 +350,7 @@ private:
   // harmonic map: every vertex at the average of its neighbours), with Dirichlet values from the
   // vertices around the region (the (u,v) of other moved vertices, the foot points of unmoved
   // ones). Returns false when the region did not change (nothing more to gain).
-  bool Relax(RowVectors3d& P, const std::vector<std::int64_t>& bad, double t, int rings) {
+  bool relax(RowVectors3d& P, const std::vector<std::int64_t>& bad, double t, int rings) {
     const std::size_t before = region_.size();
     for (std::int64_t tr : bad)
       for (int k = 0; k < 3; ++k) {
@@ -407,15 +407,15 @@ private:
     for (std::size_t k = 0; k < m; ++k) {
       const std::int64_t i = region_[k];
       uv_[i] = Vector2d(Clamp01(sol(Eigen::Index(k), 0)), Clamp01(sol(Eigen::Index(k), 1)));
-      Place(P, i, t);
+      place(P, i, t);
     }
     return true;
   }
 
-  const BezierSurface& S_;
+  const BezierSurface& surface_;
   const std::vector<Tri>& tris_;
   const std::vector<std::vector<std::int64_t>>& nbrs_;
-  const RowVectors3d& X0_;
+  const RowVectors3d& original_;
   const std::vector<std::uint8_t>& moved_;
   const std::vector<Vector2d>& foot_;
   std::vector<Vector2d> uv_;
@@ -444,10 +444,10 @@ CutMapping MapCutOntoSurface(const BezierSurface& surface, const SurfaceMesh& me
                              const CutMappingOptions& options) {
   CutMapper mapper(surface, triangles, neighbours, mesh.points, moved, footParameters);
   CutMapping m;
-  m.ok = mapper.Direct(m.points, m.directProblem);
+  m.ok = mapper.direct(m.points, m.directProblem);
   m.problem = m.directProblem;
   if (!m.ok && options.localRepair &&
-      mapper.LocalRepair(options.maxRelaxIterations, m.points, m.problem)) {
+      mapper.localRepair(options.maxRelaxIterations, m.points, m.problem)) {
     m.ok = true;
     m.intermediarySteps = 1; // S itself is the only surface used
   }
@@ -455,15 +455,15 @@ CutMapping MapCutOntoSurface(const BezierSurface& surface, const SurfaceMesh& me
     for (int T : options.stepSchedules) {
       if (T < 1)
         continue;
-      if (mapper.Intermediary(T, options.maxRelaxIterations, m.points, m.problem)) {
+      if (mapper.intermediary(T, options.maxRelaxIterations, m.points, m.problem)) {
         m.ok = true;
         m.intermediarySteps = T;
         break;
       }
     }
   }
-  m.parameters = mapper.Parameters();
-  m.repairVertexSearches = mapper.VertexSearches();
+  m.parameters = mapper.parameters();
+  m.repairVertexSearches = mapper.vertexSearches();
   return m;
 }
 

@@ -42,13 +42,13 @@ bool DefaultCutCurves(const RowVectors3d& points, const std::vector<std::uint8_t
         bestRise = riseUp;
         w = axis;
         sign = 1.0;
-        level = boundaryHi[axis] + 0.95 * riseUp;
+        level = boundaryHi[axis] + kDefaultCutDepth * riseUp;
       }
       if (riseDown > bestRise) {
         bestRise = riseDown;
         w = axis;
         sign = -1.0;
-        level = boundaryLo[axis] - 0.95 * riseDown;
+        level = boundaryLo[axis] - kDefaultCutDepth * riseDown;
       }
     }
     if (bestRise <= 0.0)

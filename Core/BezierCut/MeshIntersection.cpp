@@ -139,7 +139,7 @@ bool TriangleBoxesApart(const Tri& A, const Tri& B, const RowVectors3d& P) {
 
 TriangleBoxTree::TriangleBoxTree(const std::vector<Tri>& tris, const RowVectors3d& P,
                                  const std::vector<std::int64_t>& ids)
-    : tris_(tris), P_(P), ids_(ids) {
+    : tris_(tris), points_(P), ids_(ids) {
   // KdBVH indexes its objects with int: the objects are positions in ids_.
   std::vector<int> objects;
   if (ids_.size() < std::size_t(std::numeric_limits<int>::max())) {
@@ -147,23 +147,23 @@ TriangleBoxTree::TriangleBoxTree(const std::vector<Tri>& tris, const RowVectors3
     boxes_.reserve(ids_.size());
     for (std::size_t k = 0; k < ids_.size(); ++k) {
       objects.push_back(int(k));
-      boxes_.push_back(GrownBox(ids_[k]));
+      boxes_.push_back(grownBox(ids_[k]));
     }
   }
   tree_.init(objects.begin(), objects.end(), boxes_.begin(), boxes_.end());
 }
 
-TriangleBoxTree::Box TriangleBoxTree::GrownBox(std::int64_t t) const {
-  Box box(P_.row(tris_[t].v[0]).transpose());
+TriangleBoxTree::Box TriangleBoxTree::grownBox(std::int64_t t) const {
+  Box box(points_.row(tris_[t].v[0]).transpose());
   for (int k = 1; k < 3; ++k)
-    box.extend(P_.row(tris_[t].v[k]).transpose());
+    box.extend(points_.row(tris_[t].v[k]).transpose());
   const double margin = 1e-6 * box.sizes().maxCoeff();
   box.min().array() -= margin;
   box.max().array() += margin;
   return box;
 }
 
-void TriangleBoxTree::Candidates(std::int64_t t, std::vector<std::int64_t>& out) const {
+void TriangleBoxTree::candidates(std::int64_t t, std::vector<std::int64_t>& out) const {
   struct Collect {
     const Box query;
     const TriangleBoxTree& self;
@@ -177,7 +177,7 @@ void TriangleBoxTree::Candidates(std::int64_t t, std::vector<std::int64_t>& out)
     }
   };
   out.clear();
-  Collect collect{GrownBox(t), *this, out};
+  Collect collect{grownBox(t), *this, out};
   Eigen::BVIntersect(tree_, collect);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
@@ -230,7 +230,7 @@ std::vector<std::int64_t> NewIntersections(const std::vector<Tri>& tris, const R
   std::vector<std::uint8_t> flagged(tris.size(), 0);
   std::vector<std::int64_t> cand;
   for (std::int64_t a : active) {
-    tree.Candidates(a, cand);
+    tree.candidates(a, cand);
     for (std::int64_t b : cand) {
       if (b == a || (activeTri[b] && b < a))
         continue; // each pair once

@@ -39,15 +39,15 @@ public:
   // The triangles among `ids` that TriangleBoxesApart may not rule out against triangle t: every
   // one whose box, grown by 1e-6 of its largest extent, meets t's box grown the same way (a
   // superset of the pairs not apart, sorted, unique, t itself included when it is among ids).
-  void Candidates(std::int64_t t, std::vector<std::int64_t>& out) const;
+  void candidates(std::int64_t t, std::vector<std::int64_t>& out) const;
 
 private:
   using Box = Eigen::AlignedBox<double, 3>;
-  Box GrownBox(std::int64_t t) const;
+  Box grownBox(std::int64_t t) const;
   const std::vector<Tri>& tris_;
-  const RowVectors3d& P_;
+  const RowVectors3d& points_;
   std::vector<std::int64_t> ids_;
-  std::vector<Box> boxes_; // GrownBox of ids_[k]
+  std::vector<Box> boxes_; // grownBox of ids_[k]
   Eigen::KdBVH<double, 3, int> tree_;
 };
 

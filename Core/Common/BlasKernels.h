@@ -2,9 +2,8 @@
 // Which BLAS kernels this process runs, so that a timing says what it was measured with, and
 // whether faster ones would run on this CPU. OpenBLAS picks its kernels once, when it loads, by CPU
 // family, or as OPENBLAS_CORETYPE says: an OpenBLAS older than the CPU can fall back to AVX2
-// kernels on a CPU with AVX-512, and an environment can force them (the project's 2-core machines
-// set OPENBLAS_CORETYPE=Haswell; Debian 12's OpenBLAS 0.3.21 left to itself picks its AVX-512
-// "Cooperlake" kernels on their AMD Zen 5, whose dense products run ~1.7x faster single-threaded).
+// kernels on a CPU with AVX-512, and an environment can force them (an OPENBLAS_CORETYPE=Haswell
+// set for a whole machine keeps AVX2 kernels where faster AVX-512 ones would run).
 // FacePlan cannot change the choice after load; it reports it, and advises only when no one chose.
 #include <string>
 

@@ -1,8 +1,8 @@
 #pragma once
 // A std::vector whose resize() leaves new elements of trivial types uninitialized. A large buffer
 // that parallel workers then fill completely is first touched by those workers, so its page faults
-// (about 1.5 us per 4 KiB page on these VMs, build/bin/kernel_probe) spread over the cores instead
-// of running in one thread's zero-fill before the work starts.
+// (Benchmarks/kernel_probe measures their cost) spread over the cores instead of running in one
+// thread's zero-fill before the work starts.
 #include <memory>
 #include <new>
 #include <type_traits>

@@ -50,6 +50,49 @@ void BackgroundPrecompute::stopForExit() {
 void BackgroundPrecompute::joinWorker() {
   if (worker_.joinable())
     worker_.join();
+  if (largeWorker_.joinable())
+    largeWorker_.join();
+}
+
+void BackgroundPrecompute::startLargeDeformation(PrecomputeRequest request,
+                                                 PrecomputedLargeDeformationOptions options) {
+  {
+    std::lock_guard<std::mutex> lock(Live().mutex);
+    Live().instances.insert(this);
+  }
+  if (largeWorker_.joinable())
+    largeWorker_.join();
+  std::uint64_t generation;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    generation = ++largeGeneration_;
+    largeFinished_ = false;
+    large_.reset();
+  }
+  largeWorker_ =
+      std::thread([this, generation, request = std::move(request), options = std::move(options)] {
+        std::shared_ptr<LargeDeformationSystem> system;
+        Status status = PrecomputeLargeDeformation(request, options, system);
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (generation != largeGeneration_)
+          return;
+        largeStatus_ = status;
+        large_ = status ? system : nullptr;
+        largeFinished_ = true;
+        done_.notify_all();
+      });
+}
+
+Status BackgroundPrecompute::waitLargeDeformation(std::shared_ptr<LargeDeformationSystem>& system) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  done_.wait(lock, [this] { return largeFinished_; });
+  system = large_;
+  return largeStatus_;
+}
+
+bool BackgroundPrecompute::largeDeformationReady() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return largeFinished_;
 }
 
 void BackgroundPrecompute::start(PrecomputeRequest request, ProgressCallback progress) {
@@ -60,7 +103,8 @@ void BackgroundPrecompute::start(PrecomputeRequest request, ProgressCallback pro
   cancel();
   // The old worker sees its cancel flag at its next stage boundary; waiting for it keeps at most
   // one precompute (and its memory) alive.
-  joinWorker();
+  if (worker_.joinable())
+    worker_.join();
   auto flag = std::make_shared<std::atomic<bool>>(false);
   std::uint64_t generation;
   {

@@ -1,7 +1,10 @@
 #pragma once
-// Runs Precompute on a worker thread as soon as its inputs are known. A new request cancels the
-// running one; wait() returns the system for the latest request only, so no stale result escapes.
+// Runs Precompute on a worker thread as soon as its inputs are known, and beside it (its own
+// worker) the large-deformation model's precompute (PrecomputeLargeDeformation) when it is asked
+// for. A new request cancels the running one; wait() returns the system for the latest request
+// only, so no stale result escapes.
 #include "CondensedFEM/CondensedFEM.h"
+#include "CondensedFEM/PrecomputedLargeDeformation.h"
 
 #include <condition_variable>
 #include <cstdint>
@@ -29,6 +32,13 @@ public:
   // Cancels and joins the worker; called for every instance when the process exits.
   void stopForExit();
 
+  // The large-deformation precompute for `request` (replacing any earlier one; it is not
+  // cancelled, only superseded: at most one runs, and a new start waits for it).
+  void startLargeDeformation(PrecomputeRequest request, PrecomputedLargeDeformationOptions options);
+  // Blocks until the latest large-deformation precompute is done (an error if none was started).
+  Status waitLargeDeformation(std::shared_ptr<LargeDeformationSystem>& system);
+  bool largeDeformationReady() const;
+
 private:
   void joinWorker();
 
@@ -40,6 +50,12 @@ private:
   bool finished_ = true;
   Status status_ = Status::Error("no precompute was started");
   std::shared_ptr<const CondensedSystem> system_;
+
+  std::thread largeWorker_;
+  std::uint64_t largeGeneration_ = 0;
+  bool largeFinished_ = true;
+  Status largeStatus_ = Status::Error("no large-deformation precompute was started");
+  std::shared_ptr<LargeDeformationSystem> large_;
 };
 
 } // namespace faceplan

@@ -30,10 +30,15 @@ enum class SolveMethod {
   DenseResponse, // precompute kept x ROI response; an edit is one matrix-vector product
   CachedFactor,  // keep the sparse Cholesky factor of the free block; an edit is one solve
   FullReference, // no condensation, no cache: assemble and factor everything on every solve
-  RigidSegments  // precompute the kept response to 12 affine motions per rigid segment (plus the
+  RigidSegments, // precompute the kept response to 12 affine motions per rigid segment (plus the
                  // general response to the ROI DOFs of segment-0 nodes); an edit is one product
-                 // with the 12 s segment parameters and the general part. Auto picks it when
+                 // with the 12 parameters per segment and the general part. Auto picks it when
                  // NodeSets::movableSegment names segments and the response fits the budget.
+  // The neo-Hookean model's results (LargeDeformation.h, PrecomputedLargeDeformation.h): Newton's
+  // method with a factorization per iteration, and the solve with the precomputed factor. Never
+  // chosen by Auto, and not a precompute's method.
+  LargeDeformationNewton,
+  LargeDeformationPrecomputed
 };
 const char* MethodName(SolveMethod method);
 
@@ -62,9 +67,9 @@ struct PrecomputeOptions {
   double memoryBudgetBytes = 0.0;
   // Compute backend for element stiffness, assembly and the dense per-edit update; null = CPU.
   std::shared_ptr<ComputeBackend> backend;
-  // Columns of the response solved per block (bounds the precompute's transient memory). Large
-  // enough that the solve's gathered rows stay in cache, small enough to halve the transient
-  // memory of 256 (the measurement is in BENCHMARKS.md).
+  // Columns of the response solved per block (bounds the precompute's transient memory): large
+  // enough that the solve's gathered rows stay in cache, small enough to keep the transient memory
+  // at half of what 256 columns take (BENCHMARKS.md, "Figures behind design choices in Core").
   int responseBlockColumns = 128;
 
   // Element order and stability options (all optional; the defaults are linear elements).

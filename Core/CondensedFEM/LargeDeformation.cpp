@@ -1,11 +1,11 @@
-// Newton's method on the total potential energy, in each node's frame (a sliding node's frame is
-// its normal and two tangents, every other node's the identity), so that each prescribed value is
-// one DOF. Prescribed DOFs get a unit row and column in the tangent, which keeps one sparsity
-// pattern and one symbolic factorization for every iteration.
+// Newton's method on the total potential energy, in each node's frame (LargeDeformationProblem.h).
+// Prescribed DOFs get a unit row and column in the tangent, which keeps one sparsity pattern and
+// one symbolic factorization for every iteration.
 #include "CondensedFEM/LargeDeformation.h"
 
 #include "Common/ExceptionBoundary.h"
 #include "Common/ParallelFor.h"
+#include "CondensedFEM/LargeDeformationProblem.h"
 #include "CondensedFEM/NodeLayout.h"
 #include "Element/NeoHookeanTet.h"
 #include "Element/StiffnessAssembly.h"
@@ -14,56 +14,17 @@
 #include "SparseSolver/FillReducingOrdering.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <sstream>
 
 namespace faceplan {
+namespace large_deformation {
 
-namespace {
-
-struct Problem {
-  const TetMesh* mesh = nullptr;
-  Eigen::Index n = 0;
-  std::vector<int> frameOf;            // node -> index into frames, -1 for the identity
-  std::vector<Eigen::Matrix3d> frames; // columns: normal, two tangents
-  std::vector<char> prescribed;        // per DOF, in the node's frame
-  Eigen::VectorXd target;              // prescribed DOFs' full values, 0 elsewhere
-  Eigen::VectorXd externalLoad;        // full dead load, in the nodes' frames
-  std::vector<TetReference> cells;
-  std::vector<NeoHookeanParameters> materials;
-  AssemblyPattern pattern;
-  std::vector<int> prescribedEntries; // nonzeros of the upper triangle in a prescribed row/column
-  std::vector<int> prescribedDiagonal;
-  // Sliding nodes' normal DOFs when the tissue may lift off the bone (unilateral contact), and
-  // whether each is in contact (prescribed) now.
-  std::vector<int> liftOffDofs;
-  // The force the linear model needs for the whole prescribed move (|K_0 u_prescribed|): the
-  // residual's yardstick where the internal forces vanish, as in a rigid motion.
-  double linearForce = 0.0;
-  // |K_0 X| for the node positions X: the force of a unit strain. A small fraction of it is the
-  // yardstick's floor, where the stress's cancellation (F against F^-T near the identity) leaves
-  // round-off in the residual that a relative tolerance cannot get below.
-  double unitStrainForce = 0.0;
-
-  Eigen::Vector3d toGlobal(int node, const Eigen::Vector3d& local) const {
-    return frameOf[node] < 0 ? local : Eigen::Vector3d(frames[frameOf[node]] * local);
-  }
-  Eigen::Vector3d toLocal(int node, const Eigen::Vector3d& global) const {
-    return frameOf[node] < 0 ? global : Eigen::Vector3d(frames[frameOf[node]].transpose() * global);
-  }
-};
-
-// Internal energy, internal force and (when packed is given) the packed tangents at u (nodes'
-// frames). False when a cell would be inverted or degenerate.
-struct Evaluation {
-  double energy = 0.0;
-  Eigen::VectorXd force;
-};
-
-bool Evaluate(const Problem& pb, const Eigen::VectorXd& u, Evaluation& out,
+bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
               std::vector<double>* packed) {
-  const TetMesh& mesh = *pb.mesh;
+  const TetMesh& mesh = *st.mesh;
   const Eigen::Index m = mesh.numTets();
   std::vector<double> energy(static_cast<size_t>(m));
   std::vector<ElementVector> force(static_cast<size_t>(m));
@@ -77,19 +38,19 @@ bool Evaluate(const Problem& pb, const Eigen::VectorXd& u, Evaluation& out,
       int node[4];
       for (int a = 0; a < 4; ++a) {
         node[a] = mesh.tets(e, a);
-        corner.row(a) = pb.toGlobal(node[a], u.segment<3>(3 * node[a])).transpose();
+        corner.row(a) = st.toGlobal(node[a], u.segment<3>(3 * node[a])).transpose();
       }
       ElementVector f;
-      if (!NeoHookeanTetState(pb.cells[e], pb.materials[e], corner, energy[e], f,
+      if (!NeoHookeanTetState(st.cells[e], st.materials[e], corner, energy[e], f,
                               packed ? &tangent : nullptr)) {
         valid[e] = 0;
         continue;
       }
       for (int a = 0; a < 4; ++a) {
-        const int fa = pb.frameOf[node[a]];
+        const int fa = st.frameOf[node[a]];
         if (fa < 0)
           continue;
-        const Eigen::Matrix3d& Q = pb.frames[fa];
+        const Eigen::Matrix3d& Q = st.frames[fa];
         f.segment<3>(3 * a) = Q.transpose() * f.segment<3>(3 * a);
         if (packed) {
           tangent.middleRows<3>(3 * a) = (Q.transpose() * tangent.middleRows<3>(3 * a)).eval();
@@ -108,7 +69,7 @@ bool Evaluate(const Problem& pb, const Eigen::VectorXd& u, Evaluation& out,
   if (std::find(valid.begin(), valid.end(), 0) != valid.end())
     return false;
   out.energy = 0.0;
-  out.force = Eigen::VectorXd::Zero(3 * pb.n);
+  out.force = Eigen::VectorXd::Zero(3 * st.n);
   for (Eigen::Index e = 0; e < m; ++e) {
     out.energy += energy[e];
     for (int a = 0; a < 4; ++a)
@@ -117,35 +78,27 @@ bool Evaluate(const Problem& pb, const Eigen::VectorXd& u, Evaluation& out,
   return std::isfinite(out.energy) && out.force.allFinite();
 }
 
-void ZeroPrescribed(const Problem& pb, Eigen::VectorXd& v) {
+void ZeroPrescribed(const std::vector<char>& prescribed, Eigen::VectorXd& v) {
   for (Eigen::Index i = 0; i < v.size(); ++i)
-    if (pb.prescribed[i])
+    if (prescribed[i])
       v[i] = 0.0;
 }
 
-// The tangent with unit rows and columns for the prescribed DOFs.
-void PinPrescribed(Problem& pb) {
-  double* values = pb.pattern.upper.valuePtr();
-  for (int k : pb.prescribedEntries)
-    values[k] = 0.0;
-  for (int k : pb.prescribedDiagonal)
-    values[k] = 1.0;
-}
-
-// The tangent's nonzeros that PinPrescribed overwrites, for the current prescribed DOFs.
-void FindPinnedEntries(Problem& pb) {
-  pb.prescribedEntries.clear();
-  pb.prescribedDiagonal.clear();
-  const SparseMatrix& upper = pb.pattern.upper;
+void FindPinnedEntries(const SparseMatrix& upper, const std::vector<char>& prescribed,
+                       std::vector<int>& entries, std::vector<int>& diagonal) {
+  entries.clear();
+  diagonal.clear();
   for (int col = 0; col < upper.outerSize(); ++col)
     for (int k = upper.outerIndexPtr()[col]; k < upper.outerIndexPtr()[col + 1]; ++k) {
       const int row = upper.innerIndexPtr()[k];
-      if (row == col && pb.prescribed[col])
-        pb.prescribedDiagonal.push_back(k);
-      else if (pb.prescribed[row] || pb.prescribed[col])
-        pb.prescribedEntries.push_back(k);
+      if (row == col && prescribed[col])
+        diagonal.push_back(k);
+      else if (prescribed[row] || prescribed[col])
+        entries.push_back(k);
     }
 }
+
+namespace {
 
 // For lift-off the normal must point from the bone into the tissue: the side where the node's
 // cells lie (the sum of their centroids' offsets from the node).
@@ -161,65 +114,79 @@ Eigen::Vector3d IntoTissue(const TetMesh& mesh, const std::vector<std::vector<in
   return normal.dot(towardCells) < 0.0 ? Eigen::Vector3d(-normal) : normal;
 }
 
-Status Setup(const PrecomputeRequest& request, const SolveInput& input, bool liftOff, Problem& pb) {
+} // namespace
+
+Status MakeStructure(const PrecomputeRequest& request, bool liftOff, Structure& st) {
   const TetMesh& mesh = request.mesh;
   const NodeSets& sets = request.sets;
-  pb.mesh = &mesh;
-  pb.n = mesh.numPoints();
-  const Eigen::Index n = pb.n;
-  pb.frameOf.assign(n, -1);
+  st.mesh = &mesh;
+  st.n = mesh.numPoints();
+  const Eigen::Index n = st.n;
+  st.frameOf.assign(n, -1);
   std::vector<std::vector<int>> cellsOfNode(liftOff ? n : 0);
   for (Eigen::Index e = 0; liftOff && e < mesh.numTets(); ++e)
     for (int a = 0; a < 4; ++a)
       cellsOfNode[mesh.tets(e, a)].push_back(static_cast<int>(e));
   for (size_t s = 0; s < sets.sliding.size(); ++s) {
     const int node = sets.sliding[s];
-    pb.frameOf[node] = static_cast<int>(pb.frames.size());
-    pb.frames.push_back(NormalFrame(liftOff
+    st.frameOf[node] = static_cast<int>(st.frames.size());
+    st.frames.push_back(NormalFrame(liftOff
                                         ? IntoTissue(mesh, cellsOfNode, node, sets.slidingNormal[s])
                                         : sets.slidingNormal[s]));
     if (liftOff)
-      pb.liftOffDofs.push_back(3 * node);
+      st.liftOffDofs.push_back(3 * node);
   }
-  // Prescribed DOFs: every DOF of a constrained node (only the normal one when sliding) and of a
-  // node no cell uses.
-  pb.prescribed.assign(3 * n, 0);
-  pb.target = Eigen::VectorXd::Zero(3 * n);
+  st.prescribed.assign(3 * n, 0);
   std::vector<char> used(n, 0);
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
     for (int a = 0; a < 4; ++a)
       used[mesh.tets(e, a)] = 1;
   for (Eigen::Index i = 0; i < n; ++i)
     if (!used[i])
-      pb.prescribed[3 * i] = pb.prescribed[3 * i + 1] = pb.prescribed[3 * i + 2] = 1;
+      st.prescribed[3 * i] = st.prescribed[3 * i + 1] = st.prescribed[3 * i + 2] = 1;
   for (int node : sets.constrained) {
-    const int dofs = pb.frameOf[node] >= 0 ? 1 : 3;
+    const int dofs = st.frameOf[node] >= 0 ? 1 : 3;
     for (int c = 0; c < dofs; ++c)
-      pb.prescribed[3 * node + c] = 1;
+      st.prescribed[3 * node + c] = 1;
   }
-  for (size_t k = 0; k < sets.movable.size(); ++k) {
-    const int node = sets.movable[k];
-    const Eigen::Vector3d local =
-        pb.toLocal(node, input.movableDisplacement.row(static_cast<Eigen::Index>(k)).transpose());
-    const int dofs = pb.frameOf[node] >= 0 ? 1 : 3;
-    pb.target.segment(3 * node, dofs) = local.head(dofs);
-  }
-
-  pb.cells.resize(static_cast<size_t>(mesh.numTets()));
-  pb.materials.resize(pb.cells.size());
-  Eigen::VectorXd load = Eigen::VectorXd::Zero(3 * n);
+  st.cells.resize(static_cast<size_t>(mesh.numTets()));
+  st.materials.resize(st.cells.size());
+  st.cellMass.resize(st.cells.size());
   TetCorners corners;
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
     for (int a = 0; a < 4; ++a)
       corners.row(a) = mesh.points.row(mesh.tets(e, a));
-    pb.cells[e] = MakeTetReference(corners);
-    pb.materials[e] = NeoHookeanFromLinear(request.materials.E(e), request.materials.nu(e));
-    if (input.gravity.squaredNorm() > 0.0) {
-      const double quarter = request.materials.rho(e) * pb.cells[e].volume / 4.0;
-      for (int a = 0; a < 4; ++a)
-        load.segment<3>(3 * mesh.tets(e, a)) += quarter * input.gravity;
-    }
+    st.cells[e] = MakeTetReference(corners);
+    st.materials[e] = NeoHookeanFromLinear(request.materials.E(e), request.materials.nu(e));
+    st.cellMass[e] = request.materials.rho(e) * st.cells[e].volume;
   }
+  return Status::Ok();
+}
+
+Status MakePattern(const Structure& st, AssemblyPattern& pattern) {
+  std::vector<int> identity(st.n);
+  std::iota(identity.begin(), identity.end(), 0);
+  return BuildAssemblyPattern(*st.mesh, identity, static_cast<int>(st.n), pattern);
+}
+
+Status SetValues(const PrecomputeRequest& request, const SolveInput& input, Problem& pb) {
+  const Structure& st = *pb.st;
+  const TetMesh& mesh = *st.mesh;
+  const NodeSets& sets = request.sets;
+  const Eigen::Index n = st.n;
+  pb.target = Eigen::VectorXd::Zero(3 * n);
+  for (size_t k = 0; k < sets.movable.size(); ++k) {
+    const int node = sets.movable[k];
+    const Eigen::Vector3d local =
+        st.toLocal(node, input.movableDisplacement.row(static_cast<Eigen::Index>(k)).transpose());
+    const int dofs = st.frameOf[node] >= 0 ? 1 : 3;
+    pb.target.segment(3 * node, dofs) = local.head(dofs);
+  }
+  Eigen::VectorXd load = Eigen::VectorXd::Zero(3 * n);
+  if (input.gravity.squaredNorm() > 0.0)
+    for (Eigen::Index e = 0; e < mesh.numTets(); ++e)
+      for (int a = 0; a < 4; ++a)
+        load.segment<3>(3 * mesh.tets(e, a)) += st.cellMass[e] / 4.0 * input.gravity;
   if (input.nodalLoads.size() > 0) {
     if (input.nodalLoads.rows() != n || !input.nodalLoads.allFinite())
       return Status::Error("nodal loads must be finite, one row per mesh point");
@@ -228,44 +195,127 @@ Status Setup(const PrecomputeRequest& request, const SolveInput& input, bool lif
   }
   pb.externalLoad.resize(3 * n);
   for (Eigen::Index i = 0; i < n; ++i)
-    pb.externalLoad.segment<3>(3 * i) = pb.toLocal(static_cast<int>(i), load.segment<3>(3 * i));
-
-  std::vector<int> identity(n);
-  std::iota(identity.begin(), identity.end(), 0);
-  const Status built = BuildAssemblyPattern(mesh, identity, static_cast<int>(n), pb.pattern);
-  if (!built)
-    return built;
-  FindPinnedEntries(pb);
+    pb.externalLoad.segment<3>(3 * i) = st.toLocal(static_cast<int>(i), load.segment<3>(3 * i));
   return Status::Ok();
 }
 
-// Strains below this are measured against the unit-strain force instead (see unitStrainForce).
-constexpr double kRoundOffStrain = 1e-5;
+Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd& u, double s) {
+  Balance b;
+  b.potential = ev.energy - s * pb.externalLoad.dot(u);
+  b.residual = ev.force - s * pb.externalLoad;
+  ZeroPrescribed(pb.prescribed, b.residual);
+  b.scale = std::max({ev.force.norm(), s * pb.externalLoad.norm(), pb.linearForce,
+                      kRoundOffStrain * pb.st->unitStrainForce});
+  return b;
+}
+
+bool UpdateContact(Problem& pb, const Eigen::VectorXd& u, double s) {
+  if (pb.st->liftOffDofs.empty())
+    return false;
+  Evaluation ev;
+  if (!Evaluate(*pb.st, u, ev, nullptr))
+    return false;
+  const Eigen::VectorXd reaction = ev.force - s * pb.externalLoad;
+  const double forceTolerance = 1e-12 * std::max(ev.force.norm(), pb.linearForce);
+  const double gapTolerance = 1e-12 * std::max(1.0, pb.target.cwiseAbs().maxCoeff());
+  bool changed = false;
+  for (int dof : pb.st->liftOffDofs) {
+    if (pb.prescribed[dof] && reaction[dof] < -forceTolerance) {
+      pb.prescribed[dof] = 0;
+      changed = true;
+    } else if (!pb.prescribed[dof] && u[dof] < s * pb.target[dof] - gapTolerance) {
+      pb.prescribed[dof] = 1;
+      changed = true;
+    }
+  }
+  return changed;
+}
+
+DeformationMeasures MeasureDeformation(const Structure& st, const Eigen::VectorXd& u) {
+  const TetMesh& mesh = *st.mesh;
+  DeformationMeasures r;
+  r.smallestVolumeRatio = std::numeric_limits<double>::infinity();
+  CornerDisplacements corner;
+  for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
+    for (int a = 0; a < 4; ++a) {
+      const int node = mesh.tets(e, a);
+      corner.row(a) = st.toGlobal(node, u.segment<3>(3 * node)).transpose();
+    }
+    const Eigen::Matrix3d F = DeformationGradient(st.cells[e], corner);
+    r.smallestVolumeRatio = std::min(r.smallestVolumeRatio, F.determinant());
+    const Eigen::Matrix3d green = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
+    const Eigen::Vector3d principal =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(green, Eigen::EigenvaluesOnly).eigenvalues();
+    const double largest = principal.cwiseAbs().maxCoeff();
+    if (largest > r.largestGreenStrain) {
+      r.largestGreenStrain = largest;
+      r.largestStrainCell = e;
+    }
+  }
+  return r;
+}
+
+double RestForceNorm(const SparseMatrix& restUpper, const Eigen::VectorXd& v) {
+  return (restUpper.selfadjointView<Eigen::Upper>() * v).norm();
+}
+
+Eigen::VectorXd LocalPositions(const Structure& st) {
+  Eigen::VectorXd positions(3 * st.n);
+  for (Eigen::Index i = 0; i < st.n; ++i)
+    positions.segment<3>(3 * i) =
+        st.toLocal(static_cast<int>(i), st.mesh->points.row(i).transpose());
+  return positions;
+}
+
+Status FillResult(const PrecomputeRequest& request, const SolveInput& input, const Structure& st,
+                  const Eigen::VectorXd& u, SolveResult& result) {
+  const Eigen::Index n = st.n;
+  RowVectors3d all(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i)
+    all.row(i) = st.toGlobal(static_cast<int>(i), u.segment<3>(3 * i)).transpose();
+  if (!all.allFinite())
+    return Status::Error("the large-deformation solve produced non-finite values");
+  result.keptDisplacement.resize(static_cast<Eigen::Index>(request.sets.kept.size()), 3);
+  for (size_t k = 0; k < request.sets.kept.size(); ++k)
+    result.keptDisplacement.row(static_cast<Eigen::Index>(k)) = all.row(request.sets.kept[k]);
+  if (input.recoverInterior)
+    result.allDisplacement = std::move(all);
+  return Status::Ok();
+}
+
+} // namespace large_deformation
+
+namespace {
+
+using namespace large_deformation;
+
+// Newton's own problem: the shared values plus the tangent's pattern and its pinned entries.
+struct NewtonProblem : Problem {
+  AssemblyPattern pattern;
+  std::vector<int> prescribedEntries; // nonzeros of the upper triangle in a prescribed row/column
+  std::vector<int> prescribedDiagonal;
+  void findPinned() {
+    FindPinnedEntries(pattern.upper, prescribed, prescribedEntries, prescribedDiagonal);
+  }
+};
+
+// The tangent with unit rows and columns for the prescribed DOFs.
+void PinPrescribed(NewtonProblem& pb) {
+  double* values = pb.pattern.upper.valuePtr();
+  for (int k : pb.prescribedEntries)
+    values[k] = 0.0;
+  for (int k : pb.prescribedDiagonal)
+    values[k] = 1.0;
+}
 
 struct StepState {
   Eigen::VectorXd u;   // nodes' frames
   double fraction = 0; // of the prescribed values and loads
 };
 
-// Total potential energy and the free DOFs' residual at u for the load fraction s.
-struct Balance {
-  double potential = 0.0;
-  Eigen::VectorXd residual; // zero on prescribed DOFs
-  double scale = 0.0;       // what the residual is measured against
-};
-Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd& u, double s) {
-  Balance b;
-  b.potential = ev.energy - s * pb.externalLoad.dot(u);
-  b.residual = ev.force - s * pb.externalLoad;
-  ZeroPrescribed(pb, b.residual);
-  b.scale = std::max({ev.force.norm(), s * pb.externalLoad.norm(), pb.linearForce,
-                      kRoundOffStrain * pb.unitStrainForce});
-  return b;
-}
-
 class NewtonSolver {
 public:
-  NewtonSolver(Problem& pb, const LargeDeformationOptions& options, CholmodFactor& factor,
+  NewtonSolver(NewtonProblem& pb, const LargeDeformationOptions& options, CholmodFactor& factor,
                LargeDeformationReport& report, StageTimings& timings)
       : pb_(pb), options_(options), factor_(factor), report_(report), timings_(timings) {}
 
@@ -277,7 +327,6 @@ public:
       return false;
     // Predictor: the prescribed DOFs move to their new values and the free ones follow the
     // tangent's response, K_ff du_f = -(r_f + K_fp du_p - ds f_ext,f).
-    const double ds = to - from.fraction;
     Eigen::VectorXd prescribedMove = Eigen::VectorXd::Zero(u.size());
     for (Eigen::Index i = 0; i < u.size(); ++i)
       if (pb_.prescribed[i])
@@ -285,18 +334,18 @@ public:
     Eigen::VectorXd rhs = pb_.pattern.upper.selfadjointView<Eigen::Upper>() * prescribedMove;
     rhs += ev.force - to * pb_.externalLoad;
     rhs = -rhs;
-    ZeroPrescribed(pb_, rhs);
+    ZeroPrescribed(pb_.prescribed, rhs);
     Eigen::VectorXd du;
     if (!solveTangent(rhs, du, error))
       return false;
     du += prescribedMove;
     u += du;
-    (void)ds;
     for (int it = 0; it < options_.maxIterationsPerStep; ++it) {
       if (!evaluate(u, ev, true))
         return false; // the predictor inverted a cell: a smaller step
       const Balance b = BalanceOf(pb_, ev, u, to);
       lastResidual_ = b.scale > 0.0 ? b.residual.norm() / b.scale : 0.0;
+      report_.convergence.emplace_back(clock_.elapsedMs(), lastResidual_);
       if (b.residual.norm() <= tolerance * b.scale) {
         reached.u = u;
         reached.fraction = to;
@@ -335,7 +384,7 @@ public:
 private:
   bool evaluate(const Eigen::VectorXd& u, Evaluation& ev, bool withTangent) {
     StageClock clock;
-    const bool ok = Evaluate(pb_, u, ev, withTangent ? &packed_ : nullptr);
+    const bool ok = Evaluate(*pb_.st, u, ev, withTangent ? &packed_ : nullptr);
     timings_[Stage::ElementStiffness].ms += clock.lapMs();
     if (ok && withTangent) {
       AssembleFromPacked(packed_.data(), pb_.pattern);
@@ -362,11 +411,11 @@ private:
       return false;
     }
     du = x.col(0);
-    ZeroPrescribed(pb_, du);
+    ZeroPrescribed(pb_.prescribed, du);
     return du.allFinite();
   }
 
-  Problem& pb_;
+  NewtonProblem& pb_;
   const LargeDeformationOptions& options_;
   CholmodFactor& factor_;
   LargeDeformationReport& report_;
@@ -374,60 +423,8 @@ private:
   std::vector<double> packed_;
   int lastIterations_ = 0;
   double lastResidual_ = 0.0;
+  StageClock clock_;
 };
-
-void ReportDeformation(const Problem& pb, const Eigen::VectorXd& u, LargeDeformationReport& r) {
-  const TetMesh& mesh = *pb.mesh;
-  r.smallestVolumeRatio = std::numeric_limits<double>::infinity();
-  r.largestGreenStrain = 0.0;
-  CornerDisplacements corner;
-  for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
-    for (int a = 0; a < 4; ++a) {
-      const int node = mesh.tets(e, a);
-      corner.row(a) = pb.toGlobal(node, u.segment<3>(3 * node)).transpose();
-    }
-    const Eigen::Matrix3d F = DeformationGradient(pb.cells[e], corner);
-    r.smallestVolumeRatio = std::min(r.smallestVolumeRatio, F.determinant());
-    const Eigen::Matrix3d green = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
-    const Eigen::Vector3d principal =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(green, Eigen::EigenvaluesOnly).eigenvalues();
-    const double largest = principal.cwiseAbs().maxCoeff();
-    if (largest > r.largestGreenStrain) {
-      r.largestGreenStrain = largest;
-      r.largestStrainCell = e;
-    }
-  }
-}
-
-// Unilateral contact at a converged state u for the load fraction s: a node in contact whose
-// contact force pulls it onto the bone (a negative normal residual) lifts off, a lifted node that
-// has gone into the bone comes back into contact. True when a node changed.
-bool UpdateContact(Problem& pb, const Eigen::VectorXd& u, double s) {
-  if (pb.liftOffDofs.empty())
-    return false;
-  Evaluation ev;
-  if (!Evaluate(pb, u, ev, nullptr))
-    return false;
-  const Eigen::VectorXd reaction = ev.force - s * pb.externalLoad;
-  const double forceTolerance = 1e-12 * std::max(ev.force.norm(), pb.linearForce);
-  const double gapTolerance = 1e-12 * std::max(1.0, pb.target.cwiseAbs().maxCoeff());
-  bool changed = false;
-  for (int dof : pb.liftOffDofs) {
-    if (pb.prescribed[dof] && reaction[dof] < -forceTolerance) {
-      pb.prescribed[dof] = 0;
-      changed = true;
-    } else if (!pb.prescribed[dof] && u[dof] < s * pb.target[dof] - gapTolerance) {
-      pb.prescribed[dof] = 1;
-      changed = true;
-    }
-  }
-  if (changed)
-    FindPinnedEntries(pb);
-  return changed;
-}
-
-// The relative residual at which lift-off's contact is updated before the final solve.
-constexpr double kSettleTolerance = 1e-6;
 
 Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& input,
                             const LargeDeformationOptions& options, SolveResult& result,
@@ -435,7 +432,7 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
   StageClock total, clock;
   result = SolveResult();
   report = LargeDeformationReport();
-  result.method = SolveMethod::FullReference;
+  result.method = SolveMethod::LargeDeformationNewton;
   result.backend = "CPU";
   if (request.options.elementOrder != ElementOrder::Linear)
     return Status::Error("the large-deformation model supports linear (4-node) elements only");
@@ -452,10 +449,20 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
   if (!input.movableDisplacement.allFinite() || !input.gravity.allFinite())
     return Status::Error("prescribed displacements or loads contain NaN or infinite values");
 
-  Problem pb;
-  status = Setup(request, input, options.slidingLiftOff, pb);
+  NewtonProblem pb;
+  auto structure = std::make_shared<Structure>();
+  status = MakeStructure(request, options.slidingLiftOff, *structure);
+  if (status)
+    status = MakePattern(*structure, pb.pattern);
   if (!status)
     return status;
+  pb.prescribed = structure->prescribed;
+  pb.st = structure;
+  status = SetValues(request, input, pb);
+  if (!status)
+    return status;
+  pb.findPinned();
+  const Structure& st = *pb.st;
   result.timings[Stage::Separation].ms = clock.lapMs();
   CholmodFactor factor;
   // METIS on the node graph, as the linear model's factor (SparseSolver/FillReducingOrdering.h).
@@ -469,18 +476,14 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
 
   NewtonSolver newton(pb, options, factor, report, result.timings);
   StepState state;
-  state.u = Eigen::VectorXd::Zero(3 * pb.n);
+  state.u = Eigen::VectorXd::Zero(3 * st.n);
   {
     Evaluation rest;
     std::vector<double> packed;
-    Evaluate(pb, state.u, rest, &packed);
+    Evaluate(st, state.u, rest, &packed);
     AssembleFromPacked(packed.data(), pb.pattern);
-    pb.linearForce = (pb.pattern.upper.selfadjointView<Eigen::Upper>() * pb.target).norm();
-    Eigen::VectorXd positions(3 * pb.n);
-    for (Eigen::Index i = 0; i < pb.n; ++i)
-      positions.segment<3>(3 * i) =
-          pb.toLocal(static_cast<int>(i), pb.mesh->points.row(i).transpose());
-    pb.unitStrainForce = (pb.pattern.upper.selfadjointView<Eigen::Upper>() * positions).norm();
+    pb.linearForce = RestForceNorm(pb.pattern.upper, pb.target);
+    structure->unitStrainForce = RestForceNorm(pb.pattern.upper, LocalPositions(st));
   }
   double step = options.initialStep;
   int halvings = 0;
@@ -502,12 +505,14 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     // With lift-off the contact is settled on loosely converged states (it changes a few times)
     // and the last solve converges fully; a contact change after it starts the loop again.
     const double settleTolerance =
-        pb.liftOffDofs.empty() ? options.tolerance : std::max(options.tolerance, kSettleTolerance);
+        st.liftOffDofs.empty() ? options.tolerance : std::max(options.tolerance, kSettleTolerance);
     if (newton.step(state, to, settleTolerance, reached, failure)) {
       int updates = 0;
       bool settled = true, tight = settleTolerance == options.tolerance;
       while (true) {
         const bool changed = UpdateContact(pb, reached.u, to);
+        if (changed)
+          pb.findPinned();
         if (!changed && tight)
           break;
         if (changed)
@@ -548,23 +553,18 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     step *= 0.5;
   }
 
-  ReportDeformation(pb, state.u, report);
-  for (int dof : pb.liftOffDofs)
+  const DeformationMeasures measures = MeasureDeformation(st, state.u);
+  report.smallestVolumeRatio = measures.smallestVolumeRatio;
+  report.largestGreenStrain = measures.largestGreenStrain;
+  report.largestStrainCell = measures.largestStrainCell;
+  for (int dof : st.liftOffDofs)
     report.liftedNodes += pb.prescribed[dof] ? 0 : 1;
   result.relativeResidual = newton.lastResidual();
   result.largestStrain = report.largestGreenStrain;
   result.invertedCells = 0;
-  const Eigen::Index n = pb.n;
-  RowVectors3d all(n, 3);
-  for (Eigen::Index i = 0; i < n; ++i)
-    all.row(i) = pb.toGlobal(static_cast<int>(i), state.u.segment<3>(3 * i)).transpose();
-  if (!all.allFinite())
-    return Status::Error("the large-deformation solve produced non-finite values");
-  result.keptDisplacement.resize(static_cast<Eigen::Index>(request.sets.kept.size()), 3);
-  for (size_t k = 0; k < request.sets.kept.size(); ++k)
-    result.keptDisplacement.row(static_cast<Eigen::Index>(k)) = all.row(request.sets.kept[k]);
-  if (input.recoverInterior)
-    result.allDisplacement = std::move(all);
+  status = FillResult(request, input, st, state.u, result);
+  if (!status)
+    return status;
   result.timings[Stage::Total].ms = total.elapsedMs();
   return Status::Ok();
 }

@@ -3,8 +3,9 @@
 // model, with a compressible neo-Hookean material (Element/NeoHookeanTet.h) solved by Newton's
 // method with load stepping. It is for the moves a linear model cannot take (Solve warns when its
 // largest strain exceeds the small-strain limit): strains of tens of percent and large rotations.
-// It has no precompute/solve split (every update runs the whole iteration), so it is the model
-// for the result of a plan, not for dragging.
+// Every update runs the whole iteration (a numeric factorization per iteration): it is the
+// reference and the fallback of PrecomputedLargeDeformation.h, the same model split into a
+// precompute and a solve for dragging.
 //
 // Sliding nodes keep the linear model's constraint: the displacement along the node's undeformed
 // normal is prescribed and the tangential components are free; with slidingLiftOff the normal
@@ -14,6 +15,8 @@
 #include "CondensedFEM/CondensedFEM.h"
 
 #include <functional>
+#include <utility>
+#include <vector>
 
 namespace faceplan {
 
@@ -52,6 +55,8 @@ struct LargeDeformationReport {
   long long largestStrainCell = -1;
   int contactUpdates = 0; // lift-off: solves repeated because the contact changed
   int liftedNodes = 0;    // lift-off: sliding nodes off their bone in the result
+  // Per Newton iterate: time since the solve started (ms) and its relative residual.
+  std::vector<std::pair<double, double>> convergence;
 };
 
 // Linear cells only (request.options.elementOrder must be Linear). Fills result like Solve (kept

@@ -6,8 +6,8 @@ namespace faceplan {
 
 namespace {
 // Per-edit cost decides between a dense product and a sparse solve (both exact). A sparse
-// triangular solve runs at about a third of a dense product's flop rate (scripts/report measured
-// 3.3 against 1.1 GFLOP/s median over its scenes), so its flops are weighted by that ratio.
+// triangular solve runs at about a third of a dense product's flop rate (scripts/report measures
+// both over its scenes), so its flops are weighted by that ratio.
 constexpr double kSparseSolveFlopWeight = 3.0;
 } // namespace
 

@@ -11,10 +11,11 @@
 namespace faceplan {
 
 // Row blocks the probe compares: all of them up to fullBytes of response, else every k-th
-// (the last always), so that each probe reads about that much: reading all of a 4.6 GB response
-// (1M cells) twice cost 0.35 s. What the probe is for, an operator held in lower precision, shows
-// in every block; an error confined to unsampled blocks would pass it (the GPU checks its own
-// response's residual before this, and the host copy is a plain chunked memcpy).
+// (the last always), so that each probe reads about that much: reading all of a response of
+// several GB twice would add a visible part to the precompute. What the probe is for, an operator
+// held in lower precision, shows in every block; an error confined to unsampled blocks would pass
+// it (the GPU checks its own response's residual before this, and the host copy is a plain chunked
+// memcpy).
 constexpr Eigen::Index kProbeBlockRows = 4096;
 
 // Relative deviation of a backend's response operator from the double response, on random ROI

@@ -222,8 +222,8 @@ Status ValidatePrecomputeRequest(PrecomputeState& state) {
     return Status::Error("residualTolerance must be positive and maxRefinementSteps non-negative");
   state.status = status;
   state.meshCheckWarningsAt = status.warnings.size();
-  // The checks on the shared faces take a tenth of a second per 100k cells: they run beside the
-  // separation, assembly and ordering, which the inputs checked above keep safe.
+  // The checks on the shared faces grow with the mesh: they run beside the separation, assembly
+  // and ordering, which the inputs checked above keep safe.
   const TetMesh* mesh = &request.mesh;
   const std::vector<int>* constrained = &request.sets.constrained;
   const double sliverThreshold = options.sliverQualityThreshold;

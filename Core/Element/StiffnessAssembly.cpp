@@ -111,7 +111,8 @@ Status BuildCellAssemblyPattern(const int* cells, Eigen::Index numCells, int nod
   // The gather map column node by column node, in parallel: each node's three columns take the
   // contributions of the cells at that node (in increasing cell order, so each entry lists its
   // packed indices in increasing order), one per cell and entry. No cells x 78 intermediate and
-  // no serial grouping of it: at 1M cells those took ~1 s of the precompute.
+  // no serial grouping of it: on the largest meshes those were a large serial part of the
+  // precompute.
   if (static_cast<int>(cornersOf.start.size()) != nodes + 1)
     return Status::Error("internal: the corner index does not match the node graph");
   // visit(nc, t, packed): every contribution to the columns of node nc, t its entry in `upper`.

@@ -1,6 +1,6 @@
 #pragma once
 // The BLAS and LAPACK routines Core calls directly (the same library CHOLMOD links, OpenBLAS on
-// the project's machines). Fortran calling convention: every argument by pointer, column-major.
+// Debian). Fortran calling convention: every argument by pointer, column-major.
 extern "C" {
 void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
             const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,

@@ -64,8 +64,8 @@ void CholmodFactor::Impl::extractTrailingBlock() {
   for (size_t k = 0; k < factor->nsuper; ++k)
     for (int j = std::max(super[k], first); j < super[k + 1]; ++j)
       supernodeOf[j - first] = static_cast<int>(k);
-  // Column by column on every core: at 1M cells the block is 7,830 columns (490 MB), 0.4 s on one
-  // core beside the GPU response's download.
+  // Column by column on every core: on large meshes the block has thousands of columns and runs
+  // beside the GPU response's download.
   ParallelFor(trailing, 64, [&](std::int64_t c0, std::int64_t c1) {
     for (std::int64_t c = c0; c < c1; ++c) {
       const int j = first + static_cast<int>(c), k = supernodeOf[c];
@@ -205,9 +205,9 @@ Status CholmodFactor::factorize(const SparseMatrix& upper) {
       return Status::Ok();
     }
   }
-  // At most 8 OpenBLAS threads for the supernodal BLAS calls: on the 16-core GPU machine OpenBLAS
-  // with all 16 threads made this factorization many times slower than with 8 (BENCHMARKS.md, GPU
-  // section), and fewer threads lose little elsewhere. A no-op when the BLAS is not OpenBLAS.
+  // At most 8 OpenBLAS threads for the supernodal BLAS calls: with 16, OpenBLAS made this
+  // factorization many times slower than with 8 (BENCHMARKS.md, "GPU: the CUDA backend"), and
+  // fewer threads lose little elsewhere. A no-op when the BLAS is not OpenBLAS.
   const int blasThreads = WorkerThreads(8);
   ScopedBlasThreads cappedBlas(blasThreads);
   const int ok = cholmod_factorize(&view, impl_->factor, &impl_->common);

@@ -143,10 +143,10 @@ Status OrderGraph(int n, std::vector<int>& columnStart, std::vector<int>& rows, 
 // Levels of the dissection split over threads for a graph of `nodes` nodes. `leaves` > 0 asks for
 // that many (1, 2, 4, ... 64); 0 chooses: no split below kSplitFromNodes nodes, else up to 8
 // leaves, as many as there are cores. Why not always: a split top costs some fill (its separator
-// comes from one bisection, METIS's own dissection tries harder): at ~100k cells (16k nodes) the
-// CPU factorization took ~5 % longer with two leaves, while the ordering (~0.1 s) was hidden beside
-// the assembly anyway; at 1M cells (175k nodes) the ordering is the longest CPU path and the split
-// factor was no larger. FACEPLAN_DISSECTION_LEAVES overrides the choice, for benchmarks.
+// comes from one bisection, METIS's own dissection tries harder), which slows the factorization of
+// a small mesh whose ordering is hidden beside the assembly anyway; on large meshes the ordering is
+// the longest CPU path and the split factor is no larger. FACEPLAN_DISSECTION_LEAVES overrides the
+// choice, for benchmarks.
 constexpr int kSplitFromNodes = 50000;
 
 int ParallelDissectionDepth(int nodes, int leaves) {

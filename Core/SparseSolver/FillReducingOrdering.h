@@ -8,10 +8,10 @@
 // substitution runs over the whole factor (half the flops of a full solve).
 //
 // The rest is ordered by METIS nested dissection of the node graph (each node's DOFs stay
-// together): with the same trailing nodes, its factor on the face-like shells was 11 % (10k) and
-// 28 % (100k) smaller than constrained AMD's on the DOF graph, and AMD on the node graph doubled
-// the 100k factorization time; the node graph also has 9x fewer edges than the DOF graph to
-// partition. Falls back to AMD if METIS is unavailable.
+// together): with the same trailing nodes, its factor on the face-like shells is smaller than
+// constrained AMD's on the DOF graph, the more so the larger the mesh, and AMD on the node graph
+// gives a much costlier factorization; the node graph also has 9x fewer edges than the DOF graph
+// to partition. Falls back to AMD if METIS is unavailable.
 #include "Common/Status.h"
 #include "Element/StiffnessAssembly.h"
 

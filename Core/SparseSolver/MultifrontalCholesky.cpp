@@ -94,10 +94,10 @@ struct Update {
   size_t capacity = 0;
 };
 
-// Buffers for the update matrices, reused: at ~100k cells they add up to ~550 MB over one
-// factorization, most in blocks large enough for malloc to map fresh pages for each, which the
-// kernel zero-fills on first touch (page faults were ~8 % of a precompute's CPU time). A released
-// buffer serves a later request of between half its size and its size.
+// Buffers for the update matrices, reused: over one factorization they add up to several times
+// the factor, most in blocks large enough for malloc to map fresh pages for each, which the kernel
+// zero-fills on first touch (a visible part of a precompute's CPU time). A released buffer serves
+// a later request of between half its size and its size.
 class UpdatePool {
 public:
   Update take(size_t size) {
@@ -356,8 +356,8 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
   if (outOfMemory)
     return Status::Error("out of memory in the multifrontal factorization");
   if (failedColumn < 0) {
-    // At most 8 BLAS threads, as CholmodFactor::factorize had for CHOLMOD: on the 16-core GPU
-    // machine OpenBLAS with 16 threads was many times slower on these blocks.
+    // At most 8 BLAS threads, as CholmodFactor::factorize has for CHOLMOD: OpenBLAS with 16
+    // threads was many times slower on these blocks.
     ScopedBlasThreads threadedBlas(std::min(threads, 8));
     std::vector<int> position(p.n, 0);
     for (int t = 0; t < p.nsuper && failedColumn < 0; ++t)

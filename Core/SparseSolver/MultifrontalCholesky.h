@@ -4,8 +4,8 @@
 // supernodal elimination tree so that independent subtrees run on their own threads.
 //
 // Why not cholmod_factorize: CHOLMOD parallelises only inside each supernode's BLAS calls, so the
-// many small supernodes below the top of the nested dissection use one core at a time; on the
-// 2-core machine its factorization gained 1.5x from the second core (BENCHMARKS.md). Here every
+// many small supernodes below the top of the nested dissection use one core at a time, and its
+// factorization gains little from more cores. Here every
 // supernode is a task that runs as soon as its children are done, with single-threaded BLAS, and
 // only the few large supernodes at the top, whose dense blocks are big enough for threaded BLAS to
 // pay, run one after another with all threads.

@@ -13,9 +13,8 @@ namespace faceplan {
 
 void ApplySupernodeRelaxation(cholmod_common& common, SupernodeRelaxation relaxation) {
   // CHOLMOD's defaults (cholmod_defaults), or coarser: at most 16/64/128 columns merged at up to
-  // 90/30/10 % zeros (the setting every factor had before the CPU factorization became
-  // multifrontal; on the 2-core machine CHOLMOD's own then gave the faster ~100k precompute,
-  // BENCHMARKS.md, session 10).
+  // 90/30/10 % zeros. The CPU's multifrontal factorization is faster with CHOLMOD's own; the GPU's
+  // per-supernode costs favour the coarser setting.
   const bool coarse = relaxation == SupernodeRelaxation::Coarse;
   const size_t nrelax[3] = {coarse ? 16u : 4u, coarse ? 64u : 16u, coarse ? 128u : 48u};
   const double zrelax[3] = {coarse ? 0.9 : 0.8, coarse ? 0.3 : 0.1, coarse ? 0.1 : 0.05};

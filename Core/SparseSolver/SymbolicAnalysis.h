@@ -4,8 +4,8 @@
 // a private dependency; see CholmodViews.h).
 //
 // cholmod_analyze_p with CHOLMOD_GIVEN transposes the matrix through the permutation twice (for
-// the column counts, then for the supernodal pattern) and works on every DOF: at 1M cells that
-// was 0.4-0.6 s on the ordering thread, the precompute's longest CPU path. Here:
+// the column counts, then for the supernodal pattern) and works on every DOF, on the ordering
+// thread, the precompute's longest CPU path on large meshes. Here:
 //  - when the matrix is node-blocked (3 DOFs per node with full 3x3 blocks, as every stiffness
 //    matrix from the node graph is) and the order keeps each node's DOFs together, the elimination
 //    tree and column counts come from the node graph (9x fewer entries) and are expanded exactly:

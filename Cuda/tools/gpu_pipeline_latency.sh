@@ -1,21 +1,19 @@
 #!/usr/bin/env bash
-# Issue 14 §1 with Backend = CUDA, measured through ParaView: Benchmarks/pipeline_latency.py run by
-# Debian's pvpython on the lent GPU machine, which has no ParaView. The files pvpython opens for that
-# run (found with strace here, less the C runtime the GPU machine has) travel with it: ~140 MB
-# compressed, more than one call may carry (64 MiB), so they go in parts over successive calls while
-# the machine is warm (30 s), each part appended to /tmp/pvpython.tar.xz there.
-#
-#   here:  Cuda/tools/gpu_pipeline_latency.sh pack          -> .pvcarry/part-*, .pvcarry/plugin/
-#          (pack --stage-only: only the files, in /tmp/pvpython-pack, to try them here)
-#   there: Cuda/tools/gpu_pipeline_latency.sh receive part-aa   (one call per part, in order, each
-#          carrying only its part: carry [".pvcarry/part-aa"]; the last also ".pvcarry/plugin")
-#   there: OUT=<dir> Cuda/tools/gpu_pipeline_latency.sh run [ROUNDS] [EDITS]
-#
-# `run` alternates Backend = CUDA and = CPU on the ~100k shell scene (--shell-only) and fails when the
+# The edit latency through ParaView with Backend = CUDA: Benchmarks/pipeline_latency.py on a GPU
+# host, alternating Backend = CUDA and = CPU on the ~100k shell scene (--shell-only); fails when the
 # CUDA run did not run on CUDA (pipeline_latency.py checks the filter's Backend field).
+# On a host with ParaView and a FacePlan build with the plugin and CUDA:
+#   OUT=<dir> [FACEPLAN_BUILD_DIR=build] Cuda/tools/gpu_pipeline_latency.sh run [ROUNDS] [EDITS]
+# A GPU host without ParaView runs Debian's pvpython from a pack of the files it opens (found with
+# strace on a machine with ParaView, less the C runtime every host has), with the plugin beside:
+#   Cuda/tools/gpu_pipeline_latency.sh pack      -> out/pvpython-pack.tar.xz, out/pvpython-plugin/
+#          (pack --stage-only: only the files, in /tmp/pvpython-pack, to try them first)
+#   OUT=<dir> PACK=out/pvpython-pack.tar.xz PLUGIN_DIR=out/pvpython-plugin \
+#     Cuda/tools/gpu_pipeline_latency.sh run [ROUNDS] [EDITS]
 set -uo pipefail
+[ -n "${PACK:-}" ] && PACK=$(realpath "$PACK")
+[ -n "${PLUGIN_DIR:-}" ] && PLUGIN_DIR=$(realpath "$PLUGIN_DIR")
 cd "$(dirname "$0")/../.."
-PART_BYTES=$((40 * 1024 * 1024)) # with the working tree under the 64 MiB a call carries
 ROOT=/tmp/pvroot
 
 pack() {
@@ -55,28 +53,33 @@ pack() {
     done
   cp -L "$(command -v pvpython)" "$stage/usr/bin/pvpython" # the executable is not opened by openat
   cp out/pipeline_latency/shell100k.vtk "$stage/"
-  [ "${1:-}" = --stage-only ] && return 0 # to try the staged files here first
-  rm -rf .pvcarry && mkdir -p .pvcarry/plugin
-  cp "$plugin" "$(dirname "$plugin")/libFacePlanFilters.so" .pvcarry/plugin/
-  tar -C "$stage" -cf - . | xz -T2 -9 | split -b "$PART_BYTES" - .pvcarry/part-
-  ls -l .pvcarry .pvcarry/plugin
-}
-
-receive() { # $1: the part this call carried (an earlier call's part may still lie there)
-  [ -f ".pvcarry/$1" ] || { echo "no .pvcarry/$1"; return 1; }
-  [ "$1" = part-aa ] && rm -f /tmp/pvpython.tar.xz
-  cat ".pvcarry/$1" >>/tmp/pvpython.tar.xz && rm -f ".pvcarry/$1"
-  echo "received $1; /tmp/pvpython.tar.xz is $(stat -c %s /tmp/pvpython.tar.xz) bytes"
+  [ "${1:-}" = --stage-only ] && return 0 # to try the staged files first
+  rm -rf out/pvpython-plugin && mkdir -p out/pvpython-plugin
+  cp "$plugin" "$(dirname "$plugin")/libFacePlanFilters.so" out/pvpython-plugin/
+  tar -C "$stage" -cf - . | xz -T2 -9 >out/pvpython-pack.tar.xz
+  ls -l out/pvpython-pack.tar.xz out/pvpython-plugin
 }
 
 run() {
   local out=${OUT:-/tmp/faceplan-pipeline-latency} rounds=${1:-3} edits=${2:-30}
+  local pvpython plugin scene build=${FACEPLAN_BUILD_DIR:-build}
   mkdir -p "$out"
-  rm -rf "$ROOT" && mkdir -p "$ROOT"
-  xz -dc /tmp/pvpython.tar.xz | tar -xf - -C "$ROOT" || { echo "the pvpython pack is incomplete"; return 1; }
-  export LD_LIBRARY_PATH=$ROOT/usr/lib/x86_64-linux-gnu:$PWD/.pvcarry/plugin:/usr/local/cuda/lib64:/usr/local/cuda/lib:${LD_LIBRARY_PATH:-}
-  export PYTHONHOME=$ROOT/usr OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-8}
-  if ldd "$ROOT/usr/bin/pvpython" .pvcarry/plugin/*.so | grep "not found"; then
+  if [ -n "${PACK:-}" ]; then
+    rm -rf "$ROOT" && mkdir -p "$ROOT"
+    xz -dc "$PACK" | tar -xf - -C "$ROOT" || { echo "the pvpython pack is incomplete"; return 1; }
+    export LD_LIBRARY_PATH=$ROOT/usr/lib/x86_64-linux-gnu:$PLUGIN_DIR:/usr/local/cuda/lib64:/usr/local/cuda/lib:${LD_LIBRARY_PATH:-}
+    export PYTHONHOME=$ROOT/usr
+    pvpython=$ROOT/usr/bin/pvpython plugin=$PLUGIN_DIR/FacePlan.so scene=$ROOT/shell100k.vtk
+  else
+    pvpython=$(command -v pvpython) || { echo "no pvpython: set PACK (see the header)"; return 1; }
+    plugin=$(find "$build" -name FacePlan.so -path '*paraview*plugins*' | head -n 1)
+    [ -n "$plugin" ] || { echo "no FacePlan.so under $build: build with the plugin and CUDA first"; return 1; }
+    scene=out/pipeline_latency/shell100k.vtk
+    mkdir -p out/pipeline_latency
+    [ -f "$scene" ] || "$build/bin/export_shell_scene" --subdivisions 18 --layers 5 --out "$scene"
+  fi
+  export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-8}
+  if ldd "$pvpython" "$plugin" | grep "not found"; then
     echo "missing libraries"
     return 1
   fi
@@ -84,8 +87,8 @@ run() {
   local status=0 round backend
   for round in $(seq 1 "$rounds"); do
     for backend in CUDA CPU; do
-      "$ROOT/usr/bin/pvpython" --no-mpi Benchmarks/pipeline_latency.py --plugin .pvcarry/plugin/FacePlan.so \
-        --data "$PWD/Data" --shell-scene "$ROOT/shell100k.vtk" --shell-only --edits "$edits" \
+      "$pvpython" --no-mpi Benchmarks/pipeline_latency.py --plugin "$plugin" \
+        --data "$PWD/Data" --shell-scene "$scene" --shell-only --edits "$edits" \
         --backend "$backend" --json "$out/pipeline_latency_${backend}_r$round.json" 2>&1 |
         grep -v 'WARN|' | tee -a "$out/pipeline_latency.txt"
       [ "${PIPESTATUS[0]}" = 0 ] || status=1
@@ -96,7 +99,6 @@ run() {
 
 case "${1:-}" in
   pack) pack "${2:-}" ;;
-  receive) receive "${2:-}" ;;
   run) shift; run "$@" ;;
-  *) echo "usage: $0 pack | receive PART | run [ROUNDS] [EDITS]"; exit 2 ;;
+  *) echo "usage: $0 pack [--stage-only] | run [ROUNDS] [EDITS]"; exit 2 ;;
 esac

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# On the lent GPU machine: the working tree built and tested (Cuda/tools/gpu_machine_run.sh), then
+# On a GPU host: the working tree built and tested (Cuda/tools/gpu_machine_run.sh), then
 # the ordering's parts (Benchmarks/ordering_breakdown) for each dissection split asked for, then
 # gpu_benchmark ROUNDS times, so that one machine gives the median of the 1M precompute.
-# Usage there: OUT=<dir> Cuda/tools/gpu_precompute_runs.sh ROUNDS "LEAVES..." [gpu_benchmark args]
+# FACEPLAN_DEPS as for gpu_machine_run.sh.
+# Usage: OUT=<dir> Cuda/tools/gpu_precompute_runs.sh ROUNDS "LEAVES..." [gpu_benchmark args]
 #   e.g. OUT=$OUT Cuda/tools/gpu_precompute_runs.sh 3 "8 16" --no-blas-sweep --cpu-edit-budget-ms 100 --cases 1M
 # Writes $OUT/runs.txt (the precompute lines of every run, the ordering breakdowns) and
 # $OUT/runs.tar.gz (every log, JSON and stdout).
@@ -18,8 +19,10 @@ if ! OUT="$work/build" BUILD="$work/build-tree" SKIP_BENCHMARK=1 "$root/Cuda/too
   exit 1
 fi
 cmake --build "$work/build-tree" --target ordering_breakdown > "$work/build_breakdown.log" 2>&1
-lib=/tmp/devroot/usr/lib/x86_64-linux-gnu
-export LD_LIBRARY_PATH=$lib:$lib/openblas-pthread:${LD_LIBRARY_PATH:-}
+if [ -n "${FACEPLAN_DEPS:-}" ]; then # unpacked by gpu_machine_run.sh
+  lib=/tmp/faceplan-deps-root/usr/lib/x86_64-linux-gnu
+  export LD_LIBRARY_PATH=$lib:$lib/openblas-pthread:${LD_LIBRARY_PATH:-}
+fi
 export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-8}
 summary="$OUT/runs.txt"
 grep -E "tests passed|TESTS FAILED" "$work/build.txt" > "$summary"

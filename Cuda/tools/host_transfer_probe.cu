@@ -1,7 +1,7 @@
 // How fast a large device-to-host copy can land in ordinary (pageable, already touched) host
 // memory on this machine: through two 64 MB page-locked buffers and a parallel host copy (what
 // DownloadLarge does), or straight into the destination after cudaHostRegister (timing the
-// registration and its undoing too). Issue 14 §2: the 1M response is 4.6 GB.
+// registration and its undoing too). The dense response of the 1M-cell scene is 4.6 GB.
 //   host_transfer_probe [GB]
 #include <cuda_runtime.h>
 

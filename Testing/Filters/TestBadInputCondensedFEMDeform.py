@@ -175,8 +175,14 @@ f, c = fem_on(bone=bad)
 cases.error("bone with a triangle strip", f, c, "triangle strip", "Triangulate", ports=PORTS)
 D = vtk_to_numpy(BONE.GetPointData().GetArray("Displacement")).copy()
 M = vtk_to_numpy(BONE.GetPointData().GetArray("ROIMask")).astype(float)
-for name, values, words in (("missing", None, ("Displacement", "3-component")),
-                            ("2 components", D[:, :2], ("Displacement", "2 components")),
+# Without Displacement a bone is fixed (it stays put): no error, a tissue that does not move.
+bad = copy(BONE)
+bad.GetPointData().RemoveArray("Displacement")
+f, c = fem_on(bone=bad)
+cases.ok("bone without Displacement (a fixed bone)", f, c)
+u = displacement(f)
+check(u is not None and len(u) > 0 and np.all(u == 0.0), "a fixed bone leaves the tissue where it is")
+for name, values, words in (("2 components", D[:, :2], ("Displacement", "2 components")),
                             ("too short", D[:-9], ("Displacement", "values", "one per point")),
                             ("NaN", np.where(np.arange(len(D))[:, None] == 50, np.nan, D), ("Displacement", "NaN"))):
     bad = copy(BONE)

@@ -18,6 +18,7 @@ LoadPlugin(sys.argv[1], ns=globals())
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from faceplan_test_util import (ErrorCatcher, area_vectors, bezier_curve, cells_equal, check, fetch, finish,
                                 point_array, points, producer, triangles)
+from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkFiltersCore import vtkTriangleFilter, vtkCleanPolyData
 from vtkmodules.vtkFiltersSources import vtkTessellatedBoxSource
 
@@ -235,7 +236,9 @@ if check(os.path.exists(mandible_file), "mandible data present (%s)" % mandible_
 # ---------------------------------------------------------------- ill-defined control points
 good_u, good_v = line([-1.2, -1.2, h], [1.2, -1.2, h]), line([-1.2, -1.2, h], [-1.2, 1.2, h])
 cases = [
-    ("first points not shared", good_u, line([-1.2, -1.1, h], [-1.2, 1.2, h]), "first control points not shared"),
+    # Both first points moved, to different places: nothing tells which P0 is meant.
+    ("first points not shared", line([-1.25, -1.2, h], [1.2, -1.2, h]), line([-1.2, -1.1, h], [-1.2, 1.2, h]),
+     "first control points not shared"),
     ("wrong count", good_u + [1.5, -1.2, h], good_v, "3k+1"),
     ("coincident", good_u[:3] + good_u[:3] + good_u[6:], good_v, "degenerate"),
     ("parallel", good_u, line([-1.2, -1.2, h], [0, -1.2, h]), "degenerate"),
@@ -256,6 +259,49 @@ errors.clear()
 cut.CurveU, cut.CurveV = good_u, good_v
 cut.UpdatePipeline()
 check(fetch(cut).GetNumberOfPoints() == roi_data.GetNumberOfPoints() and not errors.messages, "recovers after errors")
+
+# The shared first point is linked: moving one curve's first point (as a GUI drag of one handle
+# does) moves P0 for both, and the bone stays; a later edit of the other curve, whose first point
+# is still the old one, keeps the moved P0.
+def displacement_of(proxy):
+    out = fetch(proxy)
+    return None if out.GetNumberOfPoints() == 0 else vtk_to_numpy(out.GetPointData().GetArray("Displacement")).copy()
+
+
+def fresh_cut(u, v):
+    f = BezierCut(Input=roi, CurveU=u, CurveV=v)
+    f.UpdatePipeline()
+    d = displacement_of(f)
+    Delete(f)
+    return d
+
+
+errors.clear()
+cut.CurveU, cut.CurveV = good_u, good_v
+cut.UpdatePipeline()
+p0 = [-1.1, -1.15, h]
+moved_u = p0 + good_u[3:]
+cut.CurveU = moved_u
+cut.UpdatePipeline()
+linked = displacement_of(cut)
+expected = fresh_cut(moved_u, p0 + good_v[3:])
+check(not errors.messages and linked is not None, "moving Curve U's first point alone keeps the bone (%s)" % errors.messages)
+check(linked is not None and expected is not None and np.abs(linked - expected).max() == 0.0,
+      "moving Curve U's first point moves Curve V's with it")
+stale_v = good_v[:3] + [-1.2, -0.5, h] + good_v[6:]  # Curve V edited, its first point as before
+cut.CurveV = stale_v
+cut.UpdatePipeline()
+kept = displacement_of(cut)
+expected = fresh_cut(moved_u, p0 + stale_v[3:])
+check(not errors.messages and kept is not None and expected is not None and np.abs(kept - expected).max() == 0.0,
+      "an edit of Curve V keeps the moved P0 (%s)" % errors.messages)
+cut.CurveV = [-1.0, -1.2, h] + stale_v[3:]  # now Curve V's first point moves: P0 follows it
+cut.UpdatePipeline()
+followed = displacement_of(cut)
+expected = fresh_cut([-1.0, -1.2, h] + moved_u[3:], [-1.0, -1.2, h] + stale_v[3:])
+check(not errors.messages and followed is not None and expected is not None and
+      np.abs(followed - expected).max() == 0.0, "moving Curve V's first point moves P0 for both")
+cut.CurveU, cut.CurveV = good_u, good_v
 
 # Input without ROI arrays.
 bare = BezierCut(Input=sphere)

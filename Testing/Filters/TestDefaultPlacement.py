@@ -1,5 +1,7 @@
-"""Filters that start where the anatomy is (pvpython, headless): ROIExtract's region starts on the
-input's bounds, and a Bezier Cut whose control points were never set places them over the ROI, so a
+"""Filters that start where the anatomy is (pvpython, headless): ROIExtract's sphere starts on the
+bone where an operation would be planned (its most anterior point, a fifth of its extent; also
+when the input was never updated, where ParaView's own start has Radius -1), its box on the input's
+bounds, and a Bezier Cut whose control points were never set places them over the ROI, so a
 default-constructed cut on the face's mandible cuts something; a new Bezier Cut proxy's CurveU and
 CurveV (what the GUI's handle widgets show) start at those curves; control points set by the user win.
 argv[1] is the plugin, argv[2] the Data folder.
@@ -16,14 +18,23 @@ LoadPlugin(sys.argv[1], ns=globals())
 data = sys.argv[2]
 
 mandible = XMLPolyDataReader(FileName=[data + "/face/mandible.vtp"])
-mandible.UpdatePipeline()
-b = mandible.GetDataInformation().GetBounds()
-centre = [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2]
-
+# Created before its input was ever updated, as a pvpython script does.
 roi = ROIExtract(Input=mandible)
-check(np.allclose(roi.Region.Center, centre), "the default sphere region is centred on the input")
-check(roi.Region.Radius > 0.25 * max(b[1] - b[0], b[3] - b[2], b[5] - b[4]),
-      "the default sphere region spans the input")
+mandible_points = vtk_to_numpy(fetch(mandible).GetPoints().GetData())
+b = mandible.GetDataInformation().GetBounds()
+extent = max(b[1] - b[0], b[3] - b[2], b[5] - b[4])
+front = mandible_points[np.argmin(mandible_points[:, 0])]
+print("default sphere: centre %s, radius %.2f" % (list(roi.Region.Center), roi.Region.Radius))
+check(roi.Region.Radius > 0.0, "the default sphere has a positive radius (%g)" % roi.Region.Radius)
+check(np.allclose(roi.Region.Center, front), "the default sphere is centred on the bone's most anterior point")
+check(abs(roi.Region.Radius - 0.2 * extent) < 1e-9 * extent, "the default sphere's radius is a fifth of the extent")
+roi.UpdatePipeline()
+marked = int(vtk_to_numpy(fetch(roi).GetPointData().GetArray("ROIMask")).sum())
+check(0 < marked < 0.5 * len(mandible_points),
+      "the default sphere marks part of the bone, not all of it (%d of %d points)" % (marked, len(mandible_points)))
+Delete(roi)
+# The box is ParaView's own, placed from the bounds of an input already updated (as in the GUI).
+roi = ROIExtract(Input=mandible)
 roi.Region = "Box"
 check(np.allclose(roi.Region.Position, [b[0], b[2], b[4]]) and
       np.allclose(roi.Region.Length, [b[1] - b[0], b[3] - b[2], b[5] - b[4]]),
@@ -57,6 +68,9 @@ for region in ("Sphere", "Chin", "Box"):
     check(n > 0 and largest > 0.0, "a default Bezier Cut on the %s ROI cuts something (%d points moved, "
           "largest %.2f mm)" % (region, n, largest))
     lo, hi = roi_box(roi)
+    # Visible at the first Apply: a cap of at least 2 % of the ROI's size, not a tenth of a mm.
+    check(largest >= 0.02 * (hi - lo).max(), "the default cut on the %s ROI is deep enough to see (%.2f mm "
+          "on an ROI of %.1f mm)" % (region, largest, (hi - lo).max()))
     u = np.array(cut.GetClientSideObject().GetOutputDataObject(1).GetBounds()).reshape(3, 2)
     check(np.all(u[:, 0] <= hi + 1e-9) and np.all(u[:, 1] >= lo - 1e-9),
           "the default operative surface lies over the %s ROI" % region)

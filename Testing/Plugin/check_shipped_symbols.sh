@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Fails when a shipped library defines a symbol of the comparison paths or of the test and benchmark
-# support (FacePlanComparison, FacePlanTestSupport): the plugin must not carry them.
+# support (FacePlanComparison, FacePlanTestSupport: mesh generators, test scenes, the CalculiX
+# runner, the .vtu reader, the boundary-node sets): the plugin must not carry them.
 # Usage: check_shipped_symbols.sh <library>...
 set -euo pipefail
-pattern='FreeSystem|ConjugateGradient|SinglePrecisionCholesky|ReverseCuthillMcKee|TraditionalBand|MassSpring|FloatCpu|ShellMesh|AnalyticHollowSphere|ShellRequest'
+pattern='FreeSystem|ConjugateGradient|SinglePrecisionCholesky|ReverseCuthillMcKee|TraditionalBand|MassSpring|FloatCpu|ShellMesh|AnalyticHollowSphere|ShellRequest|BoxTetMesh|faceplan::testing::|faceplan::testmesh::|faceplan::bench::|RunCalculix|ReadVtuTets'
 status=0
 for library in "$@"; do
   [ -f "$library" ] || { echo "missing: $library"; exit 1; }

@@ -170,15 +170,15 @@ TEST(BezierSurface, EvaluationMatchesDeCasteljauAndDerivatives) {
   BezierSurface S;
   Status s = BezierSurface::Create(U, V, false, S);
   ASSERT_TRUE(s.ok) << s.message;
-  EXPECT_EQ(S.SegmentsU(), 2);
-  EXPECT_EQ(S.SegmentsV(), 1);
+  EXPECT_EQ(S.segmentsU(), 2);
+  EXPECT_EQ(S.segmentsV(), 1);
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> uni(0.01, 0.99);
   for (int k = 0; k < 50; ++k) {
     const double u = uni(rng), v = uni(rng);
-    EXPECT_LT((S.Evaluate(u, v) - RefSurface(U, V, u, v)).norm(), 1e-12);
+    EXPECT_LT((S.evaluate(u, v) - RefSurface(U, V, u, v)).norm(), 1e-12);
     Vector3d P, Su, Sv, Suu, Svv;
-    S.Derivatives(u, v, P, Su, Sv, Suu, Svv);
+    S.derivatives(u, v, P, Su, Sv, Suu, Svv);
     const double h = 1e-6;
     if (std::abs(u - 0.5) > 2 * h) { // not across the joint
       EXPECT_LT((Su - (RefSurface(U, V, u + h, v) - RefSurface(U, V, u - h, v)) / (2 * h)).norm(),
@@ -186,14 +186,14 @@ TEST(BezierSurface, EvaluationMatchesDeCasteljauAndDerivatives) {
     }
     EXPECT_LT((Sv - (RefSurface(U, V, u, v + h) - RefSurface(U, V, u, v - h)) / (2 * h)).norm(),
               1e-5);
-    EXPECT_NEAR(S.UnitNormal(u, v).dot(Su.cross(Sv).normalized()), 1.0, 1e-12);
+    EXPECT_NEAR(S.unitNormal(u, v).dot(Su.cross(Sv).normalized()), 1.0, 1e-12);
   }
-  EXPECT_LT((S.Evaluate(0, 0) - U[0]).norm(), 1e-15);
-  EXPECT_LT((S.Evaluate(1, 0) - U.back()).norm(), 1e-12);
-  EXPECT_LT((S.Evaluate(0, 1) - V.back()).norm(), 1e-12);
+  EXPECT_LT((S.evaluate(0, 0) - U[0]).norm(), 1e-15);
+  EXPECT_LT((S.evaluate(1, 0) - U.back()).norm(), 1e-12);
+  EXPECT_LT((S.evaluate(0, 1) - V.back()).norm(), 1e-12);
   BezierSurface F;
   ASSERT_TRUE(BezierSurface::Create(U, V, true, F).ok);
-  EXPECT_NEAR(F.UnitNormal(0.3, 0.3).dot(S.UnitNormal(0.3, 0.3)), -1.0, 1e-12);
+  EXPECT_NEAR(F.unitNormal(0.3, 0.3).dot(S.unitNormal(0.3, 0.3)), -1.0, 1e-12);
 }
 
 TEST(BezierSurface, ProjectionIsClosestPoint) {
@@ -205,7 +205,7 @@ TEST(BezierSurface, ProjectionIsClosestPoint) {
   std::uniform_real_distribution<double> xy(-0.8, 0.8), z(-0.5, 0.9);
   for (int k = 0; k < 40; ++k) {
     const Vector3d x(xy(rng), xy(rng), z(rng));
-    const SurfaceProjection p = S.Project(x);
+    const SurfaceProjection p = S.project(x);
     double best = 1e300;
     for (int i = 0; i <= 300; ++i)
       for (int j = 0; j <= 300; ++j)
@@ -217,9 +217,9 @@ TEST(BezierSurface, ProjectionIsClosestPoint) {
     }
   }
   // A point beyond the u = 1 border projects outside the patch.
-  EXPECT_FALSE(S.Project(Vector3d(3, 0, 0)).inside);
-  EXPECT_TRUE(S.Project(Vector3d(0, 0, 2)).inside);
-  EXPECT_GT(S.Project(Vector3d(0, 0, 2)).signedDistance, 0); // n = Su x Sv points to +z here
+  EXPECT_FALSE(S.project(Vector3d(3, 0, 0)).inside);
+  EXPECT_TRUE(S.project(Vector3d(0, 0, 2)).inside);
+  EXPECT_GT(S.project(Vector3d(0, 0, 2)).signedDistance, 0); // n = Su x Sv points to +z here
 }
 
 TEST(BezierSurface, TessellationFollowsNormal) {
@@ -228,7 +228,7 @@ TEST(BezierSurface, TessellationFollowsNormal) {
     BezierSurface S;
     ASSERT_TRUE(BezierSurface::Create(U, V, flip, S).ok);
     SurfaceMesh t;
-    S.Tessellate(5, t);
+    S.tessellate(5, t);
     EXPECT_EQ(t.numPoints(), (2 * 5 + 1) * (5 + 1));
     EXPECT_EQ(t.numCells(), 2 * 2 * 5 * 5);
     for (std::int64_t c = 0; c < t.numCells(); ++c)
@@ -423,7 +423,7 @@ TEST(BezierCut, CurvedCompositeSurface) {
   ASSERT_TRUE(BezierSurface::Create(U, V, false, S).ok);
   for (Eigen::Index i = 0; i < m.numPoints(); ++i)
     if (r.moved[i]) {
-      EXPECT_GT(S.Project(Row(m.points, i)).signedDistance, 0);
+      EXPECT_GT(S.project(Row(m.points, i)).signedDistance, 0);
     }
 }
 
@@ -536,7 +536,7 @@ TEST(CutMapping, LocalRepairStopsWhenUntanglingStalls) {
   for (Eigen::Index i = 0; i < n; ++i) {
     if (!roi.mask[std::size_t(i)])
       continue;
-    const SurfaceProjection p = surface.Project(m.points.row(i).transpose());
+    const SurfaceProjection p = surface.project(m.points.row(i).transpose());
     foot[std::size_t(i)] = Eigen::Vector2d(p.u, p.v);
     moved[std::size_t(i)] = p.inside && p.signedDistance < 0 && !roi.boundary[std::size_t(i)];
   }

@@ -43,7 +43,7 @@ TEST(MeshIntersection, TreeCandidatesHoldEveryPairWhoseBoxesAreNotApart) {
   std::vector<std::int64_t> candidates;
   int pairsNotApart = 0;
   for (std::int64_t a = 0; a < count; ++a) {
-    tree.Candidates(a, candidates);
+    tree.candidates(a, candidates);
     EXPECT_TRUE(std::is_sorted(candidates.begin(), candidates.end()));
     for (std::int64_t b = 0; b < count; ++b) {
       if (TriangleBoxesApart(tris[a], tris[b], P))

@@ -1,10 +1,10 @@
 // Sliding contact (NodeSets::sliding): only the normal displacement is prescribed. Checked against
 // the analytic uniaxial solution of a block between frictionless walls, and against CalculiX on a
 // curved surface (*TRANSFORM + *BOUNDARY on the local normal DOF).
-#include "CalculixRunner.h"
 #include "Common/RelativeDifference.h"
 #include "CondensedFEM/CondensedSystem.h"
 #include "Support/BoxMeshGenerator.h"
+#include "Support/CalculixRunner.h"
 #include "Support/FEMTestScenes.h"
 
 #include <cstdlib>

@@ -140,7 +140,7 @@ TEST(Stability, NearIncompressibleLinearIsFiniteWithResidualAndCondition) {
 
 // Quadratic cells with mean dilatation (P2-P0) on the same ~35k-cell mesh: the error no longer
 // grows with lambda. Measured (docs/STABILITY.md): 0.085% at nu = 0.45, 0.36% at 0.499, 0.47% at
-// 0.4999, against 2.7%, 34% and 76% for linear cells. The bound (error at 0.499 within 1.5x
+// 0.4999, against 2.7%, 34% and 76% for linear cells. The locking bound (error at 0.499 within 1.5x
 // the error at 0.45) is NOT met: P2-P0's constant pressure limits its incompressible accuracy to
 // O(h^2) while the compressible P2 error is O(h^3), so the ratio is ~4.2x (see the docs);
 // QuadraticNodalPressure meets it (QuadraticNodalPressureMeetsLockingBound).
@@ -182,11 +182,11 @@ TEST(Stability, QuadraticErrorIndependentOfLambda) {
   EXPECT_LE(q4999.residual, 1e-9);
 }
 
-// Quadratic cells with a continuous nodal pressure (P2-P1, lumped pressure mass) meet the issue's
+// Quadratic cells with a continuous nodal pressure (P2-P1, lumped pressure mass) meet the locking
 // bound: the error at nu = 0.499 (and 0.4999) within 1.5x the error at 0.45 on the same mesh.
 // Measured (docs/STABILITY.md): 4,320 cells 0.318% / 0.347% / 0.347% (x1.09); 34,560 cells
 // 0.095% / 0.098% / 0.098% (x1.03). This check uses the 4,320-cell shell (a few seconds); the
-// 34,560-cell check below takes ~2.5 min on 2 cores (its factor is ~6x Quadratic's), so it is
+// 34,560-cell check below takes minutes (its factor is ~6x Quadratic's), so it is
 // disabled by default: run it with --gtest_also_run_disabled_tests.
 TEST(Stability, QuadraticNodalPressureMeetsLockingBound) {
   const ShellMesh shell = MakeSphericalShell(6, 2, 1.0, 2.0);

@@ -1,0 +1,183 @@
+"""Update time of the large-deformation model through pvpython: Condensed FEM Deform with Model
+NeoHookean, LargeDeformationSolver Precomputed against Newton, side by side in one run, on the
+three osteotomy scenes of the Badin face (scripts/osteotomy_scenes.py: ContactModel ByArray, Released
+where degloved, LiftOff as the demos run it) and the main demo's Bezier cut (scripts/faceplan_pipeline.py).
+
+Per scene and solver (medians of repeats; the bone's filters are updated before the clock starts):
+- full move: from the converged rest state (zero move) to the scene's whole move, after a pause in
+  which the background refactorization of the rest state finishes (Newton: every update is cold);
+- drag step: a 0.5 mm change of the move from a converged state, after a pause ("paused"), and the
+  same steps back to back with no pause ("continuous"; the background refactorization may lag);
+- the precompute's time (the first update).
+It also writes every iterate's time and relative residual (field data ConvergenceHistory) of one full
+move and one drag step per scene and solver to a CSV.
+
+    pvpython Benchmarks/large_deformation_drag.py <FacePlan.so> <Data dir> [--repeats 5]
+        [--drag-steps 6] [--scenes lefort1,bsso,genioplasty,cut] [--json FILE] [--csv FILE]
+"""
+import argparse
+import csv
+import json
+import os
+import statistics
+import sys
+import time
+
+from paraview import simple
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+import faceplan_pipeline  # noqa: E402
+import osteotomy_scenes  # noqa: E402
+
+parser = argparse.ArgumentParser()
+parser.add_argument("plugin")
+parser.add_argument("data")
+parser.add_argument("--repeats", type=int, default=5)
+parser.add_argument("--newton-repeats", type=int, default=3)
+parser.add_argument("--drag-steps", type=int, default=6)
+parser.add_argument("--pause", type=float, default=1.5, help="seconds before a 'paused' update")
+parser.add_argument("--scenes", default="lefort1,bsso,genioplasty,cut")
+parser.add_argument("--json")
+parser.add_argument("--csv")
+args = parser.parse_args()
+simple.LoadPlugin(args.plugin)
+
+
+def fields(fem):
+    fd = fem.GetClientSideObject().GetOutputDataObject(0).GetFieldData()
+    out = {}
+    for i in range(fd.GetNumberOfArrays()):
+        a = fd.GetAbstractArray(i)
+        if a.GetNumberOfTuples() == 0:
+            continue
+        if a.IsA("vtkStringArray"):
+            out[a.GetName()] = a.GetValue(0)
+        elif a.GetNumberOfComponents() == 1:
+            out[a.GetName()] = a.GetTuple1(0)
+    history = fd.GetArray("ConvergenceHistory")
+    out["history"] = [history.GetTuple2(i) for i in range(history.GetNumberOfTuples())] if history else []
+    return out
+
+
+def timed_update(fem, bone_filters):
+    for f in bone_filters:
+        f.UpdatePipeline()
+    start = time.perf_counter()
+    fem.UpdatePipeline()
+    wall = time.perf_counter() - start
+    if fem.GetClientSideObject().GetOutputDataObject(0).GetNumberOfPoints() == 0:
+        raise RuntimeError("CondensedFEMDeform produced no output")
+    return wall * 1e3, fields(fem)
+
+
+def osteotomy_scene(name):
+    tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(args.data, name)
+    osteotomy_scenes.configure_contact(fem)
+    fem.Model = "NeoHookean"
+    fem.LiftOff = 1
+    full = list(osteotomy_scenes.SCENES[name][2])
+    length = sum(c * c for c in full) ** 0.5
+
+    def move(mm):  # the segment moved mm along the scene's direction
+        osteotomy.Translation = [c * mm / length for c in full]
+    return fem, [osteotomy, skeleton], move, length
+
+
+def cut_scene():
+    tissue, mandible, roi, cut, fem = faceplan_pipeline.build(args.data)
+    fem.Model = "NeoHookean"
+
+    def move(mm):  # mm: how far the cut goes below the demo's (0 = no cut: the surface far below)
+        offset = 0.0 if mm > 0.0 else -200.0  # rest: the surface below the chin cuts nothing
+        deeper = mm - 1.0 if mm > 0.0 else 0.0
+        shift = offset - deeper
+
+        def moved(curve):
+            return [c + (shift if k % 3 == 2 else 0.0) for k, c in enumerate(curve)]
+        cut.CurveU = moved(faceplan_pipeline.CURVE_U)
+        cut.CurveV = moved(faceplan_pipeline.CURVE_V)
+    return fem, [roi, cut], move, 1.0
+
+
+def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
+    fem.LargeDeformationSolver = solver
+    r = dict(solver=solver)
+    move(0.0)
+    r["first_update_ms"], f = timed_update(fem, bone)  # the precompute (Precomputed) and rest
+    full_ms, full_iter = [], []
+    for k in range(repeats):
+        move(0.0)
+        timed_update(fem, bone)
+        time.sleep(args.pause if solver == "Precomputed" else 0.0)
+        move(full)
+        ms, f = timed_update(fem, bone)
+        full_ms.append(ms)
+        full_iter.append(f.get("QuasiNewtonIterations", f.get("NewtonIterations", float("nan"))))
+        if k == 0:
+            histories.append((name, solver, "full_move", f["history"]))
+        r["ran"] = f.get("LargeDeformationSolver", "?")
+        r["solver_note"] = f.get("SolverNote", "")
+    r["full_move_ms"] = statistics.median(full_ms)
+    r["full_move_ms_all"] = full_ms
+    r["full_move_iterations"] = statistics.median(full_iter)
+    r["full_move_solve_ms"] = f.get("SolveTimeMs")
+    r["largest_strain"] = f.get("LargestStrain")
+    r["lifted_nodes"] = f.get("LiftedNodes", 0)
+    r["refactorizations_full"] = f.get("Refactorizations", 0)
+    drag_paused, drag_cont, drag_iter = [], [], []
+    steps = args.drag_steps if solver == "Precomputed" else min(args.drag_steps, repeats)
+    time.sleep(args.pause if solver == "Precomputed" else 0.0)
+    for k in range(1, steps + 1):
+        move(full + 0.5 * k)
+        ms, f = timed_update(fem, bone)
+        drag_paused.append(ms)
+        drag_iter.append(f.get("QuasiNewtonIterations", f.get("NewtonIterations", float("nan"))))
+        if k == 1:
+            histories.append((name, solver, "drag_step", f["history"]))
+        time.sleep(args.pause if solver == "Precomputed" else 0.0)
+    if solver == "Precomputed":
+        for k in range(steps - 1, -1, -1):  # back again, step after step with no pause
+            move(full + 0.5 * k)
+            ms, f = timed_update(fem, bone)
+            drag_cont.append(ms)
+    r["drag_step_ms"] = statistics.median(drag_paused)
+    r["drag_step_ms_all"] = drag_paused
+    r["drag_step_iterations"] = statistics.median(drag_iter)
+    if drag_cont:
+        r["drag_step_continuous_ms"] = statistics.median(drag_cont)
+        r["drag_step_continuous_ms_all"] = drag_cont
+    print("  %-11s %-11s full move %8.1f ms (%s it)  drag step %7.1f ms (%s it)%s  first update %7.1f ms  %s"
+          % (name, solver, r["full_move_ms"], r["full_move_iterations"], r["drag_step_ms"],
+             r["drag_step_iterations"],
+             ", continuous %.1f ms" % r["drag_step_continuous_ms"] if drag_cont else "",
+             r["first_update_ms"], r["solver_note"]), flush=True)
+    return r
+
+
+results, histories = {}, []
+for name in args.scenes.split(","):
+    fem, bone, move, full = cut_scene() if name == "cut" else osteotomy_scene(name)
+    scene = {}
+    scene["Precomputed"] = measure(name, fem, bone, move, full, "Precomputed", args.repeats, None,
+                                   histories)
+    scene["Newton"] = measure(name, fem, bone, move, full, "Newton", args.newton_repeats, None,
+                              histories)
+    p, n = scene["Precomputed"], scene["Newton"]
+    scene["speedup_full_move"] = n["full_move_ms"] / p["full_move_ms"]
+    scene["speedup_drag_step"] = n["drag_step_ms"] / p["drag_step_ms"]
+    print("  %-11s Newton / Precomputed: full move %.1fx, drag step %.1fx"
+          % (name, scene["speedup_full_move"], scene["speedup_drag_step"]), flush=True)
+    results[name] = scene
+    for proxy in list(simple.GetSources().values()):
+        simple.Delete(proxy)
+
+if args.json:
+    with open(args.json, "w") as f:
+        json.dump(results, f, indent=1)
+if args.csv:
+    with open(args.csv, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["scene", "solver", "case", "iterate", "time_ms", "relative_residual"])
+        for scene, solver, case, history in histories:
+            for k, (ms, residual) in enumerate(history):
+                w.writerow([scene, solver, case, k, "%.3f" % ms, "%.6e" % residual])

@@ -1,0 +1,595 @@
+#include "CondensedFEM/PrecomputedLargeDeformation.h"
+
+#include "Common/ExceptionBoundary.h"
+#include "CondensedFEM/LargeDeformationProblem.h"
+#include "Mesh/InputValidation.h"
+#include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/FillReducingOrdering.h"
+
+#include <algorithm>
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+namespace faceplan {
+
+using namespace large_deformation;
+
+namespace {
+
+// A numeric factor of the tangent at state u with the DOFs `prescribed` pinned (their rows and
+// columns zero, their diagonal kept), and the unpinned tangent for the predictor's products.
+struct TangentFactor {
+  CholmodFactor factor;
+  SparseMatrix tangent;
+};
+
+// Assembles the tangent at u into `pattern` and factors it. False (with a message) when a cell is
+// inverted or the pinned tangent is not positive definite.
+Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
+                     AssemblyPattern& pattern, const Eigen::VectorXd& u,
+                     const std::vector<char>& prescribed, std::shared_ptr<TangentFactor>& out,
+                     StageTimings* timings) {
+  StageClock clock;
+  Evaluation ev;
+  std::vector<double> packed;
+  if (!Evaluate(st, u, ev, &packed))
+    return Status::Error("a cell is inverted at the state to factor");
+  if (timings)
+    (*timings)[Stage::ElementStiffness].ms += clock.lapMs();
+  AssembleFromPacked(packed.data(), pattern);
+  auto made = std::make_shared<TangentFactor>();
+  made->tangent = pattern.upper;
+  std::vector<int> entries, diagonal;
+  FindPinnedEntries(pattern.upper, prescribed, entries, diagonal);
+  double* values = pattern.upper.valuePtr();
+  for (int k : entries)
+    values[k] = 0.0;
+  for (int k : diagonal)
+    if (!(values[k] > 0.0))
+      values[k] = 1.0;
+  if (timings)
+    (*timings)[Stage::Assembly].ms += clock.lapMs();
+  Status status = made->factor.analyze(pattern.upper, &ordering);
+  if (status)
+    status = made->factor.factorize(pattern.upper);
+  if (timings)
+    (*timings)[Stage::Factorization].ms += clock.lapMs();
+  if (!status)
+    return status;
+  out = std::move(made);
+  return Status::Ok();
+}
+
+} // namespace
+
+class LargeDeformationSystem {
+public:
+  ~LargeDeformationSystem() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    if (worker_.joinable())
+      worker_.join();
+  }
+
+  PrecomputeRequest request;
+  PrecomputedLargeDeformationOptions options;
+  std::shared_ptr<Structure> structure;
+  FillReducingOrdering ordering;
+  SparseMatrix restTangent; // upper, unpinned
+  StageTimings timings;
+
+  std::shared_ptr<const TangentFactor> factor() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return factor_;
+  }
+  void setFactor(std::shared_ptr<const TangentFactor> f) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    factor_ = std::move(f);
+  }
+
+  // Queues a refactorization at (u, prescribed); a newer request replaces a queued one.
+  void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      pendingU_ = u;
+      pendingPrescribed_ = prescribed;
+      pending_ = true;
+      if (!worker_.joinable()) {
+        workerPattern_ = solvePattern; // copied here: the solve's thread writes solvePattern
+        worker_ = std::thread([this] { work(); });
+      }
+    }
+    wake_.notify_all();
+  }
+
+  void waitIdle() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    idle_.wait(lock, [this] { return !pending_ && !busy_; });
+  }
+  int backgroundCount() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return backgroundCount_;
+  }
+
+  // The pattern a synchronous refactorization assembles into (the solve's thread only).
+  AssemblyPattern solvePattern;
+
+private:
+  void work() {
+    AssemblyPattern& pattern = workerPattern_;
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (true) {
+      wake_.wait(lock, [this] { return stop_ || pending_; });
+      if (stop_)
+        return;
+      const Eigen::VectorXd u = std::move(pendingU_);
+      const std::vector<char> prescribed = std::move(pendingPrescribed_);
+      pending_ = false;
+      busy_ = true;
+      lock.unlock();
+      std::shared_ptr<TangentFactor> made;
+      // A tangent that is not positive definite keeps the previous factor.
+      const Status status =
+          FactorTangent(*structure, ordering, pattern, u, prescribed, made, nullptr);
+      lock.lock();
+      if (status) {
+        factor_ = std::move(made);
+        ++backgroundCount_;
+      }
+      busy_ = false;
+      if (!pending_)
+        idle_.notify_all();
+    }
+  }
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_, idle_;
+  std::thread worker_;
+  std::shared_ptr<const TangentFactor> factor_;
+  AssemblyPattern workerPattern_; // the worker's only
+  Eigen::VectorXd pendingU_;
+  std::vector<char> pendingPrescribed_;
+  bool pending_ = false, busy_ = false, stop_ = false;
+  int backgroundCount_ = 0;
+};
+
+namespace {
+
+Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
+  if (!(o.tolerance > 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
+      o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0)
+    return Status::Error("invalid large-deformation options");
+  return Status::Ok();
+}
+
+Status PrecomputeImpl(const PrecomputeRequest& request,
+                      const PrecomputedLargeDeformationOptions& options,
+                      std::shared_ptr<LargeDeformationSystem>& out) {
+  StageClock total, clock;
+  out.reset();
+  if (request.options.elementOrder != ElementOrder::Linear)
+    return Status::Error("the large-deformation model supports linear (4-node) elements only");
+  Status status = ValidateOptions(options);
+  if (!status)
+    return status;
+  status = ValidateSolveInputs(request.mesh, request.materials, request.sets);
+  if (!status)
+    return status;
+  auto sys = std::make_shared<LargeDeformationSystem>();
+  sys->request = request;
+  sys->request.options.backend.reset();
+  sys->options = options;
+  sys->structure = std::make_shared<Structure>();
+  Structure& st = *sys->structure;
+  status = MakeStructure(sys->request, options.slidingLiftOff, st);
+  if (status)
+    status = MakePattern(st, sys->solvePattern);
+  if (!status)
+    return status;
+  sys->timings[Stage::Separation].ms = clock.lapMs();
+  status = OrderNodesWithTrailing(sys->solvePattern.upper, 3, {}, sys->ordering);
+  if (!status)
+    return status;
+  sys->timings[Stage::Reordering].ms = clock.lapMs();
+  const Eigen::VectorXd rest = Eigen::VectorXd::Zero(3 * st.n);
+  std::shared_ptr<TangentFactor> factor;
+  status = FactorTangent(st, sys->ordering, sys->solvePattern, rest, st.prescribed, factor,
+                         &sys->timings);
+  if (!status)
+    return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
+                         status.message);
+  sys->restTangent = factor->tangent;
+  st.unitStrainForce = RestForceNorm(sys->restTangent, LocalPositions(st));
+  sys->setFactor(std::move(factor));
+  sys->timings[Stage::Total].ms = total.elapsedMs();
+  out = std::move(sys);
+  return Status::Ok();
+}
+
+// Why a sub-step failed: a smaller one may mend it, or the solve falls back.
+enum class Failure { None, Smaller, Fallback };
+
+class QuasiNewton {
+public:
+  QuasiNewton(LargeDeformationSystem& sys, Problem& pb, PrecomputedLargeDeformationReport& report,
+              StageTimings& timings)
+      : sys_(sys), st_(*sys.structure), pb_(pb), report_(report), timings_(timings),
+        factor_(sys.factor()) {}
+
+  std::string why; // set with Failure::Fallback
+
+  // From u (converged for the previous targets, with pb_.prescribed's contact) to equilibrium at
+  // pb_'s targets and loads.
+  Failure substep(Eigen::VectorXd& u) {
+    clearHistory();
+    sinceFactor_ = 0;
+    if (!predict(u))
+      return Failure::Smaller;
+    const bool liftOff = !st_.liftOffDofs.empty();
+    const double tight = sys_.options.tolerance;
+    double tolerance = liftOff ? std::max(tight, kSettleTolerance) : tight;
+    int updates = 0;
+    while (true) {
+      const Failure f = minimise(u, tolerance);
+      if (f != Failure::None)
+        return f;
+      const std::vector<char> before = pb_.prescribed;
+      const bool changed = UpdateContact(pb_, u, 1.0);
+      if (!changed && tolerance == tight)
+        return Failure::None;
+      if (changed) {
+        ++report_.contactUpdates;
+        if (++updates > sys_.options.maxContactUpdates) {
+          why = "the lift-off contact did not settle";
+          return Failure::Smaller;
+        }
+        for (int dof : st_.liftOffDofs)
+          if (pb_.prescribed[dof] && !before[dof])
+            u[dof] = pb_.target[dof];
+        clearHistory();
+        tolerance = std::max(tight, kSettleTolerance);
+      } else {
+        tolerance = tight;
+      }
+    }
+  }
+
+  double lastResidual() const { return lastResidual_; }
+  // The internal force at the first sub-step's start (a converged state's), when known.
+  void setStartForce(const Eigen::VectorXd* force) { startForce_ = force; }
+  const Eigen::VectorXd& lastForce() const { return lastForce_; }
+
+private:
+  bool evaluate(const Eigen::VectorXd& u, Evaluation& ev) {
+    StageClock clock;
+    ++report_.evaluations;
+    const bool ok = Evaluate(st_, u, ev, nullptr);
+    timings_[Stage::ElementStiffness].ms += clock.lapMs();
+    return ok;
+  }
+
+  // H0 r = P F^-1 P r.
+  Eigen::VectorXd applyFactor(const Eigen::VectorXd& r) {
+    StageClock clock;
+    Eigen::MatrixXd x;
+    const Status solved = factor_->factor.solve(r, x);
+    ++report_.factorSolves;
+    timings_[Stage::Solve].ms += clock.lapMs();
+    if (!solved)
+      return Eigen::VectorXd();
+    Eigen::VectorXd out = x.col(0);
+    ZeroPrescribed(pb_.prescribed, out);
+    return out;
+  }
+
+  // The prescribed DOFs go to their targets and the free ones follow the factored tangent.
+  bool predict(Eigen::VectorXd& u) {
+    Eigen::VectorXd move = Eigen::VectorXd::Zero(u.size());
+    for (Eigen::Index i = 0; i < u.size(); ++i)
+      if (pb_.prescribed[i]) {
+        move[i] = pb_.target[i] - u[i];
+      }
+    Evaluation ev;
+    if (startForce_ && startForce_->size() == u.size()) {
+      ev.force = *startForce_; // the converged state's own
+    } else if (!evaluate(u, ev)) {
+      return false;
+    }
+    startForce_ = nullptr;
+    Eigen::VectorXd rhs = factor_->tangent.selfadjointView<Eigen::Upper>() * move;
+    rhs += ev.force - pb_.externalLoad;
+    rhs = -rhs;
+    ZeroPrescribed(pb_.prescribed, rhs);
+    Eigen::VectorXd follow = applyFactor(rhs);
+    if (follow.size() == 0 || !follow.allFinite())
+      return false;
+    for (double alpha : {1.0, 0.5, 0.25, 0.0}) {
+      const Eigen::VectorXd trial = u + move + alpha * follow;
+      if (evaluate(trial, cached_)) {
+        u = trial;
+        haveCached_ = true;
+        return true;
+      }
+    }
+    return false;
+  }
+
+  void clearHistory() {
+    s_.clear();
+    y_.clear();
+    rho_.clear();
+  }
+
+  Eigen::VectorXd direction(const Eigen::VectorXd& r) {
+    Eigen::VectorXd q = r;
+    const int k = static_cast<int>(s_.size());
+    std::vector<double> a(static_cast<size_t>(k));
+    for (int i = k - 1; i >= 0; --i) {
+      a[i] = rho_[i] * s_[i].dot(q);
+      q -= a[i] * y_[i];
+    }
+    Eigen::VectorXd z = applyFactor(q);
+    if (z.size() == 0)
+      return z;
+    for (int i = 0; i < k; ++i) {
+      const double b = rho_[i] * y_[i].dot(z);
+      z += (a[i] - b) * s_[i];
+    }
+    return -z;
+  }
+
+  bool refactor(const Eigen::VectorXd& u) {
+    if (report_.refactorizations >= sys_.options.maxRefactorizations)
+      return false;
+    std::shared_ptr<TangentFactor> made;
+    if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed, made, &timings_))
+      return false;
+    factor_ = std::move(made);
+    ++report_.refactorizations;
+    return true;
+  }
+
+  // L-BFGS on the free DOFs with the current contact, to `tolerance`.
+  Failure minimise(Eigen::VectorXd& u, double tolerance) {
+    Evaluation ev;
+    if (haveCached_) {
+      ev = std::move(cached_);
+      haveCached_ = false;
+    } else if (!evaluate(u, ev)) {
+      return Failure::Smaller;
+    }
+    Balance b = BalanceOf(pb_, ev, u, 1.0);
+    while (true) {
+      lastResidual_ = b.scale > 0.0 ? b.residual.norm() / b.scale : 0.0;
+      report_.convergence.emplace_back(clock_.elapsedMs(), lastResidual_);
+      if (b.residual.norm() <= tolerance * b.scale) {
+        lastForce_ = std::move(ev.force);
+        return Failure::None;
+      }
+      if (report_.iterations >= sys_.options.maxIterations) {
+        why = "it did not converge within " + std::to_string(sys_.options.maxIterations) +
+              " quasi-Newton iterations";
+        return Failure::Fallback;
+      }
+      ++report_.iterations;
+      if (sys_.options.refactorAfter > 0 && ++sinceFactor_ >= sys_.options.refactorAfter) {
+        sinceFactor_ = 0;
+        if (refactor(u))
+          clearHistory();
+      }
+      bool accepted = false;
+      for (int attempt = 0; attempt < 2 && !accepted; ++attempt) {
+        const Eigen::VectorXd d = direction(b.residual);
+        if (d.size() == 0 || !d.allFinite()) {
+          why = "a substitution with the factor failed";
+          return Failure::Fallback;
+        }
+        const double slope = b.residual.dot(d);
+        if (!(slope < 0.0)) {
+          clearHistory();
+          continue;
+        }
+        for (double alpha = 1.0; alpha >= 1.0 / 1024.0; alpha *= 0.5) {
+          const Eigen::VectorXd trial = u + alpha * d;
+          Evaluation tev;
+          if (!evaluate(trial, tev))
+            continue; // a cell would invert: a shorter step
+          Balance tb = BalanceOf(pb_, tev, trial, 1.0);
+          if (tb.potential <= b.potential + 1e-4 * alpha * slope ||
+              tb.residual.norm() < b.residual.norm()) {
+            Eigen::VectorXd sk = trial - u, yk = tb.residual - b.residual;
+            const double sy = sk.dot(yk);
+            if (sys_.options.historySize > 0 && sy > 1e-14 * sk.norm() * yk.norm()) {
+              if (static_cast<int>(s_.size()) == sys_.options.historySize) {
+                s_.pop_front();
+                y_.pop_front();
+                rho_.pop_front();
+              }
+              s_.push_back(std::move(sk));
+              y_.push_back(std::move(yk));
+              rho_.push_back(1.0 / sy);
+            }
+            u = trial;
+            b = std::move(tb);
+            ev = std::move(tev);
+            accepted = true;
+            break;
+          }
+        }
+        if (!accepted)
+          clearHistory(); // the factor's own step next
+      }
+      if (!accepted) {
+        why = "its line search found no step that lowers the energy or the residual";
+        return Failure::Smaller;
+      }
+    }
+  }
+
+  LargeDeformationSystem& sys_;
+  const Structure& st_;
+  Problem& pb_;
+  PrecomputedLargeDeformationReport& report_;
+  StageTimings& timings_;
+  std::shared_ptr<const TangentFactor> factor_;
+  std::deque<Eigen::VectorXd> s_, y_;
+  std::deque<double> rho_;
+  int sinceFactor_ = 0;
+  double lastResidual_ = 0.0;
+  Evaluation cached_; // the predictor's accepted state
+  bool haveCached_ = false;
+  const Eigen::VectorXd* startForce_ = nullptr;
+  Eigen::VectorXd lastForce_; // at the last converged state
+  StageClock clock_;
+};
+
+Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
+                 const LargeDeformationState* warm, SolveResult& result,
+                 PrecomputedLargeDeformationReport& report, LargeDeformationState* converged) {
+  StageClock total;
+  result = SolveResult();
+  report = PrecomputedLargeDeformationReport();
+  if (converged)
+    *converged = LargeDeformationState();
+  result.method = SolveMethod::LargeDeformationPrecomputed;
+  result.backend = "CPU";
+  const PrecomputeRequest& request = sys.request;
+  if (input.movableDisplacement.rows() != static_cast<Eigen::Index>(request.sets.movable.size()))
+    return Status::Error("expected one ROI displacement per movable node");
+  if (!input.movableDisplacement.allFinite() || !input.gravity.allFinite())
+    return Status::Error("prescribed displacements or loads contain NaN or infinite values");
+
+  const Structure& st = *sys.structure;
+  Problem pb;
+  pb.st = sys.structure;
+  Status status = SetValues(request, input, pb);
+  if (!status)
+    return status;
+  const Eigen::VectorXd fullTarget = pb.target, fullLoad = pb.externalLoad;
+  pb.linearForce = RestForceNorm(sys.restTangent, fullTarget);
+
+  Eigen::VectorXd u, fromTarget, fromLoad;
+  report.warmStarted = warm && warm->system == &sys && warm->u.size() == 3 * st.n;
+  if (report.warmStarted) {
+    u = warm->u;
+    pb.prescribed = warm->prescribed;
+    fromTarget = warm->target;
+    fromLoad = warm->load;
+  } else {
+    u = Eigen::VectorXd::Zero(3 * st.n);
+    pb.prescribed = st.prescribed;
+    fromTarget = Eigen::VectorXd::Zero(3 * st.n);
+    fromLoad = Eigen::VectorXd::Zero(3 * st.n);
+  }
+
+  QuasiNewton solver(sys, pb, report, result.timings);
+  double reached = 0.0, step = 1.0;
+  int halvings = 0;
+  std::string why;
+  while (reached < 1.0) {
+    const double to = std::min(1.0, reached + step);
+    pb.target = fromTarget + to * (fullTarget - fromTarget);
+    pb.externalLoad = fromLoad + to * (fullLoad - fromLoad);
+    Eigen::VectorXd trial = u;
+    const std::vector<char> contact = pb.prescribed;
+    solver.why.clear();
+    solver.setStartForce(reached == 0.0 && report.warmStarted ? &warm->force : nullptr);
+    const Failure f = solver.substep(trial);
+    if (f == Failure::None) {
+      u = std::move(trial);
+      reached = to;
+      ++report.substeps;
+      halvings = 0;
+      continue;
+    }
+    pb.prescribed = contact;
+    ++report.rejectedSubsteps;
+    if (f == Failure::Fallback || ++halvings > sys.options.maxSubstepHalvings) {
+      why = solver.why.empty() ? "a cell would invert at the smallest sub-step" : solver.why;
+      break;
+    }
+    step *= 0.5;
+  }
+
+  if (reached < 1.0) {
+    if (!sys.options.fallBackToNewton)
+      return Status::Error("the precomputed large-deformation solve did not converge: " + why);
+    report.fellBack = true;
+    report.fallbackReason = why;
+    LargeDeformationOptions newton = sys.options.newton;
+    newton.slidingLiftOff = sys.options.slidingLiftOff;
+    newton.tolerance = sys.options.tolerance;
+    status = SolveLargeDeformation(request, input, newton, result, report.newton);
+    if (!status)
+      return status;
+    report.smallestVolumeRatio = report.newton.smallestVolumeRatio;
+    report.largestGreenStrain = report.newton.largestGreenStrain;
+    report.largestStrainCell = report.newton.largestStrainCell;
+    report.liftedNodes = report.newton.liftedNodes;
+    return status;
+  }
+
+  const DeformationMeasures measures = MeasureDeformation(st, u);
+  report.smallestVolumeRatio = measures.smallestVolumeRatio;
+  report.largestGreenStrain = measures.largestGreenStrain;
+  report.largestStrainCell = measures.largestStrainCell;
+  for (int dof : st.liftOffDofs)
+    report.liftedNodes += pb.prescribed[dof] ? 0 : 1;
+  result.relativeResidual = solver.lastResidual();
+  result.largestStrain = measures.largestGreenStrain;
+  result.invertedCells = 0;
+  status = FillResult(request, input, st, u, result);
+  if (!status)
+    return status;
+  if (sys.options.backgroundRefactorization)
+    sys.requestRefactorization(u, pb.prescribed);
+  if (converged) {
+    converged->system = &sys;
+    converged->u = std::move(u);
+    converged->prescribed = pb.prescribed;
+    converged->target = fullTarget;
+    converged->load = fullLoad;
+    converged->force = solver.lastForce();
+  }
+  result.timings[Stage::Total].ms = total.elapsedMs();
+  return Status::Ok();
+}
+
+} // namespace
+
+Status PrecomputeLargeDeformation(const PrecomputeRequest& request,
+                                  const PrecomputedLargeDeformationOptions& options,
+                                  std::shared_ptr<LargeDeformationSystem>& system) {
+  return ReturnStatusOnException("the large-deformation precompute", [&]() -> Status {
+    return PrecomputeImpl(request, options, system);
+  });
+}
+
+Status SolvePrecomputedLargeDeformation(LargeDeformationSystem& system, const SolveInput& input,
+                                        const LargeDeformationState* warm, SolveResult& result,
+                                        PrecomputedLargeDeformationReport& report,
+                                        LargeDeformationState* converged) {
+  return ReturnStatusOnException("the large-deformation solve", [&]() -> Status {
+    return SolveImpl(system, input, warm, result, report, converged);
+  });
+}
+
+void WaitForRefactorization(LargeDeformationSystem& system) {
+  system.waitIdle();
+}
+
+StageTimings PrecomputeTimings(const LargeDeformationSystem& system) {
+  return system.timings;
+}
+
+int BackgroundRefactorizations(const LargeDeformationSystem& system) {
+  return system.backgroundCount();
+}
+
+} // namespace faceplan

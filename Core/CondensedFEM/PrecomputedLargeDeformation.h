@@ -1,0 +1,121 @@
+#pragma once
+// The large-deformation model (LargeDeformation.h: the same compressible neo-Hookean equilibrium,
+// node frames, sliding and lift-off contact, tolerance) split into a precompute and a solve, so
+// that an edit costs no numeric factorization.
+//
+// Precompute (on a worker thread): the node frames, the assembly pattern, the METIS ordering and
+// the symbolic analysis of the whole-mesh tangent, and the numeric factor of the rest-pose tangent
+// (prescribed DOFs keep their diagonal; their rows and columns are zero).
+//
+// Solve: L-BFGS on the free DOFs whose initial inverse Hessian is that factor (Liu, Bouaziz &
+// Kavan, ACM TOG 2017), with a predictor that moves the prescribed DOFs and lets the free ones
+// follow the factored tangent. The two-loop recursion is written here: LBFGS++ scales a multiple of
+// the identity as its initial Hessian and has no hook for a factor, nor for a step that must keep
+// every cell's det F > 0 (the line search here rejects such steps). Every accepted step keeps det F
+// > 0. After a converged solve the tangent at the converged state is factored again on a background
+// thread (with that state's contact), so the next edit of a drag, a small change from there,
+// starts from an exact Newton predictor and converges in a few cheap iterations. Within a solve, a
+// sub-step that has not converged after `refactorAfter` iterations factors the current tangent
+// (modified Newton with a refresh) and restarts the L-BFGS history.
+//
+// Lift-off (unilateral contact): the factor is made with the contact of its state pinned. A DOF
+// free now but pinned in the factor gets the factor's diagonal (its row is decoupled); a DOF
+// pinned now but free in the factor is projected out (the initial inverse Hessian is P F^-1 P, P
+// zeroing the pinned DOFs), which stays symmetric positive definite on the free DOFs, so L-BFGS
+// minimises the energy over exactly the free DOFs. The active set is updated with Newton's rule
+// (UpdateContact) on states converged to 1e-6 and the final state is converged to the tolerance
+// with no change left: the constrained equilibrium Newton finds (the tests compare them).
+//
+// Warm start: a solve may start from the last converged state (only the prescribed values or
+// loads changed); the prescribed values and loads then go from that state's to the new ones.
+// A sub-step that inverts a cell or does not converge is halved. When the solve does not converge
+// within its bounds it falls back to Newton (SolveLargeDeformation) and says so in the report; it
+// never returns an unconverged answer.
+//
+// Chosen by measurement on the Badin face scenes (Benchmarks/results/large_deformation_timing.txt):
+// see there for the figures against Newton.
+#include "CondensedFEM/CondensedFEM.h"
+#include "CondensedFEM/LargeDeformation.h"
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace faceplan {
+
+struct PrecomputedLargeDeformationOptions {
+  double tolerance = 1e-9; // as LargeDeformationOptions::tolerance
+  bool slidingLiftOff = false;
+  int historySize = 8; // L-BFGS pairs kept
+  // Quasi-Newton iterations over the whole solve; past it the solve falls back to Newton.
+  int maxIterations = 400;
+  // A sub-step that has run this many iterations without converging factors the tangent at its
+  // current state (0: never).
+  int refactorAfter = 40;
+  int maxRefactorizations = 4; // per solve
+  int maxSubstepHalvings = 8;
+  int maxContactUpdates = 100;
+  // After a converged solve, factor the tangent at its state on a background thread.
+  bool backgroundRefactorization = true;
+  // When the solve does not converge: Newton (true) or an error (false, for tests).
+  bool fallBackToNewton = true;
+  LargeDeformationOptions newton; // the fallback's (slidingLiftOff and tolerance are set from here)
+};
+
+// The precompute's data (opaque). Solves may run while its background refactorization does; two
+// solves on one system must not run at once.
+class LargeDeformationSystem;
+
+// Precomputes for `request` (linear cells only; validated as SolveLargeDeformation does).
+Status PrecomputeLargeDeformation(const PrecomputeRequest& request,
+                                  const PrecomputedLargeDeformationOptions& options,
+                                  std::shared_ptr<LargeDeformationSystem>& system);
+
+// A converged state of one system, from which a later solve may start.
+struct LargeDeformationState {
+  const LargeDeformationSystem* system = nullptr;
+  Eigen::VectorXd u;            // every DOF, in the nodes' frames
+  std::vector<char> prescribed; // per DOF (lift-off's contact included)
+  Eigen::VectorXd target, load; // what it is the equilibrium for
+  Eigen::VectorXd force;        // the internal force at u
+  bool valid() const { return system != nullptr; }
+};
+
+struct PrecomputedLargeDeformationReport {
+  bool warmStarted = false;
+  int iterations = 0;   // quasi-Newton iterations (evaluations of the forces, line search aside)
+  int evaluations = 0;  // force evaluations, line search included
+  int factorSolves = 0; // substitutions with the factor
+  int substeps = 0;     // accepted sub-steps of the prescribed change
+  int rejectedSubsteps = 0;
+  int refactorizations = 0; // numeric factorizations in this solve (slow convergence)
+  int contactUpdates = 0;
+  int liftedNodes = 0;
+  double smallestVolumeRatio = 1.0;
+  double largestGreenStrain = 0.0;
+  long long largestStrainCell = -1;
+  // Fallback: why the precomputed solve did not converge, and Newton's report.
+  bool fellBack = false;
+  std::string fallbackReason;
+  LargeDeformationReport newton;
+  // Per iteration: time since the solve started (ms) and the relative residual.
+  std::vector<std::pair<double, double>> convergence;
+};
+
+// Solves for `input` (as SolveLargeDeformation) with the precomputed system, from `warm` when it
+// is a converged state of this system, else from the rest state. `converged` (optional) receives
+// the converged state (invalid after a fallback to Newton).
+Status SolvePrecomputedLargeDeformation(LargeDeformationSystem& system, const SolveInput& input,
+                                        const LargeDeformationState* warm, SolveResult& result,
+                                        PrecomputedLargeDeformationReport& report,
+                                        LargeDeformationState* converged = nullptr);
+
+// Blocks until no background refactorization is running or queued (benchmarks and tests).
+void WaitForRefactorization(LargeDeformationSystem& system);
+// The precompute's stage times (Reordering, ElementStiffness, Assembly, Factorization, Total).
+StageTimings PrecomputeTimings(const LargeDeformationSystem& system);
+// Refactorizations completed in the background so far.
+int BackgroundRefactorizations(const LargeDeformationSystem& system);
+
+} // namespace faceplan

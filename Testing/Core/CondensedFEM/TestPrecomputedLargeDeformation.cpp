@@ -1,0 +1,307 @@
+// The precomputed large-deformation solve against Newton's (the same equilibrium to 1e-8), warm
+// starts against cold solves, lift-off's active set changing during a drag, a move that must invert
+// cells, the fallback to Newton, the background refactorization and bad input.
+#include "Common/RelativeDifference.h"
+#include "CondensedFEM/LargeDeformation.h"
+#include "CondensedFEM/PrecomputedLargeDeformation.h"
+#include "Support/BoxMeshGenerator.h"
+#include "Support/FEMTestScenes.h"
+
+#include <cmath>
+#include <functional>
+#include <gtest/gtest.h>
+
+using namespace faceplan;
+using namespace faceplan::testing;
+
+namespace {
+
+constexpr double kLx = 20.0, kLy = 16.0, kLz = 12.0, kNu = 0.45, kE = 3000.0;
+constexpr double kAgreement = 1e-8;
+
+SolveInput PlateMove(const PrecomputeRequest& request, double press) {
+  SolveInput input;
+  input.movableDisplacement =
+      RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+  input.movableDisplacement.col(2).setConstant(-press);
+  input.recoverInterior = true;
+  return input;
+}
+
+// A block on a frictionless floor (z = 0, sliding) whose top face is held and moved by `top`.
+struct FloorBlock {
+  PrecomputeRequest request;
+  std::vector<int> floor;
+  std::vector<Eigen::RowVector3d> topPoints;
+  SolveInput input(const std::function<Eigen::RowVector3d(const Eigen::RowVector3d&)>& top) const {
+    SolveInput in;
+    in.movableDisplacement.resize(static_cast<Eigen::Index>(topPoints.size()), 3);
+    for (size_t k = 0; k < topPoints.size(); ++k)
+      in.movableDisplacement.row(static_cast<Eigen::Index>(k)) = top(topPoints[k]);
+    in.recoverInterior = true;
+    return in;
+  }
+};
+FloorBlock BlockOnFloor() {
+  FloorBlock b;
+  b.request.mesh = MakeBoxTetMesh(4, 4, 3, kLx, kLx, kLz);
+  b.request.materials = Materials::Uniform(kE, kNu);
+  for (Eigen::Index i = 0; i < b.request.mesh.numPoints(); ++i) {
+    const Eigen::RowVector3d p = b.request.mesh.points.row(i);
+    const int node = static_cast<int>(i);
+    b.request.sets.kept.push_back(node);
+    if (p.z() == 0.0) {
+      b.request.sets.constrained.push_back(node);
+      b.request.sets.sliding.push_back(node);
+      b.request.sets.slidingNormal.push_back(Eigen::Vector3d::UnitZ());
+      b.floor.push_back(node);
+    } else if (p.z() == kLz) {
+      b.request.sets.constrained.push_back(node);
+      b.request.sets.movable.push_back(node);
+      b.topPoints.push_back(p);
+    }
+  }
+  return b;
+}
+
+// The top face tilted by `angle` about its centre line: one side presses, the other pulls.
+std::function<Eigen::RowVector3d(const Eigen::RowVector3d&)> Tilt(double angle) {
+  return [angle](const Eigen::RowVector3d& p) {
+    const double x = p.x() - 0.5 * kLx;
+    return Eigen::RowVector3d(x * (std::cos(angle) - 1.0), 0.0, x * std::sin(angle));
+  };
+}
+
+std::shared_ptr<LargeDeformationSystem>
+Precomputed(const PrecomputeRequest& request, PrecomputedLargeDeformationOptions options = {}) {
+  std::shared_ptr<LargeDeformationSystem> system;
+  const Status s = PrecomputeLargeDeformation(request, options, system);
+  EXPECT_TRUE(s.ok) << s.message;
+  return system;
+}
+
+SolveResult Newton(const PrecomputeRequest& request, const SolveInput& input, bool liftOff,
+                   LargeDeformationReport* out = nullptr) {
+  LargeDeformationOptions options;
+  options.slidingLiftOff = liftOff;
+  SolveResult result;
+  LargeDeformationReport report;
+  const Status s = SolveLargeDeformation(request, input, options, result, report);
+  EXPECT_TRUE(s.ok) << s.message;
+  if (out)
+    *out = report;
+  return result;
+}
+
+TEST(PrecomputedLargeDeformation, AgreesWithNewton) {
+  // A 35 % press (no sliding), the shell's 5 mm ROI push with ties and sliding nodes and a kept
+  // subset, and the sliding shell on a curved surface.
+  std::vector<std::pair<PrecomputeRequest, SolveInput>> scenes;
+  {
+    const PrecomputeRequest r = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+    scenes.emplace_back(r, PlateMove(r, 0.35 * kLz));
+  }
+  {
+    const PrecomputeRequest r = ShellRequest(4, 2);
+    SolveInput in;
+    in.movableDisplacement = SmoothRoiField(r, 5.0);
+    scenes.emplace_back(r, in);
+  }
+  {
+    RowVectors3d moves;
+    const PrecomputeRequest r = SlidingShellRequest(10.0, moves);
+    SolveInput in;
+    in.movableDisplacement = moves;
+    scenes.emplace_back(r, in);
+  }
+  for (size_t k = 0; k < scenes.size(); ++k) {
+    const auto& [request, input] = scenes[k];
+    auto system = Precomputed(request);
+    ASSERT_TRUE(system);
+    SolveResult result;
+    PrecomputedLargeDeformationReport report;
+    const Status s = SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_FALSE(report.fellBack) << "scene " << k << ": " << report.fallbackReason;
+    EXPECT_EQ(result.method, SolveMethod::LargeDeformationPrecomputed);
+    EXPECT_LT(result.relativeResidual, 1e-9);
+    const SolveResult newton = Newton(request, input, false);
+    EXPECT_LT(RelativeMaxNodeDifference(result.keptDisplacement, newton.keptDisplacement),
+              kAgreement)
+        << "scene " << k;
+    EXPECT_EQ(newton.method, SolveMethod::LargeDeformationNewton);
+    EXPECT_GT(report.largestGreenStrain, 0.1) << "scene " << k << " is a large move";
+  }
+}
+
+TEST(PrecomputedLargeDeformation, LiftOffAgreesWithNewton) {
+  // Pulled up, the block leaves the floor; tilted, part of it does: the constrained equilibrium.
+  const FloorBlock b = BlockOnFloor();
+  PrecomputedLargeDeformationOptions options;
+  options.slidingLiftOff = true;
+  auto system = Precomputed(b.request, options);
+  ASSERT_TRUE(system);
+  for (const auto& top :
+       {Tilt(0.25), std::function<Eigen::RowVector3d(const Eigen::RowVector3d&)>(
+                        [](const Eigen::RowVector3d&) { return Eigen::RowVector3d(0, 0, 3.0); })}) {
+    const SolveInput input = b.input(top);
+    SolveResult result;
+    PrecomputedLargeDeformationReport report;
+    const Status s = SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_FALSE(report.fellBack) << report.fallbackReason;
+    LargeDeformationReport newtonReport;
+    const SolveResult newton = Newton(b.request, input, true, &newtonReport);
+    EXPECT_EQ(report.liftedNodes, newtonReport.liftedNodes);
+    EXPECT_GT(report.liftedNodes, 0);
+    EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement),
+              kAgreement);
+  }
+}
+
+TEST(PrecomputedLargeDeformation, WarmStartsEqualColdSolvesAndTheActiveSetChangesInADrag) {
+  // The tilt dragged from 0 in small steps, each step warm-started from the last: at first every
+  // floor node stays down, then more and more lift off. Each step equals a cold solve and Newton.
+  const FloorBlock b = BlockOnFloor();
+  PrecomputedLargeDeformationOptions options;
+  options.slidingLiftOff = true;
+  auto system = Precomputed(b.request, options);
+  ASSERT_TRUE(system);
+  LargeDeformationState state;
+  std::vector<int> lifted;
+  for (int step = 1; step <= 6; ++step) {
+    const SolveInput input = b.input(Tilt(0.05 * step));
+    SolveResult warm, cold;
+    PrecomputedLargeDeformationReport warmReport, coldReport;
+    LargeDeformationState next;
+    Status s = SolvePrecomputedLargeDeformation(*system, input, &state, warm, warmReport, &next);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_EQ(warmReport.warmStarted, step > 1);
+    EXPECT_FALSE(warmReport.fellBack) << warmReport.fallbackReason;
+    state = next;
+    ASSERT_TRUE(state.valid());
+    s = SolvePrecomputedLargeDeformation(*system, input, nullptr, cold, coldReport);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_FALSE(coldReport.warmStarted);
+    EXPECT_LT(RelativeMaxNodeDifference(warm.allDisplacement, cold.allDisplacement), kAgreement)
+        << "step " << step;
+    LargeDeformationReport newtonReport;
+    const SolveResult newton = Newton(b.request, input, true, &newtonReport);
+    EXPECT_LT(RelativeMaxNodeDifference(warm.allDisplacement, newton.allDisplacement), kAgreement)
+        << "step " << step;
+    EXPECT_EQ(warmReport.liftedNodes, newtonReport.liftedNodes) << "step " << step;
+    lifted.push_back(warmReport.liftedNodes);
+  }
+  EXPECT_LT(lifted.front(), lifted.back()) << "the active set changed during the drag";
+  WaitForRefactorization(*system);
+  EXPECT_GT(BackgroundRefactorizations(*system), 0);
+}
+
+TEST(PrecomputedLargeDeformation, ADragOnTheShellEqualsTheColdSolve) {
+  const PrecomputeRequest request = ShellRequest(4, 2);
+  auto system = Precomputed(request);
+  ASSERT_TRUE(system);
+  LargeDeformationState state;
+  SolveInput input;
+  input.recoverInterior = true;
+  for (double amplitude = 0.5; amplitude <= 5.0; amplitude += 0.5) {
+    input.movableDisplacement = SmoothRoiField(request, amplitude);
+    SolveResult result;
+    PrecomputedLargeDeformationReport report;
+    LargeDeformationState next;
+    ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, &state, result, report, &next).ok);
+    state = next;
+  }
+  SolveResult warm, cold;
+  PrecomputedLargeDeformationReport report;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, &state, warm, report).ok);
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, nullptr, cold, report).ok);
+  EXPECT_LT(RelativeMaxNodeDifference(warm.allDisplacement, cold.allDisplacement), kAgreement);
+  // A state of another system is not used.
+  auto other = Precomputed(request);
+  ASSERT_TRUE(other);
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*other, input, &state, warm, report).ok);
+  EXPECT_FALSE(report.warmStarted);
+}
+
+TEST(PrecomputedLargeDeformation, AMoveThatMustInvertCellsIsAClearError) {
+  // The plate pushed 1.5 block heights down: no state without inverted cells reaches it. The
+  // precomputed solve falls back to Newton, whose load steps cannot go further either.
+  const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+  auto system = Precomputed(request);
+  ASSERT_TRUE(system);
+  SolveResult result;
+  PrecomputedLargeDeformationReport report;
+  const Status s = SolvePrecomputedLargeDeformation(*system, PlateMove(request, 1.5 * kLz), nullptr,
+                                                    result, report);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("did not converge"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("a cell would invert"), std::string::npos) << s.message;
+  EXPECT_TRUE(report.fellBack);
+}
+
+TEST(PrecomputedLargeDeformation, ItFallsBackToNewtonAndSaysSo) {
+  const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+  PrecomputedLargeDeformationOptions options;
+  options.maxIterations = 1; // the 35 % press needs more
+  auto system = Precomputed(request, options);
+  ASSERT_TRUE(system);
+  const SolveInput input = PlateMove(request, 0.35 * kLz);
+  SolveResult result;
+  PrecomputedLargeDeformationReport report;
+  LargeDeformationState state;
+  Status s = SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report, &state);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_TRUE(report.fellBack);
+  EXPECT_NE(report.fallbackReason.find("within 1 quasi-Newton iterations"), std::string::npos)
+      << report.fallbackReason;
+  EXPECT_EQ(result.method, SolveMethod::LargeDeformationNewton);
+  EXPECT_GT(report.newton.newtonIterations, 0);
+  EXPECT_FALSE(state.valid()) << "no warm state from the fallback";
+  const SolveResult newton = Newton(request, input, false);
+  EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement), 1e-14);
+
+  // Without the fallback the bound is an error, never an unconverged answer.
+  options.fallBackToNewton = false;
+  system = Precomputed(request, options);
+  ASSERT_TRUE(system);
+  s = SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("did not converge"), std::string::npos) << s.message;
+}
+
+TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
+  const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+  std::shared_ptr<LargeDeformationSystem> system;
+  PrecomputeRequest quadratic = request;
+  quadratic.options.elementOrder = ElementOrder::Quadratic;
+  Status s = PrecomputeLargeDeformation(quadratic, {}, system);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("linear (4-node) elements"), std::string::npos) << s.message;
+  EXPECT_FALSE(system);
+  PrecomputedLargeDeformationOptions options;
+  options.tolerance = 0.0;
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options = {};
+  options.maxIterations = 0;
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  PrecomputeRequest broken = request;
+  broken.mesh.tets(0, 0) = -1;
+  EXPECT_FALSE(PrecomputeLargeDeformation(broken, {}, system).ok);
+
+  system = Precomputed(request);
+  ASSERT_TRUE(system);
+  SolveResult result;
+  PrecomputedLargeDeformationReport report;
+  SolveInput input = PlateMove(request, 1.0);
+  input.movableDisplacement(0, 2) = std::nan("");
+  EXPECT_FALSE(SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report).ok);
+  input = PlateMove(request, 1.0);
+  input.movableDisplacement.conservativeResize(3, 3);
+  EXPECT_FALSE(SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report).ok);
+  input = PlateMove(request, 1.0);
+  input.nodalLoads = RowVectors3d::Zero(2, 3);
+  EXPECT_FALSE(SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report).ok);
+}
+
+} // namespace
