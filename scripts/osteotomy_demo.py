@@ -1,7 +1,9 @@
 """One osteotomy scene on the Badin face (pvbatch): the cut and move of the bone segment and the soft
 tissue's deformation, solved for large deformations (osteotomy_scenes.configure_model). Writes
 before/after images of the bone and the face (one displacement colour map and range for both, colour
-bar in mm) and the stage-timing table; prints the largest strain.
+bar in mm), the stage-timing table and the midline profile before and after with the facial
+landmarks marked (profile.png); prints the largest strain and the landmark table (FacialLandmarks:
+movements, soft:hard ratios and the published bands).
 
     pvbatch scripts/osteotomy_demo.py <FacePlan.so> <Data dir> <output dir> lefort1|bsso|genioplasty
 """
@@ -10,9 +12,11 @@ import os
 import sys
 import time
 
+import paraview.simple
 from paraview.simple import *
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import landmark_profile
 import osteotomy_scenes
 from faceplan_views import screenshot, white_render_view
 
@@ -123,5 +127,11 @@ print("largest strain: %.1f %% (principal Green-Lagrange, %s model; %d load step
           100.0 * strain.GetValue(0), fd.GetAbstractArray("Model").GetValue(0),
           fd.GetArray("LoadSteps").GetValue(0), fd.GetArray("NewtonIterations").GetValue(0),
           fd.GetArray("SmallestVolumeRatio").GetValue(0), fd.GetArray("LiftedNodes").GetValue(0)))
+landmarks = paraview.simple.FacialLandmarks(Input=fem, Bone=skeleton)  # the bands of the preset's Operation
+landmarks.UpdatePipeline()
+print("facial landmarks (mm; horizontal + forward, vertical + up; ratio = soft / paired bone, horizontal):")
+print(landmark_profile.table_text(landmarks))
+images.append(landmark_profile.draw(landmarks, OutputPort(fem, 0), skeleton, os.path.join(out_dir, "profile.png"),
+                                    "FacePlan, %s: midline profile before (grey) and after" % scene))
 for path in images:
     print("image:", path)

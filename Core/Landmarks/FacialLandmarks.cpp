@@ -290,7 +290,7 @@ void PlaceMidlineBone(const Segments& bone, const Frame& f, Placement& p) {
       p.miss(l, "needs Stomion and Pronasale on the skin (the occlusal level and the window)");
     return;
   }
-  const Envelope e = AnteriorEnvelope(bone, f.superior, f.anterior);
+  Envelope e = AnteriorEnvelope(bone, f.superior, f.anterior);
   if (e.size() == 0) {
     for (Landmark l : all)
       p.miss(l, "the bone has no midsagittal section");
@@ -301,14 +301,37 @@ void PlaceMidlineBone(const Segments& bone, const Frame& f, Placement& p) {
   const double top = f.superior.dot(p.at(Landmark::Pronasale));
   auto index = [&](double u) { return static_cast<int>(std::floor((u - e.u0) / e.step)); };
   const int kOcc = index(occlusal), kTop = index(top);
-  const double jump = 0.03 * H, reach = 0.1 * H;
-  // Follows the anterior contour from `start` in direction `dir` while it is sampled and does not
-  // step back by more than `jump`; returns the last sample.
+  // A step back of the contour larger than 3 % of the face's height, or than twice the section's
+  // median segment (a coarse mesh's facets), leaves the jaw's anterior surface.
+  std::vector<double> lengths;
+  for (std::size_t i = 0; i + 1 < bone.size(); i += 2)
+    lengths.push_back((bone[i + 1] - bone[i]).norm());
+  std::nth_element(lengths.begin(), lengths.begin() + static_cast<long>(lengths.size() / 2),
+                   lengths.end());
+  const double jump = std::max(0.03 * H, 2.0 * lengths[lengths.size() / 2]), reach = 0.1 * H;
+  // Follows the anterior contour from `start` in direction `dir` while it does not step back by
+  // more than `jump`, across gaps no longer than `jump` (where a coarse section has a hole);
+  // returns the last sample.
+  // Samples off the contour inside the run are dropped, so that the concavities and extremes
+  // below see the contour only.
   auto follow = [&](int start, int dir) {
-    int k = start;
-    while (e.ok(k + dir) && std::abs(e.v[k + dir] - e.v[k]) <= jump)
-      k += dir;
-    return k;
+    int last = start;
+    std::vector<int> gap;
+    for (int k = start + dir; k >= 0 && k < e.size(); k += dir) {
+      // A sample off the contour (none, or a posterior surface seen through a hole of the
+      // section) is a gap.
+      if (!e.ok(k) || std::abs(e.v[k] - e.v[last]) > jump) {
+        if (std::abs(k - last) * e.step > jump)
+          break;
+        gap.push_back(k);
+        continue;
+      }
+      for (int g : gap)
+        e.v[g] = kNaN;
+      gap.clear();
+      last = k;
+    }
+    return last;
   };
 
   // Upper jaw: above the occlusal level, up to pronasale's height.
@@ -421,11 +444,25 @@ void PlaceLateralPair(const Segments& horizontal, const Frame& f, const Eigen::V
       const int skip = static_cast<int>(0.05 * p.profileHeight / e.step);
       front = dir < 0 ? ArgMax(e, end, centre - skip) : ArgMax(e, centre + skip, end);
     }
-    const int k = Deepest(e, front, end);
-    if (k < 0 || front < 0)
-      p.miss(l, "no concavity on the horizontal section on this side");
-    else
+    const int k = front >= 0 ? Deepest(e, front, end) : -1;
+    if (k >= 0) {
       p.set(l, e.point[k]);
+      continue;
+    }
+    // A convex section (a coarse mesh): where it has receded half-way to the chord's end.
+    int half = -1;
+    for (int j = centre; j >= 0 && j < e.size(); j += dir)
+      if (e.ok(j) && e.v[j] <= v0 - 0.5 * behind) {
+        half = j;
+        break;
+      }
+    if (half < 0) {
+      p.miss(l, "no concavity on the horizontal section on this side");
+    } else {
+      p.set(l, e.point[half]);
+      p.note[static_cast<int>(l)] =
+          "no concavity on this side: taken where the section has receded half-way";
+    }
   }
 }
 

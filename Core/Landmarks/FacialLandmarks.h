@@ -19,6 +19,8 @@
 //     behind the chord from the lip's most anterior point past the fissure's notch at the midline
 //     (more than 5 % of the profile's height to the side) to where the section lies 10 % of the
 //     profile's height behind Stomion (the mouth's corner, where lip meets cheek).
+//     Without a concavity (a coarse mesh), the point where the section has receded half as far
+//     (with a note).
 //   AlarBaseRight/Left: the same on the horizontal section a quarter of the way from Subnasale up
 //   to
 //     Pronasale, the chord from the section's most anterior point (the alar-facial groove).
@@ -26,7 +28,8 @@
 //   UpperIncisorTip: the lowest point of the bone's envelope above it; LowerIncisorTip: the highest
 //     below it.
 //   ANS: the top of the anterior contour followed up from the upper incisor (where it ends or
-//     steps back by more than 3 % of the profile's height: the piriform aperture).
+//     steps back by more than 3 % of the profile's height or twice the section's median segment:
+//     the piriform aperture).
 //   APoint: the deepest point between ANS and UpperIncisorTip (on a convex maxilla, a third of the
 //     way from ANS down to the incisor, with a note).
 //   Pogonion: the most anterior point of the lower half of the anterior contour followed down from

@@ -41,7 +41,10 @@ Status LandmarkRows(const Placement& placement,
     r.boneVertical = bone.vertical;
     const Movement movement = ClassifyMovement(bone.horizontal, bone.vertical);
     r.band = FindBand(operation, movement, r.landmark);
-    const bool vertical = r.band && r.band->component == Component::Vertical;
+    // The band's component; without a band, the movement's own (vertical for an impaction).
+    const bool vertical = r.band
+                              ? r.band->component == Component::Vertical
+                              : (movement == Movement::Impaction || movement == Movement::Descent);
     const double hard = vertical ? bone.vertical : bone.horizontal;
     const double soft = vertical ? r.vertical : r.horizontal;
     if (!(std::abs(hard) > still)) {

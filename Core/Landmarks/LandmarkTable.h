@@ -23,7 +23,8 @@ struct LandmarkRow {
   bool pairedFound = false;
   double boneHorizontal = 0.0, boneVertical = 0.0;
   bool ratioDefined = false;
-  double ratio = 0.0; // soft / hard along the band's component (horizontal without a band)
+  double ratio = 0.0; // soft / hard along the band's component (without a band: the bone's
+                      // main component, vertical for an impaction or descent)
   const ClinicalBand* band = nullptr;
   std::string check; // "in", "out", "no band", "paired bone not found", "paired bone does not
                      // move", "not found"; "" for a bony landmark
