@@ -180,7 +180,7 @@ vtkSmartPointer<vtkPointSet> MergeBones(const std::vector<vtkPointSet*>& bones) 
   return merged;
 }
 
-BoneSegments ReadBoneSegments(vtkPointSet* bone) {
+BoneSegments ReadBoneSegments(vtkPointSet* bone, const std::vector<double>& undeformedPoints) {
   BoneSegments out;
   vtkDataArray* ids = bone->GetPointData()->GetArray("SegmentId");
   vtkDataArray* values = bone->GetFieldData()->GetArray("SegmentTransform");
@@ -213,12 +213,15 @@ BoneSegments ReadBoneSegments(vtkPointSet* bone) {
   RowVectors3d undeformed(n, 3);
   RowVectors3d displacement(n, 3);
   vtkDataArray* d = bone->GetPointData()->GetArray("Displacement");
+  if (undeformedPoints.size() != static_cast<size_t>(3 * n)) {
+    out.whyNot = "the undeformed bone does not match the bone's points";
+    return out;
+  }
   for (vtkIdType i = 0; i < n; ++i) {
-    double p[3], u[3];
-    bone->GetPoint(i, p);
+    double u[3];
     d->GetTuple(i, u);
     for (int c = 0; c < 3; ++c) {
-      undeformed(i, c) = p[c] - u[c];
+      undeformed(i, c) = undeformedPoints[3 * i + c];
       displacement(i, c) = u[c];
     }
     const long id = std::lround(ids->GetComponent(i, 0));

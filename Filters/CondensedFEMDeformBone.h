@@ -36,7 +36,8 @@ struct BoneSegments {
   std::vector<int> segmentOfPoint;
   std::vector<SegmentTransform> transforms;
 };
-BoneSegments ReadBoneSegments(vtkPointSet* bone);
+// `undeformed`: the bone's undeformed points, 3 per point (BoneInput::undeformed).
+BoneSegments ReadBoneSegments(vtkPointSet* bone, const std::vector<double>& undeformed);
 
 } // namespace fem_filter
 } // namespace faceplan

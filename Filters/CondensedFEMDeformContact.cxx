@@ -1,5 +1,7 @@
 #include "CondensedFEMDeformContact.h"
 
+#include "FacePlanUndeformedBone.h"
+
 #include "vtkCell.h"
 #include "vtkCellArray.h"
 #include "vtkDataArray.h"
@@ -24,24 +26,6 @@ namespace faceplan {
 namespace fem_filter {
 
 namespace {
-
-// The bone before the operation moved it: the contact is defined there.
-vtkSmartPointer<vtkPointSet> Undeformed(vtkPointSet* bone, vtkDataArray* displacement) {
-  vtkSmartPointer<vtkPointSet> undeformed;
-  undeformed.TakeReference(vtkPointSet::SafeDownCast(bone->NewInstance()));
-  undeformed->CopyStructure(bone);
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(bone->GetNumberOfPoints());
-  for (vtkIdType i = 0; i < bone->GetNumberOfPoints(); ++i) {
-    double p[3], d[3];
-    bone->GetPoint(i, p);
-    displacement->GetTuple(i, d);
-    points->SetPoint(i, p[0] - d[0], p[1] - d[1], p[2] - d[2]);
-  }
-  undeformed->SetPoints(points);
-  return undeformed;
-}
 
 // Region of a bone point for the release: its SegmentId and its side of the ROIMask boundary.
 long RegionOf(vtkPointSet* bone, vtkIdType point) {
@@ -97,10 +81,11 @@ void MarkReleased(vtkPointSet* tissue, vtkPointSet* undeformed, vtkPointSet* bon
 }
 
 ContactMap BuildContactMap(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
-                           vtkPointSet* bone, double contactDistance, double releaseDistance) {
-  vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
+                           vtkPointSet* bone, const std::vector<double>& undeformedPoints,
+                           double contactDistance, double releaseDistance) {
   vtkDataArray* roiMask = bone->GetPointData()->GetArray("ROIMask");
-  vtkSmartPointer<vtkPointSet> undeformed = Undeformed(bone, displacement);
+  // The bone before the operation moved it: the contact is defined there.
+  vtkSmartPointer<vtkPointSet> undeformed = UndeformedBone(bone, undeformedPoints);
   vtkNew<vtkStaticCellLocator> locator;
   locator->SetDataSet(undeformed);
   locator->BuildLocator();
@@ -151,73 +136,13 @@ ContactMap BuildContactMap(vtkPointSet* tissue, const std::vector<vtkIdType>& ti
 
 } // namespace
 
-ContactCache::Key ContactCache::MakeKey(vtkPointSet* tissue,
-                                        const std::vector<vtkIdType>& tissueBoundary,
-                                        vtkPointSet* bone, double contactDistance,
-                                        double releaseDistance) {
-  Key key;
-  vtkDataArray* displacement = bone->GetPointData()->GetArray("Displacement");
-  key.undeformedBone.resize(3 * bone->GetNumberOfPoints());
-  for (vtkIdType i = 0; i < bone->GetNumberOfPoints(); ++i) {
-    double p[3], d[3];
-    bone->GetPoint(i, p);
-    displacement->GetTuple(i, d);
-    for (int c = 0; c < 3; ++c)
-      key.undeformedBone[3 * i + c] = p[c] - d[c];
-  }
-  if (vtkDataArray* mask = bone->GetPointData()->GetArray("ROIMask"))
-    for (vtkIdType i = 0; i < mask->GetNumberOfTuples(); ++i)
-      key.mask.push_back(mask->GetComponent(i, 0));
-  if (vtkDataArray* ids = bone->GetPointData()->GetArray("SegmentId"))
-    for (vtkIdType i = 0; i < ids->GetNumberOfTuples(); ++i)
-      key.segmentIds.push_back(ids->GetComponent(i, 0));
-  if (vtkDataArray* flags = bone->GetPointData()->GetArray("Released"))
-    for (vtkIdType i = 0; i < flags->GetNumberOfTuples(); ++i)
-      key.releasedFlags.push_back(flags->GetComponent(i, 0));
-  key.hasReleasedFlags = bone->GetPointData()->GetArray("Released") != nullptr;
-  vtkNew<vtkIdList> ids;
-  for (vtkIdType c = 0; c < bone->GetNumberOfCells(); ++c) {
-    bone->GetCellPoints(c, ids);
-    key.boneCells.push_back(bone->GetCellType(c));
-    key.boneCells.push_back(ids->GetNumberOfIds());
-    for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
-      key.boneCells.push_back(ids->GetId(k));
-  }
-  key.tissuePoints.resize(3 * tissue->GetNumberOfPoints());
-  for (vtkIdType i = 0; i < tissue->GetNumberOfPoints(); ++i)
-    tissue->GetPoint(i, &key.tissuePoints[3 * i]);
-  key.tissueBoundary = tissueBoundary;
-  key.distance = contactDistance;
-  key.release = releaseDistance;
-  return key;
-}
-
-Status ContactCache::update(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
-                            vtkPointSet* bone, double contactDistance, double releaseDistance) {
-  Key key = MakeKey(tissue, tissueBoundary, bone, contactDistance, releaseDistance);
-  // The undeformed bone is bone points minus Displacement: an edit changes both by the same amount,
-  // so compare with a tolerance relative to the bone's size instead of bit for bit.
-  bool same = valid_ && key.undeformedBone.size() == key_.undeformedBone.size() &&
-              key.mask == key_.mask && key.segmentIds == key_.segmentIds &&
-              key.releasedFlags == key_.releasedFlags &&
-              key.hasReleasedFlags == key_.hasReleasedFlags && key.release == key_.release &&
-              key.boneCells == key_.boneCells && key.tissuePoints == key_.tissuePoints &&
-              key.tissueBoundary == key_.tissueBoundary && key.distance == key_.distance;
-  if (same) {
-    double bounds[6];
-    bone->GetBounds(bounds);
-    const double tolerance = 1e-9 * std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
-                                              (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
-                                              (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
-    for (size_t k = 0; same && k < key.undeformedBone.size(); ++k)
-      same = std::abs(key.undeformedBone[k] - key_.undeformedBone[k]) <= tolerance;
-  }
-  if (same)
-    return Status::Ok();
-  valid_ = false;
-  map_ = BuildContactMap(tissue, tissueBoundary, bone, contactDistance, releaseDistance);
-  key_ = std::move(key);
-  valid_ = true;
+Status ContactCache::build(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
+                           vtkPointSet* bone, const std::vector<double>& undeformed,
+                           double contactDistance, double releaseDistance) {
+  if (undeformed.size() != static_cast<size_t>(3 * bone->GetNumberOfPoints()))
+    return Status::Error("the undeformed bone does not match the bone's points");
+  map_ =
+      BuildContactMap(tissue, tissueBoundary, bone, undeformed, contactDistance, releaseDistance);
   return Status::Ok();
 }
 

@@ -36,27 +36,19 @@ struct ContactMap {
 
 enum class ContactModelChoice { Tied = 0, Sliding = 1, ByArray = 2 };
 
-// The contact map for one tissue and bone, rebuilt only when what it depends on changed: the
-// undeformed bone's points, its cells, its ROIMask, SegmentId and Released, the tissue's points and
-// boundary nodes, and the distances. A cut edit (new Displacement on the same bone) keeps it.
+// The contact map between one tissue and bone, kept between updates: CondensedFEMDeform rebuilds
+// it when BoneInput::contactChanged says that what it depends on changed (the tissue, the
+// distances, the bone's cells, ROIMask, SegmentId and Released, the undeformed bone); a cut edit
+// (new Displacement on the same bone) keeps it.
 class ContactCache {
 public:
-  Status update(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
-                vtkPointSet* bone, double contactDistance, double releaseDistance);
+  // `undeformed`: the bone's undeformed points, 3 per point (BoneInput::undeformed).
+  Status build(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary, vtkPointSet* bone,
+               const std::vector<double>& undeformed, double contactDistance,
+               double releaseDistance);
   const ContactMap& map() const { return map_; }
-  void clear() { valid_ = false; }
 
 private:
-  struct Key {
-    std::vector<double> undeformedBone, mask, segmentIds, releasedFlags, tissuePoints;
-    bool hasReleasedFlags = false;
-    std::vector<vtkIdType> boneCells, tissueBoundary;
-    double distance = -1.0, release = -1.0;
-  };
-  static Key MakeKey(vtkPointSet* tissue, const std::vector<vtkIdType>& tissueBoundary,
-                     vtkPointSet* bone, double contactDistance, double releaseDistance);
-  bool valid_ = false;
-  Key key_;
   ContactMap map_;
 };
 

@@ -24,7 +24,7 @@ struct Settings {
   bool useGravity = false;
   double density = 1100.0; // kg/m^3
   double gravity[3] = {0.0, 0.0, -9.81};
-  int outputMode = 0, backend = 0, method = 0, elementOrder = 0; // as set, validated before use
+  int outputMode = 1, backend = 0, method = 0, elementOrder = 0; // as set, validated before use
   bool verify = false;
   int model = 2;                  // ModelChoice
   int largeDeformationSolver = 0; // LargeDeformationSolverChoice

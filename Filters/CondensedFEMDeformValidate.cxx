@@ -1,5 +1,7 @@
 #include "CondensedFEMDeformValidate.h"
 
+#include "FacePlanUndeformedBone.h"
+
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkCellType.h"
@@ -47,25 +49,13 @@ vtkIdType FirstNonFinitePoint(vtkPointSet* data) {
   return -1;
 }
 
-// The contact is made on the undeformed bone, points minus Displacement: its first point with a
-// non-finite or too large coordinate, or -1.
-vtkIdType FirstUnusableUndeformedPoint(vtkPointSet* bone, vtkDataArray* displacement) {
-  for (vtkIdType i = 0; i < bone->GetNumberOfPoints(); ++i) {
-    double p[3], d[3];
-    bone->GetPoint(i, p);
-    displacement->GetTuple(i, d);
-    const double u[3] = {p[0] - d[0], p[1] - d[1], p[2] - d[2]};
-    if (!UsableCoordinates(u))
-      return i;
-  }
-  return -1;
-}
-
-Status CheckUndeformedBone(vtkPointSet* bone, vtkDataArray* displacement) {
-  const vtkIdType bad = FirstUnusableUndeformedPoint(bone, displacement);
-  if (bad >= 0)
-    return Error("the bone's point ", bad, " minus its Displacement (the undeformed bone) has a ",
-                 "coordinate beyond 1e30 or not finite");
+// The contact is made on the undeformed bone, points minus Displacement: none of its coordinates
+// may be beyond 1e30 or not finite.
+Status CheckUndeformedBone(const std::vector<double>& undeformed) {
+  for (size_t k = 0; k < undeformed.size(); k += 3)
+    if (!UsableCoordinates(&undeformed[k]))
+      return Error("the bone's point ", k / 3, " minus its Displacement (the undeformed bone) has ",
+                   "a coordinate beyond 1e30 or not finite");
   return Status::Ok();
 }
 
@@ -176,6 +166,11 @@ Status ValidateTissue(vtkUnstructuredGrid* tissue, const Settings& settings) {
 }
 
 Status ValidateBone(vtkPointSet* bone) {
+  std::vector<double> undeformed;
+  return ValidateBone(bone, undeformed);
+}
+
+Status ValidateBone(vtkPointSet* bone, std::vector<double>& undeformed) {
   if (!bone)
     return Error("no Bone input: connect the operated bone (the output of BezierCut or "
                  "Osteotomy) and the bones that stay put (any bone surface: without a "
@@ -205,7 +200,7 @@ Status ValidateBone(vtkPointSet* bone) {
   if (!hasSurfaceCell)
     return Error(
         "the Bone input has no surface cells (triangles or polygons) to make contact with");
-  Status s = ValidateBoneValues(bone); // coordinates and Displacement, as an edit checks them
+  Status s = ValidateBoneValues(bone, undeformed); // coordinates and Displacement, as an edit does
   if (!s)
     return s;
   for (const char* name : {"ROIMask", "SegmentId", "Sliding", "Released"})
@@ -224,7 +219,7 @@ Status ValidateBone(vtkPointSet* bone) {
   return Status::Ok();
 }
 
-Status ValidateBoneValues(vtkPointSet* bone) {
+Status ValidateBoneValues(vtkPointSet* bone, std::vector<double>& undeformed) {
   const vtkIdType bad = FirstNonFinitePoint(bone);
   if (bad >= 0)
     return Error("the bone's point ", bad,
@@ -234,7 +229,10 @@ Status ValidateBoneValues(vtkPointSet* bone) {
     return Error("the Bone input needs a 3-component point array named Displacement "
                  "(connect the output of BezierCut or Osteotomy)");
   const Status s = CheckArray(displacement, "Displacement", "point", bone->GetNumberOfPoints(), 3);
-  return s ? CheckUndeformedBone(bone, displacement) : s;
+  if (!s)
+    return s;
+  UndeformedPoints(bone, displacement, undeformed);
+  return CheckUndeformedBone(undeformed);
 }
 
 std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,

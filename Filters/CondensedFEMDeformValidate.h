@@ -18,10 +18,13 @@ namespace fem_filter {
 
 Status ValidateProperties(const Settings& settings);
 Status ValidateTissue(vtkUnstructuredGrid* tissue, const Settings& settings);
+// `undeformed` receives the undeformed bone (points minus Displacement, FacePlanUndeformedBone.h)
+// that the check computes, for the caller to keep.
+Status ValidateBone(vtkPointSet* bone, std::vector<double>& undeformed);
 Status ValidateBone(vtkPointSet* bone);
 // The part of ValidateBone that an edit can change (points and Displacement), for a bone whose
 // cells, point count and ROIMask passed ValidateBone before.
-Status ValidateBoneValues(vtkPointSet* bone);
+Status ValidateBoneValues(vtkPointSet* bone, std::vector<double>& undeformed);
 
 // After contact: a warning when the bone moves but no tied tissue node may follow it (the bone's
 // ROIMask is 0 wherever the tissue is tied), which would otherwise give an all-zero result without

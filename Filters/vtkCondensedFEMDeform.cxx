@@ -2,6 +2,7 @@
 
 #include "Common/LargeAllocations.h"
 #include "CondensedFEMDeformBone.h"
+#include "CondensedFEMDeformBoneInput.h"
 #include "CondensedFEMDeformContact.h"
 #include "CondensedFEMDeformConvert.h"
 #include "CondensedFEMDeformInputCache.h"
@@ -38,13 +39,12 @@ using namespace faceplan::fem_filter;
 // from them, and the solver with its cached precompute.
 struct vtkCondensedFEMDeform::Cache {
   TissueCache tissue;
-  BoneCache bone;
+  BoneInput bone;
   ContactCache contact;
   faceplan::PrecomputeRequest request; // mesh, materials and node sets; options set by the solver
   unsigned long requestTissue = 0;     // the tissue generation `request` was made from
   bool requestValid = false;
-  double contactRelease = -1.0; // the ReleaseDistance the contact was built with
-  int contactBuilds = 0;        // updates that (re)built the contact
+  int contactBuilds = 0; // updates that (re)built the contact
   Solver solver;
   std::set<std::string> saidNotes; // the warnings of the last update, by NoteState
 };
@@ -201,13 +201,16 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   };
 
   // 1. validate and 2. convert: nothing below runs on malformed input. The tissue is validated and
-  // converted again only when it or the material properties changed, the bone's cells only when
-  // they changed (an edit changes its points and Displacement).
+  // converted again only when it or the material properties changed; the bone is taken in one
+  // pass (BoneInput: validated once, its cells in full only when they changed, the undeformed
+  // bone computed once, and whether the contact still holds).
   faceplan::Status status = ValidateProperties(settings);
   if (status)
     status = cache.tissue.update(tissue, settings);
+  const unsigned long tissueGeneration = cache.tissue.generation();
   if (status)
-    status = cache.bone.validate(bone);
+    status = cache.bone.update(bone, tissueGeneration, settings.contactDistance,
+                               settings.releaseDistance);
   if (!status) {
     cache.requestValid = false;
     vtkErrorMacro(<< status.message);
@@ -219,17 +222,15 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   // 3. contact, rebuilt when the tissue, the distance, the release distance or the undeformed
   // bone (its cells, ROIMask, SegmentId, Released and points minus Displacement) changed: a move of
   // a cut or an osteotomy keeps it.
-  const unsigned long tissueGeneration = cache.tissue.generation();
-  if (!cache.bone.contactStillValid(bone, tissueGeneration, settings.contactDistance) ||
-      settings.releaseDistance != cache.contactRelease) {
-    status = cache.contact.update(tissue, boundary.nodes, bone, settings.contactDistance,
-                                  settings.releaseDistance);
+  if (cache.bone.contactChanged()) {
+    status = cache.contact.build(tissue, boundary.nodes, bone, cache.bone.undeformed(),
+                                 settings.contactDistance, settings.releaseDistance);
     if (!status) {
+      cache.bone.contactLost();
       vtkErrorMacro(<< status.message);
       return false;
     }
-    cache.bone.contactBuilt(bone, tissueGeneration, settings.contactDistance);
-    cache.contactRelease = settings.releaseDistance;
+    cache.bone.contactBuilt();
     ++cache.contactBuilds;
   }
   const ContactMap& contact = cache.contact.map();
@@ -251,7 +252,7 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   }
   // Rigid segments: the bone's SegmentId and SegmentTransform, used when its Displacement follows
   // them; a node tied to a segment then moves with it as one body.
-  const BoneSegments segments = ReadBoneSegments(bone);
+  const BoneSegments segments = ReadBoneSegments(bone, cache.bone.undeformed());
   if (!segments.usable && bone->GetPointData()->GetArray("SegmentId"))
     warn("rigid-segment path not used: " + segments.whyNot);
   // Released tissue is what the surgeon asked for: information (field data ReleasedNodes and the

@@ -4,31 +4,34 @@
  *
  * Input port 0 ("Input"): the soft tissue, a vtkUnstructuredGrid of tetrahedra (any other cell
  * type is an error that suggests ParaView's Tetrahedralize filter).
- * Input port 1 ("Bone"): one or more surfaces (several connections are merged: their SegmentIds
- * renumbered, their SegmentTransforms concatenated) with a point vector array `Displacement` (the
- * output of vtkBezierCut or Osteotomy) and optionally `ROIMask`, `SegmentId` (int, 0 = not moved
- * rigidly), `Sliding` (uint8, for ContactModel ByArray), `Released` (uint8: 1 where the surgeon
- * detached the tissue; tied nodes whose nearest bone point is flagged become free) and field data
- * `SegmentTransform` (12 doubles [R|t] row-major per segment; a NaN transform marks a segment as
- * not rigid). When the
- * bone carries SegmentId and SegmentTransform and its Displacement follows them, the rigid-segment
- * path (Method field data `RigidSegments`) is used; otherwise a warning says why not.
- * Contact: tissue boundary nodes within ContactDistance of the undeformed bone (bone points minus
- * Displacement) are tied to it and take the bone's Displacement interpolated at the closest point;
- * tied nodes where the bone's ROIMask is 0 stay fixed (every tied node may move without ROIMask).
+ * Input port 1 ("Bone"): one or more surfaces, each the operated bone or a fixed one (a connection
+ * without the point array `Displacement` is bone that stays put) (several connections are merged:
+ * their SegmentIds renumbered, their SegmentTransforms concatenated) with a point vector array
+ * `Displacement` (the output of vtkBezierCut or Osteotomy) and optionally `ROIMask`, `SegmentId`
+ * (int, 0 = not moved rigidly), `Sliding` (uint8, for ContactModel ByArray), `Released` (uint8: 1
+ * where the surgeon detached the tissue; tied nodes whose nearest bone point is flagged become
+ * free) and field data `SegmentTransform` (12 doubles [R|t] row-major per segment; a NaN transform
+ * marks a segment as not rigid). When the bone carries SegmentId and SegmentTransform and its
+ * Displacement follows them, the rigid-segment path (Method field data `RigidSegments`) is used;
+ * otherwise a warning says why not. Contact: tissue boundary nodes within ContactDistance of the
+ * undeformed bone (bone points minus Displacement) are tied to it and take the bone's Displacement
+ * interpolated at the closest point; tied nodes where the bone's ROIMask is 0 stay fixed (every
+ * tied node may move without ROIMask).
  *
- * Output port 0: the deformed tissue (Volume mode: every tetrahedron; Surface mode: the tissue's
- * boundary triangles only, and interior displacements are never computed) with point array
- * `Displacement` and field data `RelativeResidual`, `SolveTimeMs`, `PrecomputeTimeMs`, `Method`,
- * `Backend` (and `VerifyMaxRelativeError` with Verify on), `ConditionEstimate`, `ElementOrder`,
- * `LargestStrain`, `InvertedCells`, `Model` (the model that ran) and `ModelNote` (why); when the
- * neo-Hookean model ran also `LargeDeformationSolver` (`SolverNote` when it fell back to Newton),
- * `SmallestVolumeRatio`, with Newton `LoadSteps` and `NewtonIterations`, with Precomputed
- * `QuasiNewtonIterations`, `FactorSolves`, `Refactorizations` and `WarmStarted`, and with LiftOff
- * `LiftedNodes`. Precompute and solve
- * warnings (slivers, strain above 10%, cells inverted by the displacement, single-precision
- * fallback) are reported with vtkWarningMacro. Output port 1: a vtkTable of stage timings (columns
- * `Stage`, `TimeMs`, `Reused`, `Backend`).
+ * Output port 0: the deformed tissue (Surface mode, the default: the tissue's boundary triangles
+ * only, and interior displacements are never computed; Volume mode: every tetrahedron) with point
+ * array `Displacement` and field data `RelativeResidual`, `SolveTimeMs`, `PrecomputeTimeMs`,
+ * `Method`, `Backend` (and `VerifyMaxRelativeError` with Verify on), `ConditionEstimate`,
+ * `ElementOrder`, `LargestStrain`, `InvertedCells`, `Model` (the model that ran) and `ModelNote`
+ * (why); when the neo-Hookean model ran also `LargeDeformationSolver` (`SolverNote` when it fell
+ * back to Newton), `SmallestVolumeRatio`, with Newton `LoadSteps` and `NewtonIterations`, with
+ * Precomputed `QuasiNewtonIterations`, `FactorSolves`, `Refactorizations` and `WarmStarted`, and
+ * with LiftOff `LiftedNodes`. Precompute and solve warnings (slivers, strain above 10%, cells
+ * inverted by the displacement, single-precision fallback, a tissue moving far beyond every bone)
+ * are reported with vtkWarningMacro, once per state (an edit of the same situation does not repeat
+ * them); released nodes are information (field data `ReleasedNodes`, vtkLog at INFO). Output port
+ * 1: a vtkTable of stage timings (columns `Stage`, `TimeMs` (this update's; 0 for a reused stage),
+ * `Reused`, `Backend`, `CachedTimeMs` (what a reused stage took when it was computed)).
  *
  * The precompute (assembly, ordering, factorization, condensation) runs on a worker thread and is
  * cached: when only the bone's Displacement values change (a new cut on the same bone, ROI and
@@ -215,7 +218,7 @@ protected:
   bool UseGravity = false;
   double Density = 1100.0;
   double Gravity[3] = {0.0, 0.0, -9.81};
-  int OutputMode = VOLUME;
+  int OutputMode = SURFACE;
   int Backend = BACKEND_AUTO;
   int Method = METHOD_AUTO;
   bool Verify = false;

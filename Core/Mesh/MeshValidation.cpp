@@ -263,9 +263,10 @@ void AppendDeformationWarnings(const DeformationReport& report, double strainLim
   if (report.largestStrain > strainLimit) {
     std::ostringstream msg;
     msg.precision(3);
-    msg << "largest strain " << 100.0 * report.largestStrain << "% (cell "
-        << report.largestStrainCell << ") exceeds " << 100.0 * strainLimit
-        << "%: linear FEM is outside its small-strain range, so the result is only qualitative";
+    msg << "the tissue is stretched or compressed by up to " << 100.0 * report.largestStrain
+        << "% (largest strain, cell " << report.largestStrainCell << "), beyond the "
+        << 100.0 * strainLimit
+        << "% small-strain range of linear FEM: this result is only qualitative";
     warnings.push_back(msg.str());
   }
   if (!report.invertedCells.empty())

@@ -33,7 +33,7 @@ def field(out, name):
 
 
 def run(order, verify=False):
-    fem = CondensedFEMDeform(Input=tissue, Bone=moved_bone)
+    fem = CondensedFEMDeform(Input=tissue, Bone=moved_bone, OutputMode="Volume")
     fem.PoissonRatio = 0.49
     fem.ElementOrder = order
     fem.Verify = 1 if verify else 0

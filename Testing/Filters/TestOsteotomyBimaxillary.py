@@ -40,7 +40,7 @@ bsso = Osteotomy(Input=mandible, Operation="Custom")
 bsso.CutPlane1.Origin = [97.0, 0.0, 80.0]
 bsso.CutPlane1.Normal = [-1.0, 0.0, 0.0]  # the body in front of both rami moves
 bone = AppendGeometry(Input=[lefort, bsso])
-fem = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bone, ContactDistance=1.0)
+fem = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bone, ContactDistance=1.0, OutputMode="Volume")
 errors = ErrorCatcher(fem)
 warnings = WarningCatcher(fem)
 said = WarningCatcher(fem)  # never cleared: a warning is said once per state, not at every update
@@ -126,7 +126,7 @@ def method_of(data):
 
 # Appended segments: different moves cannot follow the one transform the appended bone keeps.
 APPENDED_NOTE = "separate pieces of the bone that move differently"
-connected = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=[lefort, bsso], ContactDistance=1.0)
+connected = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=[lefort, bsso], ContactDistance=1.0, OutputMode="Volume")
 connected_warnings = WarningCatcher(connected)
 for label, lefort_move in (("different moves", LEFORT), ("equal moves", BSSO)):
     warnings.clear()

@@ -6,13 +6,16 @@
 // is consistent (sizes, offsets, ids in range, finite weights summing to 1); on bones of
 // triangles, lines and vertices, a node is tied to a point within ContactDistance and no farther
 // than the closest point an exact linear scan finds, and left untied only when the scan finds
-// nothing within ContactDistance; a cut edit (points and Displacement moved together) and a
-// connectivity change give, through the cache, the map that a fresh cache builds; the node sets and
+// nothing within ContactDistance; a cut edit (points and Displacement moved together) keeps the
+// contact (BoneInput) and, like a connectivity change, gives through the filter's cache the map
+// that a fresh build gives; the node sets and
 // movable displacements derived from the map are consistent and finite.
 #include "FuzzBytes.h"
 
+#include "CondensedFEMDeformBoneInput.h"
 #include "CondensedFEMDeformContact.h"
 #include "CondensedFEMDeformValidate.h"
+#include "FacePlanUndeformedBone.h"
 
 #include <Eigen/Geometry>
 
@@ -128,22 +131,11 @@ Bone MakeBone(FuzzBytes& in, double scale, double offset) {
   return bone;
 }
 
-// The bone before its Displacement, as the contact defines it.
+// The bone before its Displacement, as the contact defines it (the filter's own helper).
 vtkSmartPointer<vtkPolyData> Undeformed(vtkPolyData* bone) {
-  auto undeformed = vtkSmartPointer<vtkPolyData>::New();
-  undeformed->CopyStructure(bone);
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(bone->GetNumberOfPoints());
-  vtkDataArray* d = bone->GetPointData()->GetArray("Displacement");
-  for (vtkIdType i = 0; i < bone->GetNumberOfPoints(); ++i) {
-    double p[3], u[3];
-    bone->GetPoint(i, p);
-    d->GetTuple(i, u);
-    points->SetPoint(i, p[0] - u[0], p[1] - u[1], p[2] - u[2]);
-  }
-  undeformed->SetPoints(points);
-  return undeformed;
+  std::vector<double> points;
+  UndeformedPoints(bone, bone->GetPointData()->GetArray("Displacement"), points);
+  return vtkPolyData::SafeDownCast(UndeformedBone(bone, points));
 }
 
 using Eigen::Vector3d;
@@ -349,13 +341,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const double extent = std::max({bounds[1] - bounds[0], bounds[3] - bounds[2],
                                   bounds[5] - bounds[4], std::abs(bounds[0]), std::abs(bounds[1])});
 
+  // As the filter does: the bone taken by BoneInput, the contact built when it says so.
+  BoneInput input;
+  if (!input.update(bone.data, 1, distance, release))
+    Violation("BoneInput refused a bone that ValidateBone accepted");
+  if (!input.contactChanged())
+    Violation("BoneInput reports a contact for a bone it never saw");
   ContactCache cache;
-  const Status built = cache.update(tissue, boundary, bone.data, distance, release);
+  const Status built =
+      cache.build(tissue, boundary, bone.data, input.undeformed(), distance, release);
   if (!built) {
     if (built.message.empty())
       Violation("a contact error without a message");
     return 0;
   }
+  input.contactBuilt();
   const ContactMap first = cache.map();
   CheckMap(first, tissue, boundary, bone, distance, extent);
 
@@ -401,10 +401,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (!ValidateBone(next.data))
     return 0;
   for (vtkPolyData* step : {edited.GetPointer(), next.data.GetPointer()}) {
-    if (!cache.update(tissue, boundary, step, distance, release))
+    if (!input.update(step, 1, distance, release))
       return 0;
+    if (step == edited.GetPointer() && input.contactChanged())
+      Violation("a cut edit (points and Displacement moved together) rebuilds the contact");
+    if (input.contactChanged()) {
+      if (!cache.build(tissue, boundary, step, input.undeformed(), distance, release))
+        return 0;
+      input.contactBuilt();
+    }
+    std::vector<double> undeformed;
+    UndeformedPoints(step, step->GetPointData()->GetArray("Displacement"), undeformed);
     ContactCache fresh;
-    if (!fresh.update(tissue, boundary, step, distance, release))
+    if (!fresh.build(tissue, boundary, step, undeformed, distance, release))
       Violation("a fresh cache refused what the updated cache accepted");
     if (!SameMap(cache.map(), fresh.map()))
       Violation("the cached contact map differs from a fresh one");

@@ -81,8 +81,9 @@ try:
         return a.shape == b.shape and float(np.abs(a - b).max()) <= tol * scale
 
     d0, b0, curve0 = solve()
-    check(d0.shape[0] == tissue.GetDataInformation().GetNumberOfPoints(),
-          "first solve: one displacement per tissue point")
+    check(d0.shape[0] == fem.GetDataInformation().GetNumberOfPoints() and
+          0 < d0.shape[0] < tissue.GetDataInformation().GetNumberOfPoints(),
+          "first solve: one displacement per point of the deformed surface (Output Mode Surface)")
     check(float(np.linalg.norm(d0, axis=1).max()) > 0.5, "first solve: the cut moves the chin's soft tissue")
 
     # The GUI's undo stack: pqUndoStack registers its pqUndoStackBuilder with the proxy manager.

@@ -1,10 +1,12 @@
 // ROIExtract contract: ROIMask is the selection, ROIBoundary marks ROI vertices with a non-ROI
 // neighbour along a cell edge; malformed input gives an error and an empty result.
+#include "ROIExtract/DefaultRegion.h"
 #include "ROIExtract/ROIExtract.h"
 #include "Support/FaceplanTestMeshes.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 
 using namespace faceplan;
@@ -118,4 +120,20 @@ TEST(ROIExtract, Errors) {
   s = ComputeROI(bad, std::vector<std::uint8_t>(bad.numPoints(), 1), r);
   EXPECT_FALSE(s.ok);
   EXPECT_NE(s.message.find("non-finite"), std::string::npos) << s.message;
+}
+
+// Where a new ROI sphere starts: on the most anterior point (smallest x in the face frame), with a
+// fifth of the largest extent as radius; no start for no points, a zero extent or a NaN point.
+TEST(ROIExtract, DefaultSphereOnTheMostAnteriorPoint) {
+  RowVectors3d p(4, 3);
+  p << 10, 0, 0, 2, 5, 1, 7, -3, 40, 30, 1, 2;
+  Eigen::Vector3d centre;
+  double radius = -1.0;
+  ASSERT_TRUE(DefaultROISphere(p, centre, radius));
+  EXPECT_EQ(centre, Eigen::Vector3d(2, 5, 1));
+  EXPECT_DOUBLE_EQ(radius, kDefaultROIRadiusFraction * 40.0); // the z extent, 0..40
+  EXPECT_FALSE(DefaultROISphere(RowVectors3d(0, 3), centre, radius));
+  EXPECT_FALSE(DefaultROISphere(RowVectors3d::Ones(3, 3), centre, radius));
+  p(2, 1) = std::nan("");
+  EXPECT_FALSE(DefaultROISphere(p, centre, radius));
 }
