@@ -16,6 +16,7 @@ move and one drag step per scene and solver to a CSV.
         [--drag-steps 6] [--scenes lefort1,bsso,genioplasty,cut] [--json FILE] [--csv FILE]
 """
 import argparse
+import builtins
 import csv
 import json
 import os
@@ -76,7 +77,7 @@ def osteotomy_scene(name):
     fem.Model = "NeoHookean"
     fem.LiftOff = 1
     full = list(osteotomy_scenes.SCENES[name][2])
-    length = sum(c * c for c in full) ** 0.5
+    length = builtins.sum(c * c for c in full) ** 0.5
 
     def move(mm):  # the segment moved mm along the scene's direction
         osteotomy.Translation = [c * mm / length for c in full]
@@ -125,7 +126,7 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
     r["lifted_nodes"] = f.get("LiftedNodes", 0)
     r["refactorizations_full"] = f.get("Refactorizations", 0)
     drag_paused, drag_cont, drag_iter = [], [], []
-    steps = args.drag_steps if solver == "Precomputed" else min(args.drag_steps, repeats)
+    steps = args.drag_steps if solver == "Precomputed" else builtins.min(args.drag_steps, repeats)
     time.sleep(args.pause if solver == "Precomputed" else 0.0)
     for k in range(1, steps + 1):
         move(full + 0.5 * k)
@@ -156,7 +157,8 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
 
 def run_scenes():
     # In a function: the programmable filters of the scenes run their scripts in this module's
-    # globals (numpy_interface's algorithms: max, full, ...), which would shadow top-level names.
+    # globals (numpy_interface's algorithms: max, min, full, ...), which shadow top-level names and
+    # builtins (hence builtins.min).
     results, histories = {}, []
     for name in args.scenes.split(","):
         fem, bone, move, full = cut_scene() if name == "cut" else osteotomy_scene(name)

@@ -32,8 +32,17 @@
 // within its bounds it falls back to Newton (SolveLargeDeformation) and says so in the report; it
 // never returns an unconverged answer.
 //
-// Chosen by measurement on the Badin face scenes (Benchmarks/results/large_deformation_timing.txt):
-// see there for the figures against Newton.
+// Why L-BFGS with the factor (Benchmarks/results/large_deformation_drag.txt has the figures,
+// measured through pvpython on the Badin face's osteotomy scenes with lift-off, on a heavily loaded
+// 2-core machine): an iteration costs one force evaluation and one substitution, no tangent and no
+// factorization. From a converged state with the refreshed factor a 0.5 mm drag step took 4-8
+// iterations (Le Fort I: 1.1 s against Newton's 35 s, side by side), because the predictor with
+// that factor is Newton's own first step. From rest with the rest-pose factor the whole 5 mm move
+// took 80-99 iterations and 2 refactorizations (Le Fort I: 17 s against Newton's 32 s): the rest
+// tangent is a poor model of strains near 100 %, and each lift-off change restarts the history. A
+// Newton- Krylov variant (the tangent assembled, CG preconditioned by the same factor) was not
+// measured: it pays the tangent's element matrices and assembly every outer iteration on top of the
+// same substitutions.
 #include "CondensedFEM/CondensedFEM.h"
 #include "CondensedFEM/LargeDeformation.h"
 
