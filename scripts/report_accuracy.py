@@ -1129,6 +1129,7 @@ def plot(plot_dir, rows):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker  # noqa: F401 (matplotlib.ticker below)
     os.makedirs(plot_dir, exist_ok=True)
     main_rows = [r for r in rows if "(judge)" not in r["axis"] and not r.get("failed")]
     scenes = []
@@ -1177,6 +1178,15 @@ def plot(plot_dir, rows):
                           (float(r["level"]), r["max_mm"]), fontsize=7, textcoords="offset points", xytext=(4, 4))
         left.set_xscale("log")
         left.set_yscale("log")
+        finest = [float(r["level"]) for r in mesh_series(main_rows) if r["is_reference"]]
+        for level in finest:
+            left.axvline(level, color="grey", ls=":", lw=0.8)
+            left.annotate("reference\nCellSize %g" % level, (level, 1), xycoords=("data", "axes fraction"),
+                          fontsize=7, va="top", ha="right", textcoords="offset points", xytext=(-3, -3))
+        ticks = sorted(set(h + finest))
+        left.xaxis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
+        left.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+        left.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
         left.invert_xaxis()
         left.set_xlabel("CellSize (mm), finer to the right")
         left.set_ylabel("error at the skin (mm)")
