@@ -615,6 +615,9 @@ def main():
     parser.add_argument("--ct-levels", default="",
                         help="CT CellSizes, coarse to fine (default %s; --quick %s)" % (
                             ",".join("%g" % h for h in CT_LEVELS_FULL), ",".join("%g" % h for h in CT_LEVELS_QUICK)))
+    parser.add_argument("--reuse", action="store_true",
+                        help="keep the results of configurations already run in OUT/accuracy_runs (by default "
+                             "they are removed and every configuration runs afresh)")
     parser.add_argument("--jobs", type=int, default=1,
                         help="configurations run at a time, each in its own process (default 1)")
     args = parser.parse_args()
@@ -634,6 +637,9 @@ def main():
         scenes.remove("ct")
     os.makedirs(args.out, exist_ok=True)
     work_dir = os.path.abspath(os.path.join(args.out, "accuracy_runs"))
+    if not args.reuse and os.path.isdir(work_dir):
+        import shutil
+        shutil.rmtree(work_dir)
     os.makedirs(work_dir, exist_ok=True)
     ct_levels = [float(h) for h in args.ct_levels.split(",")] if args.ct_levels else (
         CT_LEVELS_QUICK if args.quick else CT_LEVELS_FULL)
