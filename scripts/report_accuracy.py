@@ -952,7 +952,7 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
       "re-solves; the large-deformation model solves the whole equilibrium again); median of repeats. "
       "**Precompute:** the filter's PrecomputeTimeMs (factorization and condensation, done once per tissue, "
       "ROI and contact); for a CT mesh, its meshing time is listed beside it. **Peak memory:** the peak "
-      "resident memory (VmHWM) of the pvpython process that ran the configuration (one process per configuration, two at a time), ParaView included.")
+      "resident memory (VmHWM) of the pvpython process that ran the configuration (one process per configuration, %d at a time), ParaView included." % args.jobs)
     w("* **Soft-tissue landmarks:** %s" % (
         "largest error at the FacialLandmarks points (nearest skin node)." if any(
             r.get("landmark_max_mm") is not None for r in main_rows) else
