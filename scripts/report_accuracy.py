@@ -660,11 +660,18 @@ def main():
     print("accuracy study: %d configurations on %s" % (len(configs), ", ".join(scenes)), flush=True)
     results = run_configs(sorted(configs, key=lambda c: (c["scene"] != "ct", -(c["level"] or 0))), args, work_dir,
                           repeats_for)
+    # The run's span: from the first configuration's start to the last one's result (with --reuse,
+    # those of the run that produced them).
+    import glob
+    starts = [os.path.getmtime(f) for f in glob.glob(os.path.join(work_dir, "*.case.json"))]
+    ends = [os.path.getmtime(f) for f in glob.glob(os.path.join(work_dir, "*.json")) + glob.glob(
+        os.path.join(work_dir, "*.failed")) if not f.endswith(".case.json")]
+    span = (max(ends) - min(starts)) if starts and ends else time.perf_counter() - start
     rows = evaluate(plan, results)
     write_csv(os.path.join(args.out, "accuracy.csv"), rows)
     failures = check(plan, rows)
     write_markdown(os.path.join(args.out, "accuracy.md"), plan, rows, results, failures, args,
-                   time.perf_counter() - start, has_solver_choice, ct_levels)
+                   span, has_solver_choice, ct_levels)
     if not args.no_plots:
         plot(os.path.join(args.out, "plots"), rows)
     for failure in failures:
@@ -1121,11 +1128,14 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
       "model. The same checks reject the CT studies with reference and subject swapped. This run: %s." % (
           "all hold" if not failures else "**failed**: " + "; ".join(failures)))
     w("")
-    w("Measured by `pvpython scripts/report_accuracy.py%s` (run by `scripts/report`) in %.0f s on %d hardware "
-      "threads (%s), commit %s, %s UTC; the machine was shared with other work (load average %.1f at the end), "
-      "so times are those of a loaded machine. Raw numbers: `%s`." % (
-          " --quick" if args.quick else "", seconds, os.cpu_count() or 0, cpu_model(), git_commit(),
-          time.strftime("%Y-%m-%d %H:%M", time.gmtime()), load, "accuracy.csv"))
+    w("Measured by `pvpython scripts/report_accuracy.py%s --jobs %d` (run by `scripts/report`): the "
+      "configurations ran for %.0f min on %d hardware threads (%s), commit %s, evaluated %s UTC. The machine "
+      "was shared with other work (load average %.1f at the end): times are those of a loaded machine, and "
+      "the same kind of update can take ten times longer in one configuration than in another, so compare "
+      "them by order of magnitude only; uncontended edit latencies are in BENCHMARKS.md. Errors and peak "
+      "memory do not depend on the load. Raw numbers: `%s`." % (
+          " --quick" if args.quick else "", args.jobs, seconds / 60.0, os.cpu_count() or 0, cpu_model(),
+          git_commit(), time.strftime("%Y-%m-%d %H:%M", time.gmtime()), load, "accuracy.csv"))
     w("")
     with open(path, "w") as f:
         f.write("\n".join(lines))
