@@ -2,7 +2,7 @@
 # Checks of the repository as a product, on the tracked files of the source tree:
 #   readme-length   README.md, the front page, has at most 250 lines;
 #   process-words   no tracked file speaks of how the project was developed (numbered sessions or
-#                   issues, the review, a final tree, the starting code). ParaView's own sessions
+#                   issues, reviews, the state a tree ended or began in). ParaView's own sessions
 #                   (a pvpython, builtin or server session) are not numbered and do not match.
 #                   Third-party licence texts (Data/licenses/) are not ours to edit.
 # Exit 0: passed; 1: failed (the offending lines are printed); 77: not a git checkout (skipped).
