@@ -4,14 +4,11 @@
 // crash or hang; an error has a message; a success is finite, converged to the requested
 // tolerance and has no inverted cell; for tiny moves without lift-off (tiny also against the
 // material's kappa / mu) it agrees with the linear model when that system is reasonably
-// conditioned. The precomputed solve (PrecomputedLargeDeformation.h) runs on the same input, cold
-// and then warm-started from its own result, with random iteration bounds, with and without the
-// fallback to Newton: the same promises (an answer is converged to the tolerance, or an error).
+// conditioned.
 #include "FuzzBytes.h"
 #include "FuzzPrecompute.h"
 
 #include "CondensedFEM/LargeDeformation.h"
-#include "CondensedFEM/PrecomputedLargeDeformation.h"
 #include "Element/NeoHookeanTet.h"
 #include "Support/BoxMeshGenerator.h"
 
@@ -24,60 +21,6 @@ using namespace faceplan;
 using faceplan::fuzz::CheckedPrecompute;
 using faceplan::fuzz::FuzzBytes;
 using faceplan::fuzz::Violation;
-
-namespace {
-
-void CheckSolved(const Status& solved, const SolveResult& result, double smallestVolumeRatio,
-                 const PrecomputeRequest& request, double tolerance, const char* what) {
-  if (!solved) {
-    if (solved.message.empty())
-      Violation(what);
-    return;
-  }
-  if (!result.keptDisplacement.allFinite() || !result.allDisplacement.allFinite())
-    Violation("a precomputed large-deformation solve succeeded with a non-finite displacement");
-  if (result.keptDisplacement.rows() != Eigen::Index(request.sets.kept.size()))
-    Violation("a precomputed large-deformation solve has the wrong number of kept rows");
-  if (!(smallestVolumeRatio > 0.0))
-    Violation("a precomputed large-deformation solve succeeded with an inverted cell");
-  if (!(result.relativeResidual <= tolerance))
-    Violation("a precomputed large-deformation solve succeeded without converging");
-}
-
-void FuzzPrecomputed(const PrecomputeRequest& request, const SolveInput& input,
-                     const LargeDeformationOptions& newton, FuzzBytes& in) {
-  PrecomputedLargeDeformationOptions options;
-  options.slidingLiftOff = newton.slidingLiftOff;
-  options.tolerance = newton.tolerance;
-  options.newton = newton;
-  options.maxIterations = in.range(1, 200);
-  options.historySize = in.range(0, 10);
-  options.refactorAfter = in.range(0, 30);
-  options.fallBackToNewton = in.flag();
-  options.backgroundRefactorization = in.flag();
-  std::shared_ptr<LargeDeformationSystem> system;
-  const Status made = PrecomputeLargeDeformation(request, options, system);
-  if (!made) {
-    if (made.message.empty())
-      Violation("a large-deformation precompute error without a message");
-    return;
-  }
-  SolveResult result;
-  PrecomputedLargeDeformationReport report;
-  LargeDeformationState state;
-  Status solved = SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report, &state);
-  CheckSolved(solved, result, report.smallestVolumeRatio, request, options.tolerance,
-              "a precomputed large-deformation error without a message");
-  if (!solved || !state.valid())
-    return;
-  SolveInput moved = input;
-  moved.movableDisplacement *= 0.5;
-  solved = SolvePrecomputedLargeDeformation(*system, moved, &state, result, report, &state);
-  CheckSolved(solved, result, report.smallestVolumeRatio, request, options.tolerance,
-              "a warm-started large-deformation error without a message");
-}
-
-} // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   FuzzBytes in(data, size);
@@ -136,7 +79,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (int c = 0; c < 3; ++c)
       input.gravity[c] = in.scaled(10.0);
   input.recoverInterior = in.flag();
-  FuzzPrecomputed(request, input, options, in);
 
   SolveResult result;
   LargeDeformationReport report;
