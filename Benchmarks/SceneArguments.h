@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Command-line options and scene shared by the benchmark programs that time one stage on
 // MakeFaceLikeScene(subdivisions, layers): --subdivisions S --layers L --repeats R.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Benchmark of TissueModelFromCT on the bundled head CT (pvpython; no rendering).
 
     pvpython Benchmarks/ct_tissue_model_benchmark.py <FacePlan.so> <Data dir> [--sizes 12,10,8,6]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Writes the face-like shell scene of faceplan_benchmark (Testing/Support/ShellMeshGenerator) as a
 // legacy-VTK unstructured grid, so that pvpython benchmarks can run the same scene through the
 // ParaView pipeline. Point array `Layer`: 0 on the inner (bone-side) sphere.

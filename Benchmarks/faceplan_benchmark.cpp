@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // FacePlan CPU benchmark on the face-like scaling family (see scripts/benchmark, which runs one
 // size per process so that the peak memory figure belongs to that size alone).
 //

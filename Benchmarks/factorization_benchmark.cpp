@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The numeric factorization of K_FF alone, CHOLMOD's cholmod_factorize against the multifrontal
 // one (SparseSolver/MultifrontalCholesky.h), alternated in one process on the same analysed
 // matrix: medians of --repeats runs each, and the largest relative difference between the two

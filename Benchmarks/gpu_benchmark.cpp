@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // GPU benchmark: element stiffness + assembly, per-edit update and precompute, CUDA
 // backend against the CPU backend on face-like spherical-shell scenes (Core's MakeFaceLikeScene).
 //

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # On a GPU host: a base commit's tree and the working tree, each built and tested with
 # Cuda/tools/gpu_machine_run.sh, then their gpu_benchmark binaries run alternately (base, new,
 # base, new, ...) so that both see the same card and the same machine state. Timings of different

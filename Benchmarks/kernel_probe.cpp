@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The machine's ceilings behind the ~100k precompute: the BLAS's DGEMM and DTRSM rates on the
 // shapes the response's substitutions use, and the cost of touching fresh memory (page faults)
 // against populating it in one call.

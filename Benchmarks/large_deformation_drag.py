@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Update time of the large-deformation model through pvpython: Condensed FEM Deform with Model
 NeoHookean, LargeDeformationSolver Precomputed against Newton, side by side in one run, on the
 three osteotomy scenes of the Badin face (scripts/osteotomy_scenes.py: ContactModel ByArray, Released

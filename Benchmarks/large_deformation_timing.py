@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Time of the large-deformation model on the three osteotomy scenes (pvpython): the whole
 Condensed FEM Deform update with Model NeoHookean, LargeDeformationSolver Newton and LiftOff (as the demos run it), Core's solve
 time and its stages, the load steps and Newton iterations, against the linear model's first update

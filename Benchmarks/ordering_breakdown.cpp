@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Where the ordering of K_FF spends its time (the ordering thread is the precompute's longest CPU
 // path on the largest meshes): the calls StartEarlyOrdering makes, timed one by one on one
 // thread, each the median of --repeats runs, on MakeFaceLikeScene(subdivisions, layers). Also the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Time of one Osteotomy update on the face's bones (pvpython): the first run (clip, cap, move)
 and an edit of the move alone (the split is reused), medians of repeats.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Edit latency through the ParaView pipeline (pvpython; CPU backend unless --backend CUDA).
 
 Three scenes: the Badin face (ROIExtract -> BezierCut -> CondensedFEMDeform, scripts/faceplan_pipeline),

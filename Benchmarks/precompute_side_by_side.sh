@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Two faceplan_benchmark binaries (e.g. a base commit's and the working tree's) on one scene, runs
 # alternated so that both see the same machine, each under the environment's OpenBLAS kernels and
 # under OpenBLAS's own choice (OPENBLAS_CORETYPE unset). Medians over the rounds, per stage.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The rigid-segment fast path on the Badin face with a Le Fort I-sized segment: the tissue tied to
 // the maxilla moves rigidly, the rest of the bone contact stays. Compares the RigidSegments
 // precompute and edits with the general dense response for the same ROI.

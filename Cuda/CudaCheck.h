@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Error checking for CUDA runtime and cuBLAS calls inside functions that return bool and have a
 // `std::string& error` in scope: a failure sets `error` (call, file, line, CUDA's message) and

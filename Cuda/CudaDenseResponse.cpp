@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "CudaDenseResponse.h"
 
 #include "Common/InversePermutation.h"

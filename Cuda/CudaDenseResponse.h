@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The dense response of a condensed system, built on the GPU (precompute):
 //

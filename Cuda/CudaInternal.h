@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal pieces shared by the CUDA backend's translation units (not installed, not public).
 #include "Backend/ComputeBackend.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Kernel launchers of the CUDA backend. Plain pointers and sizes only (no Eigen), so the .cu file
 // compiles without Eigen. Every launcher returns cudaGetLastError() after its launch.

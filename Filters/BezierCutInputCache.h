@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // BezierCut's input validated and converted, with everything that depends on the bone and its ROI
 // alone: the surface mesh, ROIMask/ROIBoundary as flags, Core's cut topology (edge neighbours,

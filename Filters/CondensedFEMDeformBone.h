@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Step 2 of CondensedFEMDeform for the Bone port: several connections (a bimaxillary plan: maxilla
 // and mandible, each from its own Osteotomy or BezierCut) become one bone, and the bone's rigid

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CondensedFEMDeform's bone, taken in one pass per update: `update` stamps the bone's structure
 // once, validates the bone once (in full when its structure changed, else only the values an edit

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Step 3 of CondensedFEMDeform: ties soft-tissue boundary nodes to the bone. Each tissue boundary
 // node within ContactDistance of the undeformed bone (bone points minus Displacement) is tied to

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Step 2 of CondensedFEMDeform: the tissue as Core's mesh and materials, and its boundary surface
 // (the nodes the solve reports). Private to FacePlan::Filters; inputs are validated before.

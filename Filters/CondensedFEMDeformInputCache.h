@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What changed in CondensedFEMDeform's tissue input since the last update, so that an edit (a new
 // bone Displacement on the same tissue, bone surface and ROI) redoes only the per-edit work; the

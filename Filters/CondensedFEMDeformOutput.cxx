@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "CondensedFEMDeformOutput.h"
 #include "FacePlanFieldData.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Step 5 of CondensedFEMDeform: the deformed tissue (every tetrahedron, or the boundary surface
 // only), its field data and the stage-timing table. Private to FacePlan::Filters.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CondensedFEMDeform under MPI (pvbatch or pvserver with more than one process). The tissue and
 // bone pieces are gathered on the solving rank (FacePlanGather), which runs the serial steps on

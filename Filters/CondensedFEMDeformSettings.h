@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The CondensedFEMDeform properties as one value, passed to the filter's steps (validate, convert,
 // contact, solve, output) so each step sees exactly what it uses. Private to FacePlan::Filters.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "CondensedFEMDeformSolver.h"
 
 #include "CondensedFEM/RequestIdentity.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Step 4 of CondensedFEMDeform: the backend, the cached background precompute and the solve.
 // Keeps the last request: when only the prescribed values change the precompute is reused.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Step 1 of CondensedFEMDeform: every check on the inputs and properties that can be made before
 // anything is converted or built, so that later steps (VTK locators, surface extraction, Core) only

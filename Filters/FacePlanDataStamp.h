@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A data set's identity and VTK modification times, the key of the filters' input caches: equal
 // stamps mean equal content as long as whoever changes the data calls Modified() (VTK's contract).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One-value field-data arrays: the figures the filters report beside their outputs (solve time,
 // residual, mesh quality, ...), readable in the Information panel and from pvpython.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Running a filter once on a whole dataset that ParaView has split into pieces across MPI
 // processes (pvbatch or pvserver under mpiexec, RedistributeDataSet, D3, multi-piece files): the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The undeformed bone: the bone's points minus its point array Displacement, the bone before the
 // operation moved it. Contact is defined there, validation checks it, the contact cache compares

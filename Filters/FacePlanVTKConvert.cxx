@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "FacePlanVTKConvert.h"
 
 #include <vtkCell.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Conversions between VTK data sets and FacePlanCore's plain arrays (private to FacePlan::Filters).
 #include "Mesh/SurfaceMesh.h"

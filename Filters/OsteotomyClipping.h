@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Geometry conversion for vtkOsteotomy (private to FacePlan::Filters): the bone clipped to each
 // convex piece of the cut with vtkClipClosedSurface (which caps the cut), triangulated, appended.

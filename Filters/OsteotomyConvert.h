@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Osteotomy's checks and conversions between VTK and Core/Osteotomy (private to
 // FacePlan::Filters): the input's validation, the cut planes from ParaView's implicit functions,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Osteotomy's outputs built from Core's result (private to FacePlan::Filters).
 #include "Osteotomy/CutPlanes.h"

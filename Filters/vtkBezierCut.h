@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class vtkBezierCut
  * @brief Cuts (or fills) a bone surface with a translational Bezier surface.

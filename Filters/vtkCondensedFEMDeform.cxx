@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "vtkCondensedFEMDeform.h"
 
 #include "Common/LargeAllocations.h"

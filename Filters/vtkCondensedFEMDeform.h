@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class vtkCondensedFEMDeform
  * @brief Soft-tissue deformation by linear static FEM with interior condensation (FacePlanCore).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class vtkFacialLandmarks
  * @brief Soft-tissue and bony facial landmarks, their movement in a reference frame and the

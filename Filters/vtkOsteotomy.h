@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class vtkOsteotomy
  * @brief Splits a bone surface along one or two cut planes and moves the segment rigidly.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class vtkROIExtract
  * @brief Marks a region of interest on a surface: point arrays ROIMask and ROIBoundary.

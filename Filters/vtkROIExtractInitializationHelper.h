@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class vtkROIExtractInitializationHelper
  * @brief Places a new ROI Extract proxy's sphere on the bone where an operation would be planned.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class vtkTissueModelFromCT
  * @brief From a CT volume (Hounsfield units) to a planning model: tetrahedral soft tissue, bone

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Finds SuiteSparse's CHOLMOD (Debian's SuiteSparse 5.x ships no CMake package).
 # Defines the imported target SuiteSparse::CHOLMOD.
 find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Soft:hard movement ratios of FacePlan's predictions over a sweep of plans, against the published
 clinical bands (docs/CLINICAL.md). Each operation is the model a user gets from Osteotomy's Operation
 preset (scripts/osteotomy_scenes.py: the preset's cut, Released and Sliding; ContactModel ByArray;

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """How far the main demo's plan strains the tissue (pvpython), under the linear and the
 large-deformation model: the figures README.md gives beside `scripts/demo`.
 

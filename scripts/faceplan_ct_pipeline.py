@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The CT job's pipeline on the bundled head CT (Data/ct/headsq.vti), shared by the CT demo and the
 CT benchmark: TissueModelFromCT, an ROI on the anterior mandible, a Bezier cut across it and the
 soft tissue's deformation. In this CT, z grows towards the chin and the face looks towards -y."""

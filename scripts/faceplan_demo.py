@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """FacePlan's main job (pvbatch): ROI on the chin, Bezier cut, soft-tissue deformation.
 Writes before/after images of the bone and the face and the stage-timing table.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """FacePlan's CT job (pvbatch): head CT -> tissue model -> ROI on the chin -> Bezier cut ->
 soft-tissue deformation. Writes images of the CT model and of the face before and after.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Renders the README's overview picture (docs/faceplan_overview.png): the main job's pipeline
 (faceplan_pipeline.build) with the cut mandible and the operative surface on the left and the
 deformed face on the right, both coloured by displacement magnitude on one colour scale.

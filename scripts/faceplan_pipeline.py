@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The main job's pipeline on the Badin face scene, shared by the demo, the image tests and the GUI
 test: an ROI on the lower border of the mandible (chin), a Bezier cut that reduces it (as in the
 ICAT 2008 paper's Figures 12 and 13) and the soft tissue's deformation."""

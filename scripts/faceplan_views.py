@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The render view FacePlan's figures are drawn in, shared by the demo scripts, the overview and
 the image tests: a white background (the figures go on white pages; ParaView >= 5.10 takes the
 background from its colour palette unless told not to), no orientation axes, and screenshots at the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The midline profile before and after a plan, overlaid, with the facial landmarks marked, and the
 landmark table as text; shared by the osteotomy demo (scripts/osteotomy_demo.py). Needs a
 FacialLandmarks proxy whose inputs are CondensedFEMDeform's output and the bone."""

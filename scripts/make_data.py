@@ -1,4 +1,5 @@
 #!/usr/bin/env pvpython
+# SPDX-License-Identifier: BSD-3-Clause
 """Build the small, real test scenes committed under Data/ from ../shared/data.
 
 Run from anywhere (needs ParaView's Python, i.e. Debian package python3-paraview, plus tetgen

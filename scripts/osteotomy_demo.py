@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """One osteotomy scene on the Badin face (pvbatch): the cut and move of the bone segment and the soft
 tissue's deformation, solved for large deformations (osteotomy_scenes.configure_model). Writes
 before/after images of the bone and the face (one displacement colour map and range for both, colour

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The three osteotomy scenes on the Badin face, shared by the demo (osteotomy_demo.py), the GUI test
 and the README's screenshot. Lengths in mm; the face looks towards -x (anterior), z is up."""
 from paraview import simple

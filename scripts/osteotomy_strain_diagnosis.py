@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Where an osteotomy scene's largest strains are, and why (pvpython).
 
     pvpython scripts/osteotomy_strain_diagnosis.py <FacePlan.so> <Data dir> lefort1|bsso|genioplasty

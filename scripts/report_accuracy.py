@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Model and discretization error in millimetres at the skin against run time (pvpython), for the
 report (scripts/report). Each choice a planner can make -- model, element order, mesh size, contact
 -- is measured one axis at a time against the most accurate configuration FacePlan can run on the

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Plots of the error-against-run-time report from <out>/results.csv.
 
 Run with Debian's Python (/usr/bin/python3, package python3-matplotlib); scripts/report calls it.

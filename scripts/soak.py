@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Long-session soak of the FacePlan pipeline in one pvpython session (docs/RELIABILITY.md, section 4).
 
 On the Badin face scene (scripts/faceplan_pipeline.py) it applies N edits: cut edits (alternately

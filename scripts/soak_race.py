@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Races between edits and the background precompute (docs/RELIABILITY.md, section 4).
 
 CondensedFEMDeform's RequestData waits on the pipeline thread for its worker's precompute and fires

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Folded faces of a tetrahedral mesh (numpy only): interior faces whose two tets lie on the same side
 of the face, so the tets overlap although each has a positive volume. Shared by the data script and
 the osteotomy strain diagnosis."""

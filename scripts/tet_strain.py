@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Per-cell strain of linear tetrahedra from nodal displacements (numpy), shared by the strain
 diagnosis scripts."""
 import numpy as np

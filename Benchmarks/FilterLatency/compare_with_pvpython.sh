@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # What ParaView's proxy layer adds to the Condensed FEM Deform filter's edit: the shell scene's edit
 # timed through pvpython (Benchmarks/pipeline_latency.py --shell-only) and through the VTK-level
 # driver (filter_latency), CPU backend, alternated on this machine.

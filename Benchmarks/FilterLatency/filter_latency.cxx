@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Edit latency of the Condensed FEM Deform filter itself (the VTK algorithm ParaView's proxy runs),
 // on the ~100k shell scene of Benchmarks/pipeline_latency.py, with a chosen backend. Made for GPU
 // hosts without ParaView, where pvpython cannot run: it measures the filter's update with

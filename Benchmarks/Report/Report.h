@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The report: runs every solve path on a scene (Runners.cpp) and writes results.csv, table2.csv
 // and REPORT.md (Writers.cpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "Report/Scenes.h"
 
 #include "Support/BoundaryNodes.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The report's scenes: the face-like shell, the refined hollow sphere with its analytic solution,
 // and the meshes of Data/ (organs, face), each with its precompute request and a surgical edit.

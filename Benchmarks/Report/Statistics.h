@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Medians of repeated timings with their spread, and the clock they are taken with.
 #include <limits>

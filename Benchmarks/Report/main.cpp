@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Error against run time: every solve path on a set of scenes, errors against the
 // double-precision reference (and, for the hollow sphere, against the analytic solution), times
 // split into precompute and per edit (medians of repeats with their spread). Writes results.csv,

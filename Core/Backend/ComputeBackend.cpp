@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "Backend/ComputeBackend.h"
 
 #include "Common/StageTimings.h"

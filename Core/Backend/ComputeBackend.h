@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The compute steps that have a second (CUDA) implementation. Core runs the CPU one; Cuda/
 // provides another behind this same interface, and the caller chooses which to pass in.

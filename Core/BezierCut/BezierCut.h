@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Bezier cut / fill of a bone surface (no VTK).
 //

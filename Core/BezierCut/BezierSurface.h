@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The operative surface of BezierCut (no VTK): the translational surface S(u,v) = U(u) + V(v) - P0
 // over two composite cubic Bezier curves U (3k+1 control points) and V (3m+1 control points)

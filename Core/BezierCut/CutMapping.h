@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Maps the vertices BezierCut moves onto its surface without folding the mesh: direct projection,
 // then local repair on S, then intermediary surfaces (the fallback order BezierCut.h describes).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Where a Bezier cut starts when the user has not placed its control points: a flat patch over the
 // region of interest, so that a newly added cut meets the bone whatever its size and position.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Triangle intersection predicates for BezierCut: which triangles of a surface mesh cross each
 // other after its points moved, found through a uniform spatial hash. Cells are fan-triangulated.

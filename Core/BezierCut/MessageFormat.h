@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Numbers, points and surface parameters as they appear in BezierCut's error messages.
 #include <Eigen/Core>

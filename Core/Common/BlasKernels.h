@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Which BLAS kernels this process runs, so that a timing says what it was measured with, and
 // whether faster ones would run on this CPU. OpenBLAS picks its kernels once, when it loads, by CPU

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Sets OpenBLAS's thread count for a scope, when the BLAS in use is OpenBLAS (looked up at run
 // time, so any BLAS links). FacePlan runs one single-threaded CHOLMOD solve per core for the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Core's one exception boundary. Core code reports its failures as Status and throws nothing
 // itself; what can still throw is the allocator (std::bad_alloc from Eigen and the standard

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Items 0 .. count-1 grouped by an integer key, by a counting sort (two passes, no comparison):
 // group k holds the items with key k, in increasing order, at items[start[k] .. start[k+1]).

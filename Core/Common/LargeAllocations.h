@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // glibc raises its mmap threshold each time a large block is freed, so the next blocks of that size
 // come from the heap and stay with the process after they are freed: every precompute of a new ROI

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Splits [0, count) into one contiguous range per hardware thread; runs inline when small.
 #include "Common/WorkerThreads.h"

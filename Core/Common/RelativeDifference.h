@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The one measure of how far a result is from a reference, used by the tests, the benchmarks and
 // the report: max |a - b| / max |b| (max |a - b| when b is all zero). A non-finite entry of `a`,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Stage-by-stage timing in the spirit of the ICAT 2008 paper's Table 2.
 #include <chrono>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Result of every Core entry point: Core never throws across its interface.
 #include <string>

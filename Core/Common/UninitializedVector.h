@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A std::vector whose resize() leaves new elements of trivial types uninitialized. A large buffer
 // that parallel workers then fill completely is first touched by those workers, so its page faults

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "Comparison/ConjugateGradientSolve.h"
 
 #include "Common/ExceptionBoundary.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Preconditioned conjugate gradients on the free system K_FF u_F = f_F - K_FR u_R, in double or
 // single precision, with a Jacobi or an incomplete Cholesky preconditioner (Eigen). The setup

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The free system K_FF u_F = f_F - K_FR u_R of a scene, assembled once, for the solve paths that
 // are not Core's condensed one (conjugate gradients, single precision, mass-spring comparisons).

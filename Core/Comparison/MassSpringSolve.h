@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A light-weight non-FEM model on the same mesh, the kind the ICAT 2008 paper contrasts FEM with:
 // linear springs on the tetrahedra's edges, stiffness k = E * (sum of the volumes of the tets

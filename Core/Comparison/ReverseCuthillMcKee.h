@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Reverse Cuthill-McKee ordering of an undirected graph (bandwidth reduction, the reordering stage
 // of the paper's traditional band-Cholesky route). Each connected component starts from a

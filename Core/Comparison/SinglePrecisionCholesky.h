@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Sparse Cholesky of K_FF in single precision (Eigen::SimplicialLLT<float>, AMD ordering), with
 // optional iterative refinement in double (residuals with the double K_FF): zero steps is the

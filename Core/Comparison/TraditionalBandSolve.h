@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The ICAT 2008 paper's "traditional" route, as a historical baseline: no condensation and no
 // cache; the free nodes are renumbered by reverse Cuthill-McKee, the whole free stiffness is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The ElementStiffness and Assembly stages.
 #include "CondensedFEM/PrecomputeStages.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Runs Precompute on a worker thread as soon as its inputs are known, and beside it (its own
 // worker) the large-deformation model's precompute (PrecomputeLargeDeformation) when it is asked

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Condensation stage: the dense response of the kept DOFs to the ROI DOFs.
 #include "Common/ParallelFor.h"
 #include "Common/WorkerThreads.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Linear static FEM on tetrahedra with interior condensation, split libigl-style into a precompute
 // (mesh, materials, node sets) and a solve (prescribed ROI displacements and loads).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What Precompute() builds and Solve() reads: a documented public struct, not an opaque handle.
 // The assembled blocks, the factor and the dense response are exactly what the comparison paths,

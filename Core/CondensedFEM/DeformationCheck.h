@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The solve's large-strain and inversion check, and what makes it cheap on the RigidSegments path.
 //

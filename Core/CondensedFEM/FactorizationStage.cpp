@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Method choice and the Factorization stage.
 #include "CondensedFEM/PrecomputeStages.h"
 

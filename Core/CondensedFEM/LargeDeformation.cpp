@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Newton's method on the total potential energy, in each node's frame (LargeDeformationProblem.h).
 // Prescribed DOFs get a unit row and column in the tangent, which keeps one sparsity pattern and
 // one symbolic factorization for every iteration.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Large-deformation solve: the same mesh, node sets and prescribed values as the condensed linear
 // model, with a compressible neo-Hookean material (Element/NeoHookeanTet.h) solved by Newton's

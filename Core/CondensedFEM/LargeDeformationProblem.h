@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The neo-Hookean equilibrium that both large-deformation solves share (LargeDeformation.cpp's
 // Newton and PrecomputedLargeDeformation.cpp): each node's frame (a sliding node's frame is its

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The memory a precompute may use, checked against the sizes known after the symbolic analysis
 // (the sparse factor, the dense response) before either is allocated, so that a scene too large

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How the precompute picks an exact solve method from the problem's sizes.
 #include "CondensedFEM/CondensedFEM.h"

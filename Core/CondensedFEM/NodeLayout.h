@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How the free and ROI DOF blocks are numbered, shared by the condensed solver and the other solve
 // paths (FreeSystem), so both build the same blocks.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Converts SI material values into a mesh's length unit. Core solves in whatever consistent units
 // it is given; a mesh in millimetres with forces in newtons needs E in N/mm^2 and density in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The precompute, one function per Stage (Common/StageTimings.h), in the order Precompute runs
 // them. Each adds its time to the system's stage table and returns an error or Ok; warnings

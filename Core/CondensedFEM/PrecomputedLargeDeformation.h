@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The large-deformation model (LargeDeformation.h: the same compressible neo-Hookean equilibrium,
 // node frames, sliding and lift-off contact, tolerance) split into a precompute and a solve, so

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The paper's "traditional FEM": the whole system in the mesh's own numbering, no separation into
 // kept/interior/ROI blocks and no cache. Prescribed DOFs are eliminated element by element, so
 // this path shares only the element stiffness with the condensed one and checks the rest.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Solves with the cached factor of K_FF, refined in double precision until the residual meets the
 // tolerance. Shared by the precompute's response and the per-edit solves.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Reordering stage: fill-reducing ordering of K_FF and its symbolic analysis, either on its own
 // thread from the node graph while the assembly and separation go on (StartEarlyOrdering), or
 // after them from the separated blocks.

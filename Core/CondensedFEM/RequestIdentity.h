@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Whether two precompute requests would produce the same system, compared field by field over the
 // whole request (mesh, materials, node sets, every option), so that a cache keyed on it can never

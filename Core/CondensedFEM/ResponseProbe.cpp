@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The probe of a backend's response operator against the double response.
 #include "CondensedFEM/ResponseProbe.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The probe of a backend's response operator (which may hold the response in lower precision, or
 // on the GPU) against the double response on the host: two random ROI vectors through both.

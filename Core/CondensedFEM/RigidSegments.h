@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Rigid segments: movable nodes that follow one affine motion u(x) = A x + b per segment, with
 // [A | b] = [R - I | t] for a segment moved by x -> R x + t. Their ROI values then lie in a

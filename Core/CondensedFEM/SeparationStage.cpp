@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Validation and the Separation stage: node classes, DOF layout, and the K_FF / K_FR blocks.
 #include "CondensedFEM/PrecomputeStages.h"
 

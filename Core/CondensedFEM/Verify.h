@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Checks a solve against an independent one: the uncondensed reference solve for linear elements,
 // or, for quadratic elements (which the reference does not support), a fresh uncached

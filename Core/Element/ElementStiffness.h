@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Linear 4-node tetrahedron, isotropic linear elasticity: Ke = B^T D B V.
 #include "Common/UninitializedVector.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "Element/NeoHookeanTet.h"
 
 #include <Eigen/LU>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Compressible neo-Hookean tetrahedron for large deformations (total Lagrangian, linear shape
 // functions, so the deformation gradient F is constant per cell).

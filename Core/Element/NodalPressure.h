@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Nodal-averaged pressure (locking-free volumetric term) for quadratic (10-node) tetrahedra.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Quadratic 10-node tetrahedra (TET10), the locking-resistant element option of the condensed FEM.
 // Core builds the TET10 mesh from the caller's linear mesh (one mid-edge node per edge, numbered

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Sparse symmetric assembly: the pattern and a gather map are built once per mesh and DOF
 // numbering; assembling new element values into it is then a pure gather (no atomics, no search),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Published soft-to-hard tissue movement ratios: how far a soft-tissue landmark moves per unit of
 // its paired bony landmark's movement, long-term, for a standard operation and direction of

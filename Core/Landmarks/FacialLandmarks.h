@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Facial landmarks by their standard definitions (Farkas's soft-tissue anthropometry; Holdaway's
 // and Legan's cephalometry), found on planar sections of the pre-operative skin and bone, and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The landmark table: per landmark its pre- and post-operative position, its movement in the
 // reference frame, its paired bony landmark's movement, the soft:hard ratio and the published band.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The input check every solve path runs first: mesh and materials, node sets, and at least one
 // constrained node in every connected component (otherwise the stiffness matrix is singular).

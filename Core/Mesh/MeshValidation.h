@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Input checks shared by every entry point, each failing with a message that names the problem.
 #include "Common/Status.h"

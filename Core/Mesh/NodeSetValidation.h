@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 #include "Common/Status.h"
 #include "Mesh/NodeSets.h"

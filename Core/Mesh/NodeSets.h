@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The three node classes of a condensed FEM problem (indices into the tetrahedral mesh's points).
 #include <Eigen/Core>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A polygonal surface as Core sees it (no VTK): points and polygon cells as plain arrays.
 #include "Common/RowVectors3d.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Geometry of one tetrahedron, shared by mesh validation and the element stiffness.
 #include <Eigen/Core>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The tetrahedral mesh and its per-cell materials, as Core sees them (no VTK).
 #include "Common/RowVectors3d.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The cut of an osteotomy: one or more planes. The segment is the part of the bone on the positive
 // side of every plane (n . (x - o) > 0), or the rest when the sides are flipped.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Osteotomy operation presets: the cut planes of a standard operation placed from the bone's
 // geometry, and the standard surgical approach marked on the split bone (Released: the degloved

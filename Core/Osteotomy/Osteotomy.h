@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // An osteotomy's move: a bone already split along the cut (the filter does the split and the caps)
 // gets one of its parts, the new segment, moved rigidly. Keeps the bookkeeping that lets several

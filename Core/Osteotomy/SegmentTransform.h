@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Rigid motions of osteotomy segments: the move a planner types (translation, rotation angles,
 // pivot), composition with earlier moves, and the flat 12-per-segment packing that the filters

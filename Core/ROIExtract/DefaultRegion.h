@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Where a new ROI Extract's sphere starts: on the bone, where an operation would be planned, not
 // over the whole bone (a sphere through the bounding box marks every vertex, and a cut of it

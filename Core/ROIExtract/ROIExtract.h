@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Region of interest on a surface: which vertices may move, and which of them border the rest.
 #include "Common/Status.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The BLAS and LAPACK routines Core calls directly (the same library CHOLMOD links, OpenBLAS on
 // Debian). Fortran calling convention: every argument by pointer, column-major.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "SparseSolver/CholmodFactor.h"
 #include "Common/InversePermutation.h"
 #include "Common/ParallelFor.h"

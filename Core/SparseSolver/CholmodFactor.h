@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // RAII wrapper of a CHOLMOD supernodal Cholesky factor of a symmetric positive definite matrix
 // given by its upper triangle. Solves are serialized (a cholmod_common is not thread-safe).

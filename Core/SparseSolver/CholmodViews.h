@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Non-owning CHOLMOD views of Eigen storage (no copies), shared by Core and the CUDA backend, and
 // the quiet cholmod_common every CHOLMOD caller here starts. For .cpp files only: CHOLMOD is a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "SparseSolver/FillReducingOrdering.h"
 
 #include "SparseSolver/CholmodViews.h"

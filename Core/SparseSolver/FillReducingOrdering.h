@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Fill-reducing ordering of a stiffness matrix with a chosen set of nodes placed last.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One random generator per thread for METIS, so that orderings can be made on several threads at
 // once and still be reproducible.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "SparseSolver/MultifrontalCholesky.h"
 #include "Common/BlasThreads.h"
 #include "Common/InversePermutation.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Numeric supernodal Cholesky factorization into CHOLMOD's own layout (the factor CHOLMOD's
 // analysis made: its supernodes, row lists and value offsets), computed multifrontally over the

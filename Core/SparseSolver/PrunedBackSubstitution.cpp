@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "SparseSolver/PrunedBackSubstitution.h"
 #include "SparseSolver/Blas.h"
 #include "SparseSolver/SupernodalTree.h"

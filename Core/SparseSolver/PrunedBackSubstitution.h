@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Backward substitution X := L^-T X with a CHOLMOD supernodal LL^T factor, for a block of
 // right-hand sides stored row by row (the block's values of one row side by side, so that gathering

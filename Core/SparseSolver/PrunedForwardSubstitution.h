@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Forward substitution X := L^-1 X with a CHOLMOD supernodal LL^T factor for right-hand sides that
 // are non-zero only on a few rows (a response column is non-zero only on the DOFs coupled to the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The supernodal elimination tree of a supernodal Cholesky factor in CHOLMOD's layout, as the
 // pruned substitutions (and the CUDA response's forward sweep) use it. For .cpp files only (CHOLMOD

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "SparseSolver/SymbolicAnalysis.h"
 
 #include "SparseSolver/CholmodViews.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CHOLMOD's supernodal symbolic analysis of a stiffness matrix in a given fill-reducing order,
 // made faster than cholmod_analyze_p without changing its result. For .cpp files only (CHOLMOD is

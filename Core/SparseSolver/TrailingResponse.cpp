@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "SparseSolver/TrailingResponse.h"
 #include "Common/WorkerThreads.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The dense response -(rows [0, keptDofs) of K_FF^-1 K_FR) from a factor whose ordering put the
 // DOFs coupled to the ROI last: the forward substitution is a dense triangular solve with the

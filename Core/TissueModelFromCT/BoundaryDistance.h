@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How far a mesh's boundary facets lie from the labelled interface they approximate, measured
 // against the same interpolated label function Mesh_3 meshes (labellized trilinear interpolation:

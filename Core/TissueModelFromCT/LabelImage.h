@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Voxel images in a physical frame, as Core sees them (no VTK): a CT volume in Hounsfield units and
 // the label image made from it.

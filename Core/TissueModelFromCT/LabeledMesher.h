@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The interface between the tissue model and a tetrahedral mesher of labelled images. The mesher
 // itself (CGAL Mesh_3, GPL) lives in Core/Copyleft/CGAL and is passed in by the caller, so this

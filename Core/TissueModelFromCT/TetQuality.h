@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Shape quality of a tetrahedral mesh: dihedral angles and mean ratio.
 #include "Mesh/TetMesh.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Labels the voxels of a CT volume as air, soft tissue or bone (optionally mandible) by thresholds,
 // connected components and cavity filling. 6-connectivity throughout.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // From a CT volume to a planning model: a tetrahedral soft-tissue mesh, the bone surface made of
 // the tissue's own facets that face bone (so tissue and bone share their points) and the skin

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Connected components (6-connectivity) of a voxel mask.
 #include <array>

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # On a GPU host: the Condensed FEM Deform filter's edit latency at ~100k cells with Backend = CPU
 # and = CUDA, alternated (Benchmarks/FilterLatency/filter_latency). With a FacePlan build with the
 # plugin and CUDA there, BUILD=<that build> runs its binaries. A host without ParaView takes them

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Builds Core + Cuda + the GPU tests + gpu_benchmark on a GPU host and runs them there; the plugin
 # is not built (a GPU host may have no ParaView).
 # Dependencies: the host's own packages (Debian: libeigen3-dev libsuitesparse-dev libopenblas-dev

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # The edit latency through ParaView with Backend = CUDA: Benchmarks/pipeline_latency.py on a GPU
 # host, alternating Backend = CUDA and = CPU on the ~100k shell scene (--shell-only); fails when the
 # CUDA run did not run on CUDA (pipeline_latency.py checks the filter's Backend field).

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # On a GPU host: the working tree built and tested (Cuda/tools/gpu_machine_run.sh), then
 # the ordering's parts (Benchmarks/ordering_breakdown) for each dissection split asked for, then
 # gpu_benchmark ROUNDS times, so that one machine gives the median of the 1M precompute.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // How fast a large device-to-host copy can land in ordinary (pageable, already touched) host
 // memory on this machine: through two 64 MB page-locked buffers and a parallel host copy (what
 // DownloadLarge does), or straight into the destination after cudaHostRegister (timing the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A small perturbed box mesh (Kuhn split: 6 tetrahedra per hexahedron, conforming), positively
 // oriented, for backend agreement tests independent of the shell generator.

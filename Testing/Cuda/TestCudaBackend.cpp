@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // GPU-against-CPU agreement of the CUDA backend. CTest label `gpu`.
 // Without a usable GPU every case is skipped (GTEST_SKIP), never passed.
 #include "CudaBackend.h"

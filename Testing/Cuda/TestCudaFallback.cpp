@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Runs on every machine (label `cuda`): the CUDA backend either works or refuses with a message,
 // so that callers can fall back to the CPU; it never throws or aborts.
 #include "Common/RelativeDifference.h"

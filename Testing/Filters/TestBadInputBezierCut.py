@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Bad-input contract of Bezier Cut through pvpython: every property (control point lists of the wrong
 length or 3k+1 count, NaN/inf/huge control points, enums and resolutions out of range) and malformed
 inputs (missing, short or NaN ROI arrays, lines-only or cell-less bones, volume cells, bad ids). Each

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Bad-input contract of Condensed FEM Deform through pvpython: every property (out of range, NaN and
 inf, enums out of range), malformed tissue and bone inputs (types, cells, ids, arrays, frames), legal
 but extreme inputs (finite output and a warning), and the cache (invalid values and back; tissue, bone

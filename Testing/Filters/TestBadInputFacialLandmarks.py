@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Bad-input contract of FacialLandmarks through pvpython: no skin, NaN coordinates and displacements,
 a degenerate frame (model axes and Frankfort), enums out of range, overrides that name no landmark,
 lie outside the mesh or are not finite. Each gives an error naming the problem and empty outputs; the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Bad-input contract of Osteotomy through pvpython: enums out of range, NaN/inf planes and moves,
 malformed inputs. Each case gives an error naming the problem and empty outputs, or, for legal
 input, a finite output. argv[1] is the plugin."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Bad-input contract of ROI Extract through pvpython (properties the GUI's domains would stop, and
 malformed inputs): each case gives an error naming the problem and an empty output, or, for legal
 but extreme input, a finite output with a warning. argv[1] is the plugin."""

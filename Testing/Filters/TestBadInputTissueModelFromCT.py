@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Bad-input contract of TissueModelFromCT through pvpython: every property out of range, NaN or
 inf; wrong input types; empty, flat, non-finite and degenerate images; images in odd frames. Each
 case gives an error naming the problem and empty outputs on all three ports, or, for legal input,

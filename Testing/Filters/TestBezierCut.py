@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """pvpython test of the BezierCut filter against its contract.
 
 Usage: pvpython TestBezierCut.py <path to FacePlan plugin>

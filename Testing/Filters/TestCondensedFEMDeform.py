@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Contract tests of CondensedFEMDeform on the Badin face scene (pvpython, headless).
 
 The bone displacement is made with ParaView's own Calculator and WarpByVector on the ROI, so this

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """CondensedFEMDeform's per-edit caches (pvpython, headless): an edit of the cut re-solves without a
 new precompute and equals a fresh filter's result; a tissue with the same content under a new
 modification time keeps the precompute; a changed mesh (new data set, or moved in place with

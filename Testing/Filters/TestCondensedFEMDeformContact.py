@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Contract tests of CondensedFEMDeform's operation contact (pvpython, headless): the rigid-segment
 path chosen on its own and equal to the general path, several Bone connections merged, the
 Sliding and ByArray contact models, ReleaseDistance and the bone's Released array.

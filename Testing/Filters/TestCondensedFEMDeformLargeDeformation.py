@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Contract tests of CondensedFEMDeform's Model, LargeDeformationSolver and LiftOff (pvpython,
 headless), on the Le Fort I scene of scripts/osteotomy_scenes.py: the default, Auto, runs the linear
 model for a small move and NeoHookean for a large one, and says why; NeoHookean agrees with the

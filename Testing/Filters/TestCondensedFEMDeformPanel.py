@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Condensed FEM Deform's panel and display as a surgeon meets them (pvpython, headless):
 - every settable property sits in one of the groups Material, Contact, Loads, Solver, Output,
   whose labels carry the units (Pa, mm); pvpython still names each property by its XML name;

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """CondensedFEMDeform with ElementOrder = Quadratic on the Badin face scene (pvpython, headless).
 
 Nearly incompressible tissue (nu = 0.49): the quadratic option runs through the same filter, cache

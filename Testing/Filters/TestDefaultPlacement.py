@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Filters that start where the anatomy is (pvpython, headless): ROIExtract's sphere starts on the
 bone where an operation would be planned (its most anterior point, a fifth of its extent; also
 when the input was never updated, where ParaView's own start has Radius -1), its box on the input's

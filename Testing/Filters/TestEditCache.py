@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Bezier Cut and Osteotomy keep what depends only on their input across edits; the result never
 depends on it (pvpython, headless).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """FacialLandmarks on the Badin face (pvpython, headless): the BSSO scene of scripts/osteotomy_scenes.py
 (the preset's model, linear for speed). Every landmark is found, in its anatomical order; the table's
 movements equal the displacement field at the landmark (probed independently in the tissue volume

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """FacialLandmarks on a model from TissueModelFromCT (the bundled head CT, CellSize 10 mm; z grows
 towards the chin and the face looks towards -y): every landmark is found on the skin and the bone,
 the profile and the bony landmarks in their anatomical order, the paired ones on either side of the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The clinical ratios of the three osteotomy demos (scripts/osteotomy_scenes.py: Le Fort I 5 mm,
 BSSO 6 mm, genioplasty 5 mm advancements, each the model a user gets from Osteotomy's Operation
 preset with the demos' contact and NeoHookean/LiftOff model) against the published bands that

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Fixed bones and the under-held tissue (pvpython, headless), on the Badin face with the README's
 Le Fort I plan (maxilla below a horizontal cut advanced 5 mm).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """pvpython test of the Osteotomy filter against its contract.
 
 Usage: pvpython TestOsteotomy.py <path to FacePlan plugin> <Data dir>

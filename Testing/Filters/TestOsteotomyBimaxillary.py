@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """pvpython test of a bimaxillary plan end to end on the Badin face.
 
 Usage: pvpython TestOsteotomyBimaxillary.py <path to FacePlan plugin> <Data dir>

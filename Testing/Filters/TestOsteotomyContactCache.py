@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """pvpython test: CondensedFEMDeform keeps its tissue-bone contact across osteotomy edits.
 
 Usage: pvpython TestOsteotomyContactCache.py <path to FacePlan plugin> <Data dir>

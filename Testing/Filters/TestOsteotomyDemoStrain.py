@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """pvpython test: the shipped osteotomy demos use a model that is valid for their strains.
 
 Usage: pvpython TestOsteotomyDemoStrain.py <path to FacePlan plugin> <Data dir>

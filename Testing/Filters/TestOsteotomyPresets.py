@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Osteotomy's Operation presets (pvpython, headless): a default-constructed Osteotomy on the face's
 maxilla cuts where a Le Fort I does, without the reader having run first (the GUI and pvpython get
 the same start); BSSO and Genioplasty cut the mandible where those operations do; every preset marks

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """PrintSelf of every FacePlan filter names each of its settable properties (pvpython, headless):
 a proxy property (as the XML names it) that the class's PrintSelf leaves out is reported. Inputs,
 information-only properties and the Region sub-proxy's own parameters are not printed by name.

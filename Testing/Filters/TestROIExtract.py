@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """pvpython test of the ROIExtract filter against its contract.
 
 Usage: pvpython TestROIExtract.py <path to FacePlan plugin>

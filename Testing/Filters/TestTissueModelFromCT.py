@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Contract tests of TissueModelFromCT (pvpython, headless): the bundled head CT through the whole
 pipeline CT -> model -> ROIExtract -> BezierCut -> CondensedFEMDeform, and the named errors for bad
 inputs. argv[1] is the plugin, argv[2] the Data folder. Exits 77 (skipped) when the plugin was

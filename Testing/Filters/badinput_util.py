@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Small synthetic scenes and expectation helpers for the bad-input contract tests (not a test).
 
 Each case asserts one of the two outcomes of the contract: (a) an error naming the problem

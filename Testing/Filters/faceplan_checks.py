@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Contract checks shared by the pvpython tests: a failed check is recorded and the test goes on,
 then `finish` exits non-zero. No ParaView import, so that drivers that must not initialise
 ParaView at load time (the MPI ones) can use it too."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Helpers shared by the FacePlan pvpython filter tests (not a test itself)."""
 import sys
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Reading FacialLandmarks' table in the pvpython tests (not a test)."""
 import numpy as np
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Bezier surface and cut on random control points over a small bone (a coarse sphere, box or
 // plate), with a random ROI and options (up to 4 relaxation rounds, schedules of up to 8 steps).
 // Promises checked: no crash; on success the topology is kept, every coordinate is finite, only ROI

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Reads typed values from a fuzzer's byte string; past its end every read gives zero, so any input
 // is a valid (if short) description.

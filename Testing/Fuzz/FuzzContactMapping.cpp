@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The contact mapping of CondensedFEMDeform (tissue boundary node -> closest point of the
 // undeformed bone) on small random bones: triangles mostly, with quads, polygons, strips, lines
 // and vertices mixed in, repeated point ids, optional ROIMask, SegmentId and Sliding, coordinates

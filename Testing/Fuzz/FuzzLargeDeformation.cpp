@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The large-deformation solve on small random meshes: a block of 1 or 2 cubes (six tetrahedra
 // each) whose nodes move at random, random node classes (sliding ones with random normals),
 // materials, moves from 1e-7 to 10 cube sizes, lift-off and solver options. Promises checked: no

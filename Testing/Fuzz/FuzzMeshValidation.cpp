@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Core's input checks on arbitrary meshes, materials, node sets and surfaces: never a crash, and
 // when every check passes, Precompute and Solve either fail with a message or give finite results.
 #include "FuzzBytes.h"

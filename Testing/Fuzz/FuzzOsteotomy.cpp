@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The osteotomy's planes and transforms on random input: cut planes (any values, NaN included)
 // over a small bone, the sides and convex pieces, the rigid move of the segment, and the packing
 // of segment transforms. Promises checked: no crash; accepted planes have unit normals; a move

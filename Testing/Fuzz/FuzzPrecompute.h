@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Precompute under the promises every fuzz target checks: its status and system agree, and an
 // error has a message. True when the precompute succeeded.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Precompute and Solve on small random meshes: a block of 1 or 2 cubes (six tetrahedra
 // each) whose nodes move at random, with random node classes, materials, methods, element orders
 // and loads. Promises checked: no crash; a success is finite; the solve agrees with an independent

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Replays every file of the given folders (or single files) through LLVMFuzzerTestOneInput, so a
 // compiler without libFuzzer (the normal build, CI) still checks the committed corpus.
 #include <cstdint>

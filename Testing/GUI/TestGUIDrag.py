@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Runs inside the real ParaView GUI (`paraview --script=TestGUIDrag.py`), started by
 run_gui_test.py --script TestGUIDrag.py (inputs in the environment as for TestGUIUndoRedo.py).
 

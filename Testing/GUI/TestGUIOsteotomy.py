@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Runs inside the real ParaView GUI (`paraview --script=TestGUIOsteotomy.py`), started by
 run_gui_test.py --script TestGUIOsteotomy.py, which passes its inputs in the environment (see
 TestGUIUndoRedo.py: FACEPLAN_GUI_PLUGIN, _DATA, _SCRIPTS, _RESULT) and checks the result file.

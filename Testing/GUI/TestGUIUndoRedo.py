@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Runs inside the real ParaView GUI (`paraview --script=TestGUIUndoRedo.py`), started by
 run_gui_test.py, which passes its inputs in the environment and checks the result file:
 

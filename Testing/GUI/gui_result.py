@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The result a GUI test script reports to run_gui_test.py: its checks, failures, error and info,
 written as JSON to $FACEPLAN_GUI_RESULT. The GUI's exit code does not reflect Python errors, hence
 the file. Shared by the scripts that run inside ParaView's GUI (TestGUI*.py)."""

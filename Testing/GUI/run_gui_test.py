@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """CTest wrapper of FacePlan's GUI tests: starts the real `paraview` GUI on a test script
 (TestGUIUndoRedo.py unless --script names another one in this folder),
 waits for the result file the script writes, optionally grabs the X screen (the whole GUI: pipeline

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """FacePlan regression image tests (pvbatch, needs an X display: run under xvfb-run).
 
 Builds the main job's pipeline (scripts/faceplan_pipeline.py: chin ROI on the Badin mandible,

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: BSD-3-Clause
 # Runs a command with an X display, for FacePlan's rendering and GUI tests:
 #  - under xvfb-run (a private Xvfb, 1280x1024x24) when xvfb-run and Xvfb are installed;
 #  - else on $DISPLAY when that display's socket exists;

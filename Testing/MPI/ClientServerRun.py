@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """One client of the client-server test (pvpython): the face scene's pipeline in a builtin session
 or on a pvserver, with the results brought back by servermanager.Fetch (GetClientSideObject() is
 None on a client). With a server of several processes the tissue is split by RedistributeDataSet.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """One run of the MPI deformation test (pvbatch, serial or under mpiexec): for each scene and split,
 every process's piece of CondensedFEMDeform's output written to <work dir>/<label>/<scene>_<split>_
 {before,after}.pvtu (before and after one edit of the bone; for the face BezierCut's output as

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """One run of the MPI TissueModelFromCT test (pvbatch, serial or under mpiexec): the head CT's
 model, its tissue points and cell count saved from the first process, which holds the model.
 

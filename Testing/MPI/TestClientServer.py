@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The face scene through a pvserver gives the builtin session's results.
 
 Runs ClientServerRun.py builtin, then against `pvserver` on loopback (results bit-identical to

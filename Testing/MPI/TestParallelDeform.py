@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """CondensedFEMDeform (with ROIExtract and BezierCut, or Osteotomy, upstream) under MPI matches
 the serial run.
 

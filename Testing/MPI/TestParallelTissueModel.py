@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """TissueModelFromCT under `mpiexec -n 2 pvbatch` meshes the whole CT once, on rank 0: the model
 equals the serial one point for point, and no other rank adds a copy or a slab's model.
 Exits 77 (CTest SKIP_RETURN_CODE) when mpiexec is missing.

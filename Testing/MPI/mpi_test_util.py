@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Shared by the MPI and client-server test drivers (pvpython): finding mpiexec, running a command
 with its output captured, and recording checks."""
 import os

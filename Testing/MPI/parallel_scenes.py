@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The scenes of the MPI tests, built and split the same way in every run (serial or mpiexec).
 
 face:   the demo's pipeline on the Badin face (ROIExtract -> BezierCut -> CondensedFEMDeform).

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Fails when a shipped library defines a symbol of the comparison paths or of the test and benchmark
 # support (FacePlanComparison, FacePlanTestSupport: mesh generators, test scenes, the CalculiX
 # runner, the .vtu reader, the boundary-node sets): the plugin must not carry them.

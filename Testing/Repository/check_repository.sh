@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Checks of the repository as a product, on the tracked files of the source tree:
 #   readme-length   README.md, the front page, has at most 250 lines;
 #   process-words   no tracked file speaks of how the project was developed (numbered sessions or

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Thick hollow sphere (inner radius a, outer b), radial displacement ua prescribed on the inner
 // surface, free outer surface: u(r) = A r + B / r^2 with sigma_rr(b) = 0. The exact solution the

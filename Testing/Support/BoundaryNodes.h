@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The benchmarks' and the report's node sets keep the tissue's outer surface: its nodes are those
 // of faces used by a single tetrahedron.

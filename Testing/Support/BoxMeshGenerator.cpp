@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "Support/BoxMeshGenerator.h"
 
 #include <Eigen/Geometry>

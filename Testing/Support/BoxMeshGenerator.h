@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A structured tetrahedral mesh of the box [0, lx] x [0, ly] x [0, lz]: nx * ny * nz hexahedra,
 // each split into 6 tetrahedra around its main diagonal (Kuhn split, conforming between

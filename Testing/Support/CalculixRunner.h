@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Runs CalculiX (ccx, C3D4, *STATIC) on the same mesh and boundary conditions as a FacePlan
 // solve, as an outside peer, and reads back the kept nodes' displacements (global axes). Sliding

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scenes for Core's tests, all built by Core's generator.
 #include "CondensedFEM/CondensedFEM.h"

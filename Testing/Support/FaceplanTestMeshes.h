@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Small surface meshes for the ROI / Bezier-cut tests (generated, no files).
 #include "Mesh/SurfaceMesh.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Structured tetrahedral meshes of a thick spherical shell, for verification and benchmarks:
 // an icosahedral sphere (each icosahedron edge cut into `subdivisions` pieces) extruded into

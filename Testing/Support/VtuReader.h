@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A tiny VTK-free reader of the VTK XML UnstructuredGrid files in Data/ (inline data, format
 // "ascii" or "binary", raw or vtkZLibDataCompressor, UInt32 or UInt64 headers, little endian),

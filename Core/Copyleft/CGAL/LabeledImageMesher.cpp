@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The only translation unit that includes CGAL Mesh_3 (slow to compile).
 #include "Copyleft/CGAL/LabeledImageMesher.h"
 

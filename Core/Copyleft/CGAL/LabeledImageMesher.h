@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CGAL Mesh_3 mesher of labelled images (GPL-3: this part is built only with FACEPLAN_ENABLE_CGAL).
 // Meshes the image from memory, in its physical frame (origin, spacing, direction), then

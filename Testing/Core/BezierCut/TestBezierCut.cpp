@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // BezierCut contract tests: moved vertices on S, the others untouched bit for bit, topology
 // unchanged, no flipped / degenerate / newly intersecting triangles, clear errors for bad curves.
 #include "BezierCut/BezierCut.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The triangle box tree behind BezierCut's intersection checks: its candidates include every pair
 // whose boxes are not apart, whatever the triangles' sizes and shapes, and a crossing far along a
 // large triangle is found.

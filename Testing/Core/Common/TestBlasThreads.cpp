@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // OpenBLAS's thread count after scopes that open and close on different threads.
 #include "Common/BlasKernels.h"
 #include "Common/BlasThreads.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ReturnLargeAllocationsToSystem: a freed 16 MiB block goes back to the system even after an
 // earlier block of that size was freed (glibc's own rule would keep the second one in the heap).
 // CTest runs this executable twice: plain, and with MALLOC_MMAP_THRESHOLD_ set by the user

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // WorkerThreads: the cap and FACEPLAN_THREADS. CTest runs this executable twice, without the
 // variable and with FACEPLAN_THREADS=1 (FACEPLAN_EXPECT_ONE_THREAD=1 tells it which).
 #include "Common/WorkerThreads.h"

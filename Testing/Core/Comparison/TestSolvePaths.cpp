@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Every extra solve path of the report agrees with Core's double-precision reference within the
 // tolerance it states, on generated shells (no hand-typed meshes).
 #include "Common/RelativeDifference.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "Common/RelativeDifference.h"
 #include "CondensedFEM/BackgroundPrecompute.h"
 #include "Support/FEMTestScenes.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The background precompute under concurrency (run under ThreadSanitizer by `scripts/sanitize
 // thread`): restarts and cancels in quick succession, solves running while a precompute runs,
 // waiters on other threads, and the owner destroyed while its precompute runs.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The condensed paths must equal the reference full solve (no condensation) on several meshes.
 #include "Common/RelativeDifference.h"
 #include "Support/FEMTestScenes.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Thick hollow sphere, radial displacement prescribed on the inner surface, free outer surface:
 // u(r) = A r + B / r^2 with sigma_rr(b) = 0 (Core/AnalyticHollowSphere.h). Linear tetrahedra
 // converge at order 2 in L2.

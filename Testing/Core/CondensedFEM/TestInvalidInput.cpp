@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Every invalid input gives a clear error and never a crash, an exception or NaN.
 #include "Support/FEMTestScenes.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The large-deformation solve against the analytic neo-Hookean uniaxial state, a rigid rotation
 // (exact, where a linear model distorts), the linear model for small moves, and bad input.
 #include "Common/RelativeDifference.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The large-deformation solves (Newton's and the precomputed one) against CalculiX (*HYPERELASTIC,
 // NEO HOOKE with NLGEOM, the same strain energy) on moves of tens of percent strain: a face-like
 // shell whose ROI is pushed in, the same with per-cell materials, and a shell sliding on a curved

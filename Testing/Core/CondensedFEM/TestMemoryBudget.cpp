@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The memory budget: sizes known after the symbolic analysis are checked before the factor or the
 // dense response is allocated.
 #include "Common/RelativeDifference.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Patch test and rigid motion on generated shells: a linear field prescribed on the boundary is
 // reproduced exactly inside; a rigid motion produces no strain and no reaction.
 #include "Common/RelativeDifference.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The precomputed large-deformation solve against Newton's (the same equilibrium to 1e-8), warm
 // starts against cold solves, lift-off's active set changing during a drag, a move that must invert
 // cells, the fallback to Newton, the background refactorization and bad input.

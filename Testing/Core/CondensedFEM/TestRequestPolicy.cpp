@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The policies the filters take from Core: which requests may share a precompute, unit scaling and
 // verification against an independent solve.
 #include "CondensedFEM/PhysicalUnits.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The probe of a backend's response operator (Core/CondensedFEM/ResponseProbe): the rows it
 // compares, in full and sampled, and that it sees a wrong block or a lower precision there.
 #include "CondensedFEM/ResponseProbe.h"

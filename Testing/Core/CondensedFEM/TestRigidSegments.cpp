@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The rigid-segment path (SolveMethod::RigidSegments) against the general dense response and the
 // reference full solve, for rigid-only and mixed plans.
 #include "Common/RelativeDifference.h"

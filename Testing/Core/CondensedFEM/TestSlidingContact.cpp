@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Sliding contact (NodeSets::sliding): only the normal displacement is prescribed. Checked against
 // the analytic uniaxial solution of a block between frictionless walls, and against CalculiX on a
 // curved surface (*TRANSFORM + *BOUNDARY on the local normal DOF).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Numerical stability on stiff and extreme cases: near-incompressible tissue and locking,
 // stiffness contrast and unit rescaling, degenerate and sliver elements, under-constrained pieces,
 // large displacements, single-precision per-edit products.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The ROI-coupled-last ordering (Core/FillReducingOrdering), the trailing solve it enables
 // (CholmodFactor::solveTrailing) and the dense response built from it (Core/TrailingResponse),
 // including the choice against the plain ordering and the fallback to refined full solves.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "Element/ElementStiffness.h"
 #include "Element/StiffnessAssembly.h"
 #include "Support/ShellMeshGenerator.h"

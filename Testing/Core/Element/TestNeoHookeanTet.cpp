@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The neo-Hookean cell: its force is the energy's gradient, its tangent the force's derivative,
 // its small-strain limit the linear element, and a rigid rotation costs nothing.
 #include "Element/ElementStiffness.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Landmark geometry on generated sections: a profile whose prominences, notches and concavities are
 // known from its formula, the frames, the table's ratios and the published bands.
 #include "Landmarks/ClinicalBands.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Osteotomy Core: the rigid move, its composition and packing, the cut's sides and pieces, and the
 // bookkeeping of MoveSegment (cumulative displacement, segment ids, transforms, errors).
 #include "Osteotomy/CutPlanes.h"

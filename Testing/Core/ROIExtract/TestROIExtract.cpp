@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ROIExtract contract: ROIMask is the selection, ROIBoundary marks ROI vertices with a non-ROI
 // neighbour along a cell edge; malformed input gives an error and an empty result.
 #include "ROIExtract/DefaultRegion.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SparseSolver/SymbolicAnalysis: the supernodal analysis in a given order, from the node graph when
 // the matrix is node-blocked and from a permuted copy otherwise, must be the factor CHOLMOD makes
 // from the original matrix with the same ordering (cholmod_analyze_p, CHOLMOD_GIVEN, postordered),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The per-thread METIS random generator (Core/SparseSolver/MetisRandom.h): it must be the one
 // libmetis reaches in this process, and it must give the sequence the C library's rand() gives, so
 // that orderings equal those METIS made on the shared generator alone.

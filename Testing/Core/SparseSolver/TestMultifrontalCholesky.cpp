@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SparseSolver/MultifrontalCholesky: the multifrontal factor in CHOLMOD's layout must be CHOLMOD's
 // factor up to round-off, the same bit for bit from run to run whatever the thread schedule, and
 // refuse a matrix that is not positive definite (CholmodFactor then names CHOLMOD's first failing

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // PrunedBackSubstitution and PrunedForwardSubstitution (Core/SparseSolver): the substitutions on
 // row-major blocks agree with CHOLMOD's own solve; restricting the backward one to wanted rows
 // changes none of their values while it skips supernodes, and the forward one over a right-hand

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Labelled and CT test images with known geometry: a soft-tissue shell around a bone ball, the
 // sizes of the analytic hollow sphere (Support/AnalyticHollowSphere.h).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The CGAL-free parts of TissueModelFromCT: labelling, parameter checks, the cell budget, quality
 // measures and the split of a labelled mesh into tissue, bone and skin.
 #include "Mesh/MeshValidation.h"

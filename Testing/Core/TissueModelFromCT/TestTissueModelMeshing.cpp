@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // TissueModelFromCT with CGAL Mesh_3 on a labelled shell around a bone ball (the analytic hollow
 // sphere's sizes): geometry, orientation, quality, boundary distance, reproducibility, the image
 // frame, and the deformation against the analytic solution. Skipped when built without CGAL.
