@@ -200,7 +200,7 @@ def build_scene(simple, data_dir, case, work_dir):
         tissue_file, bone_file, meshing, _ = mesh_ct(simple, data_dir, case["level"], work_dir)
         tissue = simple.XMLUnstructuredGridReader(FileName=[tissue_file])
         bone_surface = simple.XMLPolyDataReader(FileName=[bone_file])
-        bone = simple.Osteotomy(Input=bone_surface)
+        bone = simple.Osteotomy(Input=bone_surface, Operation="Custom")
         (bone.CutPlane1.Origin, bone.CutPlane1.Normal), (bone.CutPlane2.Origin, bone.CutPlane2.Normal) = CT_CUTS
         bone.UseSecondPlane = 1
         bone.Translation = CT_MOVE
@@ -221,6 +221,8 @@ def build_scene(simple, data_dir, case, work_dir):
         fem.ReleaseDistance = 0.0
     if contact["ContactModel"] != "Tied" and scene in ("demo", "ct"):
         raise ValueError("scene %s has no sliding bone" % scene)
+    # The study reads every node's displacement (skin ids index the volume mesh's points).
+    fem.OutputMode = "Volume"
     fem.ContactModel = contact["ContactModel"]
     fem.LiftOff = contact["LiftOff"]
     for name, value in case["props"].items():
