@@ -109,9 +109,9 @@ Status Solver::runLargeDeformation(const PrecomputeRequest& given, const Precomp
     largeState_ = LargeDeformationState();
   const bool fresh = !largeState_.valid();
   LargeDeformationState next;
-  status = SolvePrecomputedLargeDeformation(*system, input, &largeState_, outcome.result,
-                                            outcome.precomputedReport, &next,
-                                            settings.iterationLimit);
+  status =
+      SolvePrecomputedLargeDeformation(*system, input, &largeState_, outcome.result,
+                                       outcome.precomputedReport, &next, settings.iterationLimit);
   // A stopped iterate is no state to start from: the next update starts from the last converged.
   if (!outcome.precomputedReport.stoppedAtLimit)
     largeState_ = next;

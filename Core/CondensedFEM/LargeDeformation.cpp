@@ -297,6 +297,20 @@ Eigen::VectorXd LocalPositions(const Structure& st) {
   return positions;
 }
 
+Status FinishSolve(const PrecomputeRequest& request, const SolveInput& input, const Problem& pb,
+                   const Eigen::VectorXd& u, double relativeResidual, SolveResult& result,
+                   FinalState& finalState) {
+  const Structure& st = *pb.st;
+  finalState.measures = MeasureDeformation(st, u);
+  finalState.liftedNodes = 0;
+  for (int dof : st.liftOffDofs)
+    finalState.liftedNodes += pb.prescribed[dof] ? 0 : 1;
+  result.relativeResidual = relativeResidual;
+  result.largestStrain = finalState.measures.largestGreenStrain;
+  result.invertedCells = 0;
+  return FillResult(request, input, st, u, result);
+}
+
 Status FillResult(const PrecomputeRequest& request, const SolveInput& input, const Structure& st,
                   const Eigen::VectorXd& u, SolveResult& result) {
   const Eigen::Index n = st.n;
@@ -583,16 +597,12 @@ Status LargeDeformationImpl(const PrecomputeRequest& request, const SolveInput& 
     step *= 0.5;
   }
 
-  const DeformationMeasures measures = MeasureDeformation(st, state.u);
-  report.smallestVolumeRatio = measures.smallestVolumeRatio;
-  report.largestGreenStrain = measures.largestGreenStrain;
-  report.largestStrainCell = measures.largestStrainCell;
-  for (int dof : st.liftOffDofs)
-    report.liftedNodes += pb.prescribed[dof] ? 0 : 1;
-  result.relativeResidual = newton.lastResidual();
-  result.largestStrain = report.largestGreenStrain;
-  result.invertedCells = 0;
-  status = FillResult(request, input, st, state.u, result);
+  FinalState finalState;
+  status = FinishSolve(request, input, pb, state.u, newton.lastResidual(), result, finalState);
+  report.smallestVolumeRatio = finalState.measures.smallestVolumeRatio;
+  report.largestGreenStrain = finalState.measures.largestGreenStrain;
+  report.largestStrainCell = finalState.measures.largestStrainCell;
+  report.liftedNodes = finalState.liftedNodes;
   if (!status)
     return status;
   result.timings[Stage::Total].ms = total.elapsedMs();

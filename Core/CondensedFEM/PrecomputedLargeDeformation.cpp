@@ -232,7 +232,7 @@ public:
       : sys_(sys), st_(*sys.structure), pb_(pb), report_(report), timings_(timings),
         factor_(sys.factor()) {}
 
-  std::string why;       // set with Failure::Fallback
+  std::string why;        // set with Failure::Fallback
   int iterationLimit = 0; // > 0: Failure::Stopped when reached
 
   // From u (converged for the previous targets, with pb_.prescribed's contact) to equilibrium at
@@ -565,16 +565,12 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     return status;
   }
 
-  const DeformationMeasures measures = MeasureDeformation(st, u);
-  report.smallestVolumeRatio = measures.smallestVolumeRatio;
-  report.largestGreenStrain = measures.largestGreenStrain;
-  report.largestStrainCell = measures.largestStrainCell;
-  for (int dof : st.liftOffDofs)
-    report.liftedNodes += pb.prescribed[dof] ? 0 : 1;
-  result.relativeResidual = solver.lastResidual();
-  result.largestStrain = measures.largestGreenStrain;
-  result.invertedCells = 0;
-  status = FillResult(request, input, st, u, result);
+  FinalState finalState;
+  status = FinishSolve(request, input, pb, u, solver.lastResidual(), result, finalState);
+  report.smallestVolumeRatio = finalState.measures.smallestVolumeRatio;
+  report.largestGreenStrain = finalState.measures.largestGreenStrain;
+  report.largestStrainCell = finalState.measures.largestStrainCell;
+  report.liftedNodes = finalState.liftedNodes;
   if (!status)
     return status;
   if (report.stoppedAtLimit) {
