@@ -184,9 +184,11 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
     DeformGathered(controller, this->CurrentSettings().output(), tissue, bone, output, table,
                    [this](vtkUnstructuredGrid* t, vtkPointSet* b, vtkUnstructuredGrid* o,
                           vtkTable* tab) { return this->Deform(t, b, o, tab); });
-    return 1;
-  }
-  this->Deform(tissue, bone, output, table);
+  } else
+    this->Deform(tissue, bone, output, table);
+  // The field data are the solve's figures (Backend, Method, SolveTimeMs, ...), all made here:
+  // the colour-by list offers the point arrays (Displacement) only.
+  faceplan::fielddata::HideFromArrayLists(output->GetFieldData());
   return 1;
 }
 
