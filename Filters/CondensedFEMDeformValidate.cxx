@@ -266,8 +266,8 @@ std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement
   }
   // A move below the floor (0.03 mm for a head whose bounds span 300 mm) is no move: round-off or
   // a solver's tolerance (a warm-started solve back at zero leaves about 1e-13 mm), far below
-  // anything a surgeon plans or sees. Without gravity the bones are the only load, so when none moves beyond
-  // the floor the tissue has nothing to swing from and there is nothing to say.
+  // anything a surgeon plans or sees. Without gravity the bones are the only load, so when none
+  // moves beyond the floor the tissue has nothing to swing from and there is nothing to say.
   const double floor = kLooseTissueFloor * tissueSize;
   if (!(boneLargest > floor) || !(tissueLargest > kLooseTissueRatio * boneLargest))
     return std::string();
