@@ -280,7 +280,9 @@ std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement
   msg << "the tissue moves " << tissueLargest << unit << " where no bone moves more than "
       << boneLargest << unit
       << ": is every bone connected? Connect the bones that stay put (the mandible, the cranium) "
-         "to the Bone port as well; a connection without a Displacement array is a fixed bone";
+         "to the Bone port as well; a connection without a Displacement array is a fixed bone. If "
+         "every bone is connected, the tissue is held loosely: Sliding, Released and lifted-off "
+         "tissue follows the bone only along its normal or not at all";
   return msg.str();
 }
 
