@@ -423,13 +423,23 @@ def key_of(cfg):
     return hashlib.sha1(json.dumps(cfg, sort_keys=True).encode()).hexdigest()[:12]
 
 
+# The precomputed large-deformation solve stopped after k quasi-Newton iterations (the filter's
+# QuasiNewtonIterationLimit): what an update that stops early gives, against its time.
+ITERATION_LIMITS = [1, 2, 4, 8, 16]
+
+
+def iteration_label(k):
+    return "large deformation, precomputed, %d iteration%s" % (k, "" if k == 1 else "s")
+
+
 def large_deformation_series(has_solver_choice, reference_props):
-    """The model axis's large-deformation subjects beyond the reference: the precomputed solve
-    after k iterations, once the filter offers LargeDeformationSolver. One entry per series."""
+    """The model axis's large-deformation subjects beyond the reference: the precomputed solve to
+    convergence and stopped after k iterations. One entry per subject."""
     series = []
     if has_solver_choice:
-        series.append(("large deformation, precomputed factor",
-                       dict(reference_props, LargeDeformationSolver="Precomputed")))
+        precomputed = dict(reference_props, LargeDeformationSolver="Precomputed")
+        series.append(("large deformation, precomputed factor", precomputed))
+        series += [(iteration_label(k), dict(precomputed, QuasiNewtonIterationLimit=k)) for k in ITERATION_LIMITS]
     return series
 
 
@@ -754,6 +764,7 @@ def main():
     rows = evaluate(plan, results)
     write_csv(os.path.join(args.out, "accuracy.csv"), rows)
     write_landmark_csv(os.path.join(args.out, "accuracy_landmarks.csv"), rows)
+    write_convergence_csv(os.path.join(args.out, "accuracy_convergence.csv"), rows)
     failures = check(plan, rows)
     write_markdown(os.path.join(args.out, "accuracy.md"), plan, rows, results, failures, args,
                    span, has_solver_choice, ct_levels)
@@ -825,7 +836,10 @@ def evaluate(plan, results):
                 model=info["model"], solver=info["solver"], method=info["method"], element_order=info["element_order"],
                 newton_iterations=info["newton_iterations"], lifted_nodes=info["lifted_nodes"],
                 largest_strain=info["largest_strain"], largest_displacement_mm=info["largest_displacement_mm"],
-                skin_nodes=int(ref_data["skin"].sum()))
+                skin_nodes=int(ref_data["skin"].sum()), iteration_limit=info.get("iteration_limit"),
+                quasi_newton_iterations=info.get("quasi_newton_iterations"),
+                relative_residual=info.get("relative_residual"), converged=info.get("converged"),
+                solver_note=info.get("solver_note"), convergence=info.get("convergence") or [])
             rows.append(row)
         if study.get("judge"):
             judge_info, judge_data = results[key_of(study["judge"][1])]
@@ -845,8 +859,26 @@ def evaluate(plan, results):
 
 CSV_FIELDS = ["scene", "axis", "choice", "is_reference", "reference", "level", "tets", "max_mm", "p95_mm",
               "landmark_max_mm", "update_ms", "first_update_s", "precompute_ms", "meshing_s", "peak_mb", "model",
-              "method", "element_order", "newton_iterations", "lifted_nodes", "largest_strain",
-              "largest_displacement_mm", "skin_nodes", "failed"]
+              "solver", "method", "element_order", "newton_iterations", "iteration_limit", "quasi_newton_iterations",
+              "relative_residual", "converged", "lifted_nodes", "largest_strain", "largest_displacement_mm",
+              "skin_nodes", "failed"]
+
+
+def write_convergence_csv(path, rows):
+    """The large-deformation solves' iterates (the field data ConvergenceHistory): per scene and
+    solver, the first solve's time (ms since it started) and relative residual at each iterate."""
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["scene", "choice", "solver", "iteration", "ms", "relative_residual"])
+        seen = set()
+        for r in rows:
+            if r.get("failed") or r["axis"] != "model" or r.get("model") != "NeoHookean" or r.get("iteration_limit"):
+                continue
+            if (r["scene"], r["choice"]) in seen:
+                continue
+            seen.add((r["scene"], r["choice"]))
+            for i, (ms, residual) in enumerate(r["convergence"], 1):
+                writer.writerow([r["scene"], r["choice"], r["solver"], i, "%.6g" % ms, "%.6g" % residual])
 
 
 def write_csv(path, rows):
@@ -949,6 +981,9 @@ def check(plan, rows):
             for name in ("max_mm", "p95_mm", "update_ms", "peak_mb"):
                 if r.get(name) is None or not math.isfinite(r[name]) or r[name] < 0:
                     failures.append("%s %s %s: %s is %r" % (r["scene"], r["axis"], r["choice"], name, r[name]))
+            if r.get("iteration_limit") and r.get("converged") is None:
+                failures.append("%s %s %s: stopped after %d iterations without the field data Converged" % (
+                    r["scene"], r["axis"], r["choice"], r["iteration_limit"]))
             if r.get("landmark_max_mm") is None:
                 failures.append("%s %s %s: no error at the soft-tissue landmarks (%s)" % (
                     r["scene"], r["axis"], r["choice"], r.get("landmarks_error") or "none found on the reference"))
@@ -1088,6 +1123,39 @@ def landmark_coverage(main_rows):
     return "; ".join(parts)
 
 
+def iteration_section(w, main_rows):
+    """The precomputed large-deformation solve stopped after k iterations, per scene."""
+    limited = [r for r in main_rows if r["axis"] == "model" and r.get("iteration_limit")]
+    if not limited:
+        return
+    w("### The large-deformation solve stopped early")
+    w("")
+    w("![residual against iterations and time, and skin error against iterations](plots/large_deformation_iterations.png)")
+    w("")
+    w("The precomputed large-deformation solve (L-BFGS with the precompute's factor) stopped after k quasi-Newton "
+      "iterations (QuasiNewtonIterationLimit), from rest after the precompute: what an update that is cut short "
+      "gives, against its time. Its output is that iterate, marked Converged 0, not the equilibrium. Against the "
+      "Newton reference of each scene's model axis; the fully converged precomputed solve (k = –) and the "
+      "reference's own solve time are given for comparison. Each solve's iterates are in `%s`." %
+      "accuracy_convergence.csv")
+    w("")
+    w("| scene | k | iterations run | relative residual | converged | per update ms | largest mm | 95th pct mm | "
+      "landmarks mm |")
+    w("|---|---|---|---|---|---|---|---|---|")
+    for scene in dict.fromkeys(r["scene"] for r in limited):
+        mine = sorted((r for r in limited if r["scene"] == scene), key=lambda r: r["iteration_limit"])
+        full = [r for r in main_rows if r["scene"] == scene and r["axis"] == "model" and not r.get("iteration_limit")
+                and r.get("solver") == "Precomputed"]
+        ref = [r for r in main_rows if r["scene"] == scene and r["axis"] == "model" and r["is_reference"]]
+        for r in mine + full + ref:
+            k = r["iteration_limit"] or ("– (reference, Newton)" if r["is_reference"] else "–")
+            w("| %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                scene, k, fmt(r.get("quasi_newton_iterations") if not r["is_reference"] else r.get("newton_iterations")),
+                fmt(r.get("relative_residual"), 2), {1.0: "yes", 0.0: "no"}.get(r.get("converged"), "yes"),
+                fmt(r["update_ms"]), fmt(r["max_mm"]), fmt(r["p95_mm"]), fmt(r["landmark_max_mm"])))
+    w("")
+
+
 def landmark_table(w, main_rows):
     """Per landmark and scene, the linear model's error against the large-deformation reference (mm);
     the other subjects' are in the landmark CSV."""
@@ -1182,6 +1250,8 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
     w("| scene | axis | choice | largest mm | 95th pct mm | landmarks mm | per update ms | precompute ms | peak MB | tets |")
     w("|---|---|---|---|---|---|---|---|---|---|")
     for r in main_rows:
+        if r.get("iteration_limit"):
+            continue  # the precomputed solve stopped early: its own table below
         choice = ("**%s** (reference)" % r["choice"]) if r["is_reference"] else r["choice"]
         w("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %d |" % (
             r["scene"], r["axis"], choice, fmt(r["max_mm"]), fmt(r["p95_mm"]), fmt(r["landmark_max_mm"]),
@@ -1207,6 +1277,7 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
         w("")
 
     landmark_table(w, main_rows)
+    iteration_section(w, main_rows)
     w("## Discretization")
     w("")
     w("![skin error against CellSize and element order](plots/discretization.png)")
@@ -1322,6 +1393,57 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
         f.write("\n".join(lines))
 
 
+def plot_iterations(plt, plot_dir, main_rows, scenes):
+    """The large-deformation solves' relative residual against iterations and against time (the
+    first solve's ConvergenceHistory: precomputed solid, Newton dashed), and the skin error of the
+    precomputed solve stopped after k iterations."""
+    model = [r for r in main_rows if r["axis"] == "model" and r.get("model") == "NeoHookean"]
+    if not any(r.get("iteration_limit") for r in model):
+        return
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.3))
+    for n, scene in enumerate(scenes):
+        colour = "C%d" % n
+        for r in model:
+            if r["scene"] != scene or r.get("iteration_limit") or not r["convergence"]:
+                continue
+            style = "-" if r.get("solver") == "Precomputed" else "--"
+            ms = [p[0] for p in r["convergence"]]
+            residual = [p[1] for p in r["convergence"]]
+            a.plot(range(1, len(residual) + 1), residual, style, color=colour, lw=1)
+            b.plot(ms, residual, style, color=colour, lw=1)
+        limited = sorted((r for r in model if r["scene"] == scene and r.get("iteration_limit")),
+                         key=lambda r: r["iteration_limit"])
+        if limited:
+            c.plot([r["iteration_limit"] for r in limited], [r["max_mm"] for r in limited], "o-", color=colour,
+                   label=scene + ": largest")
+            c.plot([r["iteration_limit"] for r in limited], [r["p95_mm"] for r in limited], "s:", color=colour,
+                   ms=4, label=scene + ": 95th percentile")
+    for axis in (a, b):
+        axis.set_yscale("log")
+        axis.set_ylabel("relative residual")
+        axis.grid(True, which="both", alpha=0.3)
+    a.set_xlabel("iteration")
+    a.set_title("Residual against iterations")
+    b.set_xscale("log")
+    b.set_xlabel("time since the solve started (ms)")
+    b.set_title("Residual against time")
+    for n, scene in enumerate(scenes):
+        a.plot([], [], color="C%d" % n, label=scene)
+    a.plot([], [], "-", color="grey", label="precomputed (L-BFGS)")
+    a.plot([], [], "--", color="grey", label="Newton (reference)")
+    a.legend(fontsize=7)
+    c.set_xscale("log", base=2)
+    c.set_yscale("log")
+    c.set_xlabel("quasi-Newton iterations k (stopped there)")
+    c.set_ylabel("error at the skin against the reference (mm)")
+    c.set_title("Stopped after k iterations")
+    c.grid(True, which="both", alpha=0.3)
+    c.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(plot_dir, "large_deformation_iterations.png"), dpi=110)
+    plt.close(fig)
+
+
 def plot(plot_dir, rows):
     import matplotlib
     matplotlib.use("Agg")
@@ -1345,12 +1467,25 @@ def plot(plot_dir, rows):
             if key in seen:
                 continue
             seen.add(key)
+            if r.get("iteration_limit"):
+                continue
             ax.scatter(r["update_ms"], max(r["max_mm"], floor), color=colour, marker=markers[r["axis"]],
                        facecolors="none" if r["is_reference"] else colour, s=45)
+        # The precomputed solve stopped after k iterations: a line from k = 1 to the converged solve.
+        series = sorted((r for r in mine if r["axis"] == "model" and r.get("solver") == "Precomputed"),
+                        key=lambda r: r.get("iteration_limit") or 1e9)
+        if len(series) > 1:
+            ax.plot([r["update_ms"] for r in series], [max(r["max_mm"], floor) for r in series], color=colour,
+                    lw=0.8, marker=".", ms=5)
+            for r in series:
+                if r.get("iteration_limit"):
+                    ax.annotate(str(r["iteration_limit"]), (r["update_ms"], max(r["max_mm"], floor)), fontsize=6,
+                                color=colour, textcoords="offset points", xytext=(2, 2))
         ax.plot([], [], color=colour, marker="o", linestyle="", label=scene)
     for axis, m in markers.items():
         ax.plot([], [], color="grey", marker=m, linestyle="", label="axis: " + axis)
     ax.plot([], [], color="grey", marker="o", markerfacecolor="none", linestyle="", label="reference (0 mm drawn at %g)" % floor)
+    ax.plot([], [], color="grey", marker=".", lw=0.8, label="precomputed solve stopped after k iterations")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.axhline(1.0, color="grey", lw=0.6, ls=":")
@@ -1363,6 +1498,8 @@ def plot(plot_dir, rows):
     fig.tight_layout()
     fig.savefig(os.path.join(plot_dir, "model_error_vs_time.png"), dpi=110)
     plt.close(fig)
+
+    plot_iterations(plt, plot_dir, main_rows, scenes)
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
     mesh = [r for r in mesh_series(main_rows) if not r["is_reference"]]
