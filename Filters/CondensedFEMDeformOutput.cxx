@@ -81,6 +81,7 @@ void AddFieldData(const SolveOutcome& outcome, const Settings& settings,
     AddString(fd, "LargeDeformationSolver", outcome.newton ? "Newton" : "Precomputed");
     if (!outcome.solverNote.empty())
       AddString(fd, "SolverNote", outcome.solverNote);
+    AddScalar(fd, "Converged", outcome.precomputedReport.stoppedAtLimit ? 0.0 : 1.0);
     double smallest = 0.0;
     int lifted = 0;
     if (outcome.newton) {

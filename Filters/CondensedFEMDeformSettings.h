@@ -29,6 +29,7 @@ struct Settings {
   bool verify = false;
   int model = 2;                  // ModelChoice
   int largeDeformationSolver = 0; // LargeDeformationSolverChoice
+  int iterationLimit = 0;         // Precomputed: stop after this many iterations (0: none)
   bool liftOff = false;
 
   OutputMode output() const { return static_cast<OutputMode>(outputMode); }

@@ -109,11 +109,22 @@ Status Solver::runLargeDeformation(const PrecomputeRequest& given, const Precomp
     largeState_ = LargeDeformationState();
   const bool fresh = !largeState_.valid();
   LargeDeformationState next;
-  status = SolvePrecomputedLargeDeformation(*system, input, &largeState_, outcome.result,
-                                            outcome.precomputedReport, &next);
-  largeState_ = next;
+  status =
+      SolvePrecomputedLargeDeformation(*system, input, &largeState_, outcome.result,
+                                       outcome.precomputedReport, &next, settings.iterationLimit);
+  // A stopped iterate is no state to start from: the next update starts from the last converged.
+  if (!outcome.precomputedReport.stoppedAtLimit)
+    largeState_ = next;
   if (!status)
     return status;
+  if (outcome.precomputedReport.stoppedAtLimit) {
+    std::ostringstream note;
+    note << "stopped after " << outcome.precomputedReport.iterations
+         << " quasi-Newton iterations (QuasiNewtonIterationLimit) at relative residual "
+         << outcome.result.relativeResidual << ": this is not the equilibrium";
+    outcome.solverNote = note.str();
+    outcome.notes.push_back(outcome.solverNote);
+  }
   outcome.precomputeMs = precompute[Stage::Total].ms;
   outcome.freshPrecompute = outcome.freshPrecompute || fresh;
   if (outcome.precomputedReport.fellBack) {

@@ -120,6 +120,9 @@ Status ValidateProperties(const Settings& s) {
   if (s.largeDeformationSolver < 0 || s.largeDeformationSolver > 1)
     return Error("LargeDeformationSolver must be 0 (Precomputed) or 1 (Newton), not ",
                  s.largeDeformationSolver);
+  if (s.iterationLimit < 0)
+    return Error("QuasiNewtonIterationLimit must be 0 (no limit) or positive, not ",
+                 s.iterationLimit);
   if (s.largeDeformation() && s.elementOrder != 0)
     return Error("Model NeoHookean supports ElementOrder Linear only");
   if (s.largeDeformation() && s.verify)

@@ -345,6 +345,7 @@ Settings vtkCondensedFEMDeform::CurrentSettings() const {
   s.elementOrder = this->ElementOrder;
   s.model = this->Model;
   s.largeDeformationSolver = this->LargeDeformationSolver;
+  s.iterationLimit = this->QuasiNewtonIterationLimit;
   s.liftOff = this->LiftOff;
   s.verify = this->Verify;
   return s;
@@ -369,6 +370,7 @@ void vtkCondensedFEMDeform::PrintSelf(ostream& os, vtkIndent indent) {
      << indent << "ElementOrder: " << this->ElementOrder << "\n"
      << indent << "Model: " << this->Model << "\n"
      << indent << "LargeDeformationSolver: " << this->LargeDeformationSolver << "\n"
+     << indent << "QuasiNewtonIterationLimit: " << this->QuasiNewtonIterationLimit << "\n"
      << indent << "LiftOff: " << this->LiftOff << "\n"
      << indent << "Verify: " << this->Verify << "\n";
 }

@@ -162,6 +162,14 @@ public:
   ///@}
 
   ///@{
+  /// For studies of error against iterations: k > 0 stops the Precomputed solver after k
+  /// quasi-Newton iterations and outputs that iterate, which is not the equilibrium (field data
+  /// `Converged` 0, a `SolverNote` and a warning say so). 0 (the default): no limit.
+  vtkSetMacro(QuasiNewtonIterationLimit, int);
+  vtkGetMacro(QuasiNewtonIterationLimit, int);
+  ///@}
+
+  ///@{
   /// Contact: CONTACT_TIED (0, every component follows the bone), CONTACT_SLIDING (1, only the
   /// component along the bone's normal follows it; the tissue slides tangentially) or
   /// CONTACT_BY_ARRAY (2, the bone point array `Sliding` picks per node).
@@ -226,6 +234,7 @@ protected:
   int ElementOrder = LINEAR_ELEMENTS;
   int Model = AUTO_MODEL;
   int LargeDeformationSolver = PRECOMPUTED;
+  int QuasiNewtonIterationLimit = 0;
   bool LiftOff = false;
 
 private:

@@ -108,5 +108,15 @@ Eigen::VectorXd LocalPositions(const Structure& st);
 Status FillResult(const PrecomputeRequest& request, const SolveInput& input, const Structure& st,
                   const Eigen::VectorXd& u, SolveResult& result);
 
+// What both solvers report of their final state u: its measures and lifted nodes, and the result
+// (rows, residual, largest strain) through FillResult.
+struct FinalState {
+  DeformationMeasures measures;
+  int liftedNodes = 0; // lift-off DOFs not pinned at u
+};
+Status FinishSolve(const PrecomputeRequest& request, const SolveInput& input, const Problem& pb,
+                   const Eigen::VectorXd& u, double relativeResidual, SolveResult& result,
+                   FinalState& finalState);
+
 } // namespace large_deformation
 } // namespace faceplan

@@ -223,7 +223,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
 }
 
 // Why a sub-step failed: a smaller one may mend it, or the solve falls back.
-enum class Failure { None, Smaller, Fallback };
+enum class Failure { None, Smaller, Fallback, Stopped };
 
 class QuasiNewton {
 public:
@@ -232,7 +232,8 @@ public:
       : sys_(sys), st_(*sys.structure), pb_(pb), report_(report), timings_(timings),
         factor_(sys.factor()) {}
 
-  std::string why; // set with Failure::Fallback
+  std::string why;        // set with Failure::Fallback
+  int iterationLimit = 0; // > 0: Failure::Stopped when reached
 
   // From u (converged for the previous targets, with pb_.prescribed's contact) to equilibrium at
   // pb_'s targets and loads.
@@ -249,6 +250,7 @@ public:
       const Failure f = minimise(u, tolerance);
       if (f != Failure::None)
         return f;
+
       const std::vector<char> before = pb_.prescribed;
       const bool changed = UpdateContact(pb_, u, 1.0);
       if (!changed && tolerance == tight)
@@ -385,6 +387,8 @@ private:
         lastForce_ = std::move(ev.force);
         return Failure::None;
       }
+      if (iterationLimit > 0 && report_.iterations >= iterationLimit)
+        return Failure::Stopped;
       if (report_.iterations >= sys_.options.maxIterations) {
         why = "it did not converge within " + std::to_string(sys_.options.maxIterations) +
               " quasi-Newton iterations";
@@ -464,7 +468,8 @@ private:
 
 Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
                  const LargeDeformationState* warm, SolveResult& result,
-                 PrecomputedLargeDeformationReport& report, LargeDeformationState* converged) {
+                 PrecomputedLargeDeformationReport& report, LargeDeformationState* converged,
+                 int iterationLimit) {
   StageClock total;
   result = SolveResult();
   report = PrecomputedLargeDeformationReport();
@@ -501,7 +506,10 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     fromLoad = Eigen::VectorXd::Zero(3 * st.n);
   }
 
+  if (iterationLimit < 0)
+    return Status::Error("the quasi-Newton iteration limit must be 0 (none) or positive");
   QuasiNewton solver(sys, pb, report, result.timings);
+  solver.iterationLimit = iterationLimit;
   double reached = 0.0, step = 1.0;
   int halvings = 0;
   std::string why;
@@ -514,6 +522,15 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     solver.why.clear();
     solver.setStartForce(reached == 0.0 && report.warmStarted ? &warm->force : nullptr);
     const Failure f = solver.substep(trial);
+    if (f == Failure::Stopped) {
+      if (to < 1.0)
+        return Status::Error("the iteration limit was reached before the whole prescribed move "
+                             "was applied");
+      u = std::move(trial);
+      reached = to;
+      report.stoppedAtLimit = true;
+      break;
+    }
     if (f == Failure::None) {
       u = std::move(trial);
       reached = to;
@@ -548,18 +565,18 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     return status;
   }
 
-  const DeformationMeasures measures = MeasureDeformation(st, u);
-  report.smallestVolumeRatio = measures.smallestVolumeRatio;
-  report.largestGreenStrain = measures.largestGreenStrain;
-  report.largestStrainCell = measures.largestStrainCell;
-  for (int dof : st.liftOffDofs)
-    report.liftedNodes += pb.prescribed[dof] ? 0 : 1;
-  result.relativeResidual = solver.lastResidual();
-  result.largestStrain = measures.largestGreenStrain;
-  result.invertedCells = 0;
-  status = FillResult(request, input, st, u, result);
+  FinalState finalState;
+  status = FinishSolve(request, input, pb, u, solver.lastResidual(), result, finalState);
+  report.smallestVolumeRatio = finalState.measures.smallestVolumeRatio;
+  report.largestGreenStrain = finalState.measures.largestGreenStrain;
+  report.largestStrainCell = finalState.measures.largestStrainCell;
+  report.liftedNodes = finalState.liftedNodes;
   if (!status)
     return status;
+  if (report.stoppedAtLimit) {
+    result.timings[Stage::Total].ms = total.elapsedMs();
+    return Status::Ok(); // not a converged state: nothing to refactor at or to start from
+  }
   if (sys.options.backgroundRefactorization)
     sys.requestRefactorization(u, pb.prescribed);
   if (converged) {
@@ -587,9 +604,9 @@ Status PrecomputeLargeDeformation(const PrecomputeRequest& request,
 Status SolvePrecomputedLargeDeformation(LargeDeformationSystem& system, const SolveInput& input,
                                         const LargeDeformationState* warm, SolveResult& result,
                                         PrecomputedLargeDeformationReport& report,
-                                        LargeDeformationState* converged) {
+                                        LargeDeformationState* converged, int iterationLimit) {
   return ReturnStatusOnException("the large-deformation solve", [&]() -> Status {
-    return SolveImpl(system, input, warm, result, report, converged);
+    return SolveImpl(system, input, warm, result, report, converged, iterationLimit);
   });
 }
 

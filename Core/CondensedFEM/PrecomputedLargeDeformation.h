@@ -108,6 +108,9 @@ struct PrecomputedLargeDeformationReport {
   // Fallback: why the precomputed solve did not converge, and Newton's report.
   bool fellBack = false;
   std::string fallbackReason;
+  // The solve stopped at the caller's iteration limit before it converged: the result is that
+  // iterate, not the equilibrium (for studies of error against iterations).
+  bool stoppedAtLimit = false;
   LargeDeformationReport newton;
   // Per iteration: time since the solve started (ms) and the relative residual.
   std::vector<std::pair<double, double>> convergence;
@@ -115,11 +118,15 @@ struct PrecomputedLargeDeformationReport {
 
 // Solves for `input` (as SolveLargeDeformation) with the precomputed system, from `warm` when it
 // is a converged state of this system, else from the rest state. `converged` (optional) receives
-// the converged state (invalid after a fallback to Newton).
+// the converged state (invalid after a fallback to Newton or a stop at the limit).
+// `iterationLimit` > 0 stops after that many quasi-Newton iterations and returns the iterate
+// unconverged, flagged in report.stoppedAtLimit (no fallback); an error if the whole prescribed
+// move was not yet applied then.
 Status SolvePrecomputedLargeDeformation(LargeDeformationSystem& system, const SolveInput& input,
                                         const LargeDeformationState* warm, SolveResult& result,
                                         PrecomputedLargeDeformationReport& report,
-                                        LargeDeformationState* converged = nullptr);
+                                        LargeDeformationState* converged = nullptr,
+                                        int iterationLimit = 0);
 
 // Blocks until no background refactorization is running or queued (benchmarks and tests).
 void WaitForRefactorization(LargeDeformationSystem& system);

@@ -70,7 +70,8 @@ for prop, value, words in (("YoungsModulus", 0.0, ("YoungsModulus",)), ("YoungsM
                            ("ElementOrder", 99, ("ElementOrder", "99")), ("Model", 7, ("Model", "7")),
                            ("Model", -1, ("Model", "-1")), ("Model", 3, ("Model", "3")),
                            ("LargeDeformationSolver", 2, ("LargeDeformationSolver", "2")),
-                           ("LargeDeformationSolver", -1, ("LargeDeformationSolver", "-1"))):
+                           ("LargeDeformationSolver", -1, ("LargeDeformationSolver", "-1")),
+                           ("QuasiNewtonIterationLimit", -3, ("QuasiNewtonIterationLimit", "-3"))):
     f, c = fem_on(**{prop: value})
     cases.error("%s = %s" % (prop, value), f, c, *words, ports=PORTS)
 f, c = fem_on(UseGravity=1, Density=-1100.0)

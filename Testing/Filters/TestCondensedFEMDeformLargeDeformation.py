@@ -77,6 +77,29 @@ u_newton, f, errors, _ = run(LargeDeformationSolver="Newton")
 check(not errors.messages and f.get("Method") == "LargeDeformationNewton" and "NewtonIterations" in f,
       "LargeDeformationSolver Newton ran (%s)" % f.get("Method"))
 check(rel(u_large, u_newton) <= 1e-8, "5 mm: Precomputed equals Newton (%.1e)" % rel(u_large, u_newton))
+check(f.get("Converged") == "1", "Newton's result is converged (field data Converged %s)" % f.get("Converged"))
+
+# 3b. QuasiNewtonIterationLimit: the iterate after k iterations, labelled as not the equilibrium;
+# it is farther from the equilibrium for a smaller k, and the next update without the limit starts
+# from the last converged state and converges.
+fem.LargeDeformationSolver = "Precomputed"
+osteotomy.Translation = [0.0, 0.0, 0.0]
+run(QuasiNewtonIterationLimit=0)
+osteotomy.Translation = [-5.0, 0.0, 0.0]
+distances = []
+for k in (1, 4):
+    u_k, f, errors, warnings = run(QuasiNewtonIterationLimit=k)
+    check(not errors.messages and f.get("Converged") == "0" and int(float(f["QuasiNewtonIterations"])) == k,
+          "limit %d: Converged 0 after %s iterations (%s)" % (k, f.get("QuasiNewtonIterations"), errors.messages))
+    check("not the equilibrium" in f.get("SolverNote", "") and warnings.contains("not the equilibrium"),
+          "limit %d: SolverNote and a warning say it is not the equilibrium (%s)" % (k, f.get("SolverNote")))
+    check(float(f["RelativeResidual"]) > 1e-9, "limit %d: residual above the tolerance (%s)" % (k, f["RelativeResidual"]))
+    distances.append(rel(u_k, u_large))
+check(distances[0] > distances[1] > 0.0, "a larger limit is nearer the equilibrium (%s)" % distances)
+u_free, f, errors, warnings = run(QuasiNewtonIterationLimit=0)
+check(f.get("Converged") == "1" and "SolverNote" not in f and not other_warnings(warnings),
+      "without the limit: converged, no note, no warning (%s)" % f.get("SolverNote"))
+check(rel(u_free, u_large) <= 1e-8, "and equal to the unlimited solve (%.1e)" % rel(u_free, u_large))
 u_auto, f, errors, warnings = run(Model="Auto", LargeDeformationSolver="Precomputed")
 check(not errors.messages and not other_warnings(warnings) and f.get("Model") == "NeoHookean"
       and "beyond the small-strain limit" in f.get("ModelNote", ""),
@@ -112,6 +135,7 @@ fem.Backend = "Auto"
 
 # 5. Bad values and combinations: an error naming the property, and an empty output.
 for properties, words in (({"Model": 7}, "Model must be"), ({"LargeDeformationSolver": 5}, "LargeDeformationSolver must be"),
+                          ({"QuasiNewtonIterationLimit": -1}, "QuasiNewtonIterationLimit must be"),
                           ({"Model": "NeoHookean", "ElementOrder": "Quadratic"}, "ElementOrder Linear only"),
                           ({"Model": "NeoHookean", "ElementOrder": "Linear", "Verify": 1}, "Verify")):
     u, _, errors, _ = run(**properties)
@@ -121,5 +145,6 @@ for properties, words in (({"Model": 7}, "Model must be"), ({"LargeDeformationSo
     fem.ElementOrder = "Linear"
     fem.Model = "LinearElastic"
     fem.LargeDeformationSolver = "Precomputed"
+    fem.QuasiNewtonIterationLimit = 0
 
 finish("TestCondensedFEMDeformLargeDeformation")

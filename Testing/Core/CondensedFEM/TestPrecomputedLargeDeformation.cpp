@@ -271,6 +271,50 @@ TEST(PrecomputedLargeDeformation, ItFallsBackToNewtonAndSaysSo) {
   EXPECT_NE(s.message.find("did not converge"), std::string::npos) << s.message;
 }
 
+TEST(PrecomputedLargeDeformation, AnIterationLimitReturnsTheIterateAndSaysSo) {
+  // The 35 % press: the iterate after k iterations is flagged, its residual above the tolerance
+  // and shrinking with k, its distance to the equilibrium too; a limit the solve does not reach
+  // gives the converged answer itself, and a limited solve leaves no state to start from.
+  const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+  const SolveInput input = PlateMove(request, 0.35 * kLz);
+  auto system = Precomputed(request);
+  ASSERT_TRUE(system);
+  SolveResult exact;
+  PrecomputedLargeDeformationReport full;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, nullptr, exact, full).ok);
+  ASSERT_FALSE(full.stoppedAtLimit);
+  ASSERT_GT(full.iterations, 2);
+  double lastError = HUGE_VAL;
+  for (int k = 1; k < full.iterations; ++k) {
+    SolveResult result;
+    PrecomputedLargeDeformationReport report;
+    LargeDeformationState state;
+    const Status s =
+        SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report, &state, k);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_TRUE(report.stoppedAtLimit) << "k = " << k;
+    EXPECT_FALSE(report.fellBack);
+    EXPECT_EQ(report.iterations, k);
+    EXPECT_GT(result.relativeResidual, 1e-9) << "k = " << k;
+    EXPECT_FALSE(state.valid()) << "an unconverged iterate is no state to start from";
+    const double error = RelativeMaxNodeDifference(result.allDisplacement, exact.allDisplacement);
+    EXPECT_GT(error, 0.0);
+    EXPECT_LT(error, lastError) << "k = " << k;
+    lastError = error;
+  }
+  SolveResult result;
+  PrecomputedLargeDeformationReport report;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report, nullptr,
+                                               full.iterations + 5)
+                  .ok);
+  EXPECT_FALSE(report.stoppedAtLimit);
+  EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, exact.allDisplacement), 1e-14);
+  const Status s =
+      SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report, nullptr, -1);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("iteration limit"), std::string::npos) << s.message;
+}
+
 TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
   const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
   std::shared_ptr<LargeDeformationSystem> system;
