@@ -525,18 +525,16 @@ def load(result_base):
     return info, data
 
 
-def surface_values(data, query, triangles=None):
+def surface_values(data, query):
     """The displacement of `data` (a configuration's boundary: points, tris, displacement) at the
-    closest point of its boundary triangles (all of them, or those of the `triangles` mask) to each
-    of `query` (n x 3), linearly interpolated in the triangle; returns (values n x 3, distances n)."""
+    closest point of its boundary triangles to each of `query` (n x 3), linearly interpolated in the
+    triangle; returns (values n x 3, distances n)."""
     import numpy as np
     from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonCore import mutable, vtkPoints
     from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkCellLocator, vtkGenericCell, vtkPolyData
     points = data["points"].astype(np.float64)
     tris = data["tris"].astype(np.int64)
-    if triangles is not None:
-        tris = tris[triangles]
     poly = vtkPolyData()
     pts = vtkPoints()
     pts.SetData(numpy_to_vtk(points, deep=1))
