@@ -10,8 +10,13 @@ changes; per edit it times the bone filters' update and CondensedFEMDeform's upd
 process's CPU time, which a busy shared machine inflates less) and reads SolveTimeMs from
 CondensedFEMDeform's output (overhead = update wall time - SolveTimeMs). Prints medians and writes them as JSON.
 
+Each scene runs with Model LinearElastic (the linear edit path); with --large-deformation the two face
+scenes run again with Model NeoHookean (the Precomputed solver, warm-started from the previous edit's
+equilibrium), and the result adds updates per second and the plugin's share of an edit.
+
   pvpython Benchmarks/pipeline_latency.py --plugin FacePlan.so --data Data \
       --shell-scene shell.vtk [--edits 30] [--json out.json] [--backend CPU|CUDA] [--shell-only]
+      [--large-deformation]
 """
 import argparse
 import json
@@ -49,6 +54,24 @@ def precompute_count(fem):
 
 
 def run_edits(name, bone_filters, fem, edit, edits, bone_label="BezierCut"):
+    """Times `edits` edits after the first update (see the module's docstring)."""
+    result = _run_edits(name, bone_filters, fem, edit, edits, bone_label)
+    result["model"] = field_string(fem, "Model")
+    result["updates_per_s"] = 1e3 / result["whole_edit_ms_median"]
+    result["plugin_share"] = result["fem_update_ms_median"] / result["whole_edit_ms_median"]
+    if result["model"] == "NeoHookean":
+        print("    %s: %.1f updates/s, CondensedFEMDeform %.0f %% of an edit, quasi-Newton iterations "
+              "(last edit) %s" % (name, result["updates_per_s"], 100.0 * result["plugin_share"],
+                                  field(fem, "QuasiNewtonIterations")))
+    return result
+
+
+def field_string(proxy, name):
+    array = proxy.GetClientSideObject().GetOutputDataObject(0).GetFieldData().GetAbstractArray(name)
+    return array.GetValue(0) if array is not None and array.GetNumberOfTuples() else ""
+
+
+def _run_edits(name, bone_filters, fem, edit, edits, bone_label):
     """edit(k) changes the bone's filter for edit k (edit 0: the first, precomputing update);
     bone_filters are updated in order and timed together as the bone's update."""
     edit(0)
@@ -108,24 +131,25 @@ def run_edits(name, bone_filters, fem, edit, edits, bone_label="BezierCut"):
     return result
 
 
-def face_scene(data, edits, output_mode):
+def face_scene(data, edits, output_mode, model="LinearElastic"):
     import faceplan_pipeline as fp
     tissue, mandible, roi, cut, fem = fp.build(data)
     fem.Backend = BACKEND
     fem.OutputMode = output_mode
+    fem.Model = model
 
     def edit(k):
         dz = 0.25 * ((k * 7) % 9 - 4) / 4.0  # -0.25 .. 0.25 mm, a different cut each edit
         cut.CurveU = [c + (dz if i % 3 == 2 else 0.0) for i, c in enumerate(fp.CURVE_U)]
         cut.CurveV = [c + (dz if i % 3 == 2 else 0.0) for i, c in enumerate(fp.CURVE_V)]
 
-    result = run_edits("face (%s output)" % output_mode, [cut], fem, edit, edits)
+    result = run_edits("face (%s output, %s)" % (output_mode, model), [cut], fem, edit, edits)
     for p in (fem, cut, roi, mandible, tissue):
         simple.Delete(p)
     return result
 
 
-def osteotomy_scene(data, edits, output_mode):
+def osteotomy_scene(data, edits, output_mode, model="LinearElastic"):
     """The BSSO advancement of scripts/osteotomy_scenes: each edit changes the segment's move (the
     planes stay), as dragging the translation does; the bone's update is Osteotomy + the Append
     Geometry that joins the fixed bones."""
@@ -133,12 +157,14 @@ def osteotomy_scene(data, edits, output_mode):
     tissue, bone, osteotomy, skeleton, fem = scenes.build(data, "bsso")
     fem.Backend = BACKEND
     fem.OutputMode = output_mode
+    fem.Model = model
 
     def edit(k):
         dx = 0.25 * ((k * 7) % 9 - 4) / 4.0  # -0.25 .. 0.25 mm around the 6 mm advancement
         osteotomy.Translation = [-6.0 + dx, 0.0, 0.0]
 
-    result = run_edits("face BSSO (%s output)" % output_mode, [osteotomy, skeleton], fem, edit, edits,
+    result = run_edits("face BSSO (%s output, %s)" % (output_mode, model), [osteotomy, skeleton], fem,
+                       edit, edits,
                        bone_label="Osteotomy+Append")
     for p in [fem, skeleton, osteotomy, bone, tissue] + list(skeleton.Input[1:]):
         simple.Delete(p)
@@ -171,6 +197,7 @@ def shell_scene(path, edits, output_mode):
     fem = simple.CondensedFEMDeform(Input=tissue, Bone=cut)
     fem.Backend = BACKEND
     fem.OutputMode = output_mode
+    fem.Model = "LinearElastic"
     fem.ContactDistance = 0.5
 
     def edit(k):
@@ -194,6 +221,8 @@ def main():
     parser.add_argument("--shell-only", action="store_true",
                         help="only the shell scene (to compare with Benchmarks/FilterLatency's driver)")
     parser.add_argument("--backend", choices=["CPU", "CUDA"], default="CPU")
+    parser.add_argument("--large-deformation", action="store_true",
+                        help="also the face scenes with Model NeoHookean")
     args = parser.parse_args()
     global BACKEND
     BACKEND = args.backend
@@ -205,6 +234,9 @@ def main():
                    osteotomy_scene(args.data, args.edits, "Surface")]
     if args.shell_scene:
         results.append(shell_scene(args.shell_scene, args.edits, "Surface"))
+    if args.large_deformation and not args.shell_only:
+        results += [face_scene(args.data, args.edits, "Surface", "NeoHookean"),
+                    osteotomy_scene(args.data, args.edits, "Surface", "NeoHookean")]
     if args.json:
         with open(args.json, "w") as f:
             json.dump(results, f, indent=1)

@@ -259,7 +259,7 @@ std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
   return msg.str();
 }
 
-std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement,
+std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement, double tissueSize,
                             double lengthUnit) {
   double boneLargest = 0.0;
   for (vtkIdType i = 0; boneDisplacement && i < boneDisplacement->GetNumberOfTuples(); ++i) {
@@ -267,7 +267,12 @@ std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement
     boneDisplacement->GetTuple(i, d);
     boneLargest = std::max(boneLargest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
   }
-  if (!(tissueLargest > kLooseTissueRatio * boneLargest) || !(tissueLargest > 0.0))
+  // A move below the floor (0.03 mm for a head whose bounds span 300 mm) is no move: round-off or
+  // a solver's tolerance (a warm-started solve back at zero leaves about 1e-13 mm), far below
+  // anything a surgeon plans or sees. Without gravity the bones are the only load, so when none
+  // moves beyond the floor the tissue has nothing to swing from and there is nothing to say.
+  const double floor = kLooseTissueFloor * tissueSize;
+  if (!(boneLargest > floor) || !(tissueLargest > kLooseTissueRatio * boneLargest))
     return std::string();
   const char* unit = lengthUnit == 0.001 ? " mm" : lengthUnit == 1.0 ? " m" : " (mesh units)";
   std::ostringstream msg;
@@ -275,7 +280,9 @@ std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement
   msg << "the tissue moves " << tissueLargest << unit << " where no bone moves more than "
       << boneLargest << unit
       << ": is every bone connected? Connect the bones that stay put (the mandible, the cranium) "
-         "to the Bone port as well; a connection without a Displacement array is a fixed bone";
+         "to the Bone port as well; a connection without a Displacement array is a fixed bone. If "
+         "every bone is connected, the tissue is held loosely: Sliding, Released and lifted-off "
+         "tissue follows the bone only along its normal or not at all";
   return msg.str();
 }
 

@@ -36,10 +36,13 @@ std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
 // After the solve: a warning when the tissue moves much farther than any bone (by more than
 // kLooseTissueRatio times the bone's largest Displacement), which is what a tissue held by too few
 // bones does (only the operated segment connected, the fixed mandible or cranium left out); ""
-// when there is nothing to say. `tissueLargest` is the largest displacement of the tissue's
-// surface, in mesh units; `lengthUnit` (metres per mesh unit) names the unit.
+// when there is nothing to say. Moves up to kLooseTissueFloor times `tissueSize` (the tissue's
+// bounding-box diagonal) count as none. `tissueLargest` is the largest displacement of the
+// tissue's surface, in mesh units; `lengthUnit` (metres per mesh unit) names the unit. Without
+// gravity only: a sag is not a missing bone.
 constexpr double kLooseTissueRatio = 1.5;
-std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement,
+constexpr double kLooseTissueFloor = 1e-4;
+std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement, double tissueSize,
                             double lengthUnit);
 
 } // namespace fem_filter

@@ -184,9 +184,11 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
     DeformGathered(controller, this->CurrentSettings().output(), tissue, bone, output, table,
                    [this](vtkUnstructuredGrid* t, vtkPointSet* b, vtkUnstructuredGrid* o,
                           vtkTable* tab) { return this->Deform(t, b, o, tab); });
-    return 1;
-  }
-  this->Deform(tissue, bone, output, table);
+  } else
+    this->Deform(tissue, bone, output, table);
+  // The field data are the solve's figures (Backend, Method, SolveTimeMs, ...), all made here:
+  // the colour-by list offers the point arrays (Displacement) only.
+  faceplan::fielddata::HideFromArrayLists(output->GetFieldData());
   return 1;
 }
 
@@ -306,11 +308,15 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
     return false;
   }
   // A tissue that moves far beyond every bone is held by too few bones (a fixed bone left out).
+  // Under gravity the tissue sags even where every bone holds it, by an amount its density and
+  // stiffness set rather than any bone's move, so the comparison would say nothing true: telling a
+  // sag from a missing bone would take a second solve without gravity. The check is skipped.
   if (!settings.useGravity) {
     const faceplan::RowVectors3d& tissueMoves = outcome.result.keptDisplacement;
     const double tissueLargest = tissueMoves.rows() ? tissueMoves.rowwise().norm().maxCoeff() : 0.0;
-    const std::string loose = LooseTissueNote(
-        tissueLargest, bone->GetPointData()->GetArray("Displacement"), settings.lengthUnit);
+    const std::string loose =
+        LooseTissueNote(tissueLargest, bone->GetPointData()->GetArray("Displacement"),
+                        tissue->GetLength(), settings.lengthUnit);
     if (!loose.empty())
       warn(loose);
   }

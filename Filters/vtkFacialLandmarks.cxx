@@ -231,6 +231,10 @@ int vtkFacialLandmarks::RequestData(vtkInformation*, vtkInformationVector** inpu
     return fail("Operation must be 0 (FromBone), 1 (LeFortI), 2 (BSSO), 3 (Genioplasty) or 4 "
                 "(None), not " +
                 std::to_string(this->Operation));
+  if (this->PlacedLandmark < -1 || this->PlacedLandmark >= lm::kLandmarkCount)
+    return fail("PlacedLandmark must be -1 (none) or a landmark from 0 (Pronasale) to " +
+                std::to_string(lm::kLandmarkCount - 1) + " (Menton), not " +
+                std::to_string(this->PlacedLandmark));
   if (this->ReferenceFrame != MODEL_AXES && this->ReferenceFrame != FRANKFORT_HORIZONTAL)
     return fail("ReferenceFrame must be 0 (ModelAxes) or 1 (FrankfortHorizontal), not " +
                 std::to_string(this->ReferenceFrame));
@@ -298,7 +302,26 @@ int vtkFacialLandmarks::RequestData(vtkInformation*, vtkInformationVector** inpu
     placement.miss(lm::Landmark::AlarBaseLeft, "needs Subnasale and Pronasale");
   }
 
-  // Overrides: the user's point, snapped to its surface.
+  // Overrides: the user's point, snapped to its surface. The handle's landmark comes last, so it
+  // wins over a list entry for the same landmark.
+  auto placeOverride = [&](const std::string& what, int which, const double x[3],
+                           const char* howToFix) {
+    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
+      return "override " + what + " has a non-finite coordinate";
+    const bool isSkin = lm::IsSkinLandmark(static_cast<lm::Landmark>(which));
+    if (!isSkin && !haveBone)
+      return "override " + what + " is a bony landmark but there is no bone input";
+    const Surface& s = isSkin ? skin : boneSurface;
+    Eigen::Vector3d nearest, u;
+    double distance = 0.0;
+    Locate(s, Eigen::Vector3d(x), nearest, u, distance);
+    if (!(distance <= 0.02 * s.diagonal))
+      return "override " + what + " lies " + std::to_string(distance) + " from the " +
+             (isSkin ? "skin" : "bone") + " (outside the mesh; at most 2 % of its size, " +
+             std::to_string(0.02 * s.diagonal) + ", is allowed)" + howToFix;
+    placement.set(static_cast<lm::Landmark>(which), nearest);
+    return std::string();
+  };
   for (const std::string& entry : this->Overrides) {
     std::istringstream in(entry);
     std::string name;
@@ -311,20 +334,18 @@ int vtkFacialLandmarks::RequestData(vtkInformation*, vtkInformationVector** inpu
         which = i;
     if (which < 0)
       return fail("override '" + entry + "' names no landmark (Pronasale, ..., Menton)");
-    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
-      return fail("override '" + entry + "' has a non-finite coordinate");
-    const bool isSkin = lm::IsSkinLandmark(static_cast<lm::Landmark>(which));
-    if (!isSkin && !haveBone)
-      return fail("override '" + entry + "' is a bony landmark but there is no bone input");
-    const Surface& s = isSkin ? skin : boneSurface;
-    Eigen::Vector3d nearest, u;
-    double distance = 0.0;
-    Locate(s, Eigen::Vector3d(x), nearest, u, distance);
-    if (!(distance <= 0.02 * s.diagonal))
-      return fail("override '" + entry + "' lies " + std::to_string(distance) + " from the " +
-                  (isSkin ? "skin" : "bone") + " (outside the mesh; at most 2 % of its size, " +
-                  std::to_string(0.02 * s.diagonal) + ", is allowed)");
-    placement.set(static_cast<lm::Landmark>(which), nearest);
+    const std::string problem = placeOverride("'" + entry + "'", which, x, "");
+    if (!problem.empty())
+      return fail(problem);
+  }
+  if (this->PlacedLandmark >= 0) {
+    const std::string problem = placeOverride(
+        "PlacedLandmark " + lm::LandmarkName(static_cast<lm::Landmark>(this->PlacedLandmark)) +
+            " (the point handle)",
+        this->PlacedLandmark, this->PlacedLandmarkPosition,
+        ": drag the handle onto the surface, or hover over the surface in the 3D view and press P");
+    if (!problem.empty())
+      return fail(problem);
   }
 
   // The displacement field at each landmark (the cell vtkCellLocator finds), then Core's table.
@@ -457,4 +478,6 @@ void vtkFacialLandmarks::PrintSelf(ostream& os, vtkIndent indent) {
   os << indent << "Overrides: " << this->Overrides.size() << "\n";
   for (const std::string& o : this->Overrides)
     os << indent << "  " << o << "\n";
+  os << indent << "PlacedLandmark: " << this->PlacedLandmark << "\n";
+  v3("PlacedLandmarkPosition", this->PlacedLandmarkPosition);
 }

@@ -28,7 +28,8 @@
  * Output 1: the found landmarks as vertices at their post-operative positions, with point arrays
  * Landmark (name), Kind and Displacement.
  * Errors (vtkErrorMacro, empty outputs): no tissue surface, NaN coordinates or displacements, a
- * degenerate frame, an unknown override name or an override outside the mesh. Landmarks that cannot
+ * degenerate frame, an unknown override name or an override outside the mesh (PlacedLandmark's
+ * too, or PlacedLandmark out of range). Landmarks that cannot
  * be found are rows with Found 0 and a Note saying why, and a warning naming them.
  */
 #ifndef vtkFacialLandmarks_h
@@ -73,6 +74,17 @@ public:
   void RemoveAllOverrides();
   ///@}
 
+  ///@{
+  /// One landmark placed by a point handle in the GUI: PlacedLandmark (a Landmark index, 0
+  /// Pronasale ... 18 Menton; -1, the default, places none) at PlacedLandmarkPosition (its
+  /// pre-operative position). Applied as one more override, after Overrides, so it wins for its
+  /// landmark.
+  vtkSetMacro(PlacedLandmark, int);
+  vtkGetMacro(PlacedLandmark, int);
+  vtkSetVector3Macro(PlacedLandmarkPosition, double);
+  vtkGetVector3Macro(PlacedLandmarkPosition, double);
+  ///@}
+
   /// The bone input (optional).
   void SetBoneConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
 
@@ -96,6 +108,8 @@ protected:
   double FrankfortPoints[9] = {};
   int Operation = FROM_BONE;
   std::vector<std::string> Overrides;
+  int PlacedLandmark = -1;
+  double PlacedLandmarkPosition[3] = {0.0, 0.0, 0.0};
   std::string LastError;
 
 private:

@@ -49,114 +49,106 @@ void BackgroundPrecompute::stopForExit() {
   std::shared_ptr<LargeDeformationSystem> large;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    large = large_;
+    large = large_.system;
   }
   if (large)
     StopRefactorization(*large);
 }
 
 void BackgroundPrecompute::joinWorker() {
-  if (worker_.joinable())
-    worker_.join();
-  if (largeWorker_.joinable())
-    largeWorker_.join();
+  if (linear_.worker.joinable())
+    linear_.worker.join();
+  if (large_.worker.joinable())
+    large_.worker.join();
 }
 
-void BackgroundPrecompute::startLargeDeformation(PrecomputeRequest request,
-                                                 PrecomputedLargeDeformationOptions options) {
+template <class System, class Compute>
+void BackgroundPrecompute::launch(Slot<System>& slot, Compute compute) {
   {
     std::lock_guard<std::mutex> lock(Live().mutex);
     Live().instances.insert(this);
   }
-  if (largeWorker_.joinable())
-    largeWorker_.join();
+  // Waiting for the previous worker keeps at most one precompute (and its memory) alive per slot.
+  if (slot.worker.joinable())
+    slot.worker.join();
   std::uint64_t generation;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    generation = ++largeGeneration_;
-    largeFinished_ = false;
-    large_.reset();
+    generation = ++slot.generation;
+    slot.finished = false;
+    slot.system.reset();
   }
-  largeWorker_ =
-      std::thread([this, generation, request = std::move(request), options = std::move(options)] {
-        std::shared_ptr<LargeDeformationSystem> system;
-        Status status = PrecomputeLargeDeformation(request, options, system);
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (generation != largeGeneration_)
-          return;
-        largeStatus_ = status;
-        large_ = status ? system : nullptr;
-        largeFinished_ = true;
-        done_.notify_all();
-      });
-}
-
-Status BackgroundPrecompute::waitLargeDeformation(std::shared_ptr<LargeDeformationSystem>& system) {
-  std::unique_lock<std::mutex> lock(mutex_);
-  done_.wait(lock, [this] { return largeFinished_; });
-  system = large_;
-  return largeStatus_;
-}
-
-bool BackgroundPrecompute::largeDeformationReady() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return largeFinished_;
-}
-
-void BackgroundPrecompute::start(PrecomputeRequest request, ProgressCallback progress) {
-  {
-    std::lock_guard<std::mutex> lock(Live().mutex);
-    Live().instances.insert(this);
-  }
-  cancel();
-  // The old worker sees its cancel flag at its next stage boundary; waiting for it keeps at most
-  // one precompute (and its memory) alive.
-  if (worker_.joinable())
-    worker_.join();
-  auto flag = std::make_shared<std::atomic<bool>>(false);
-  std::uint64_t generation;
-  {
+  slot.worker = std::thread([this, &slot, generation, compute = std::move(compute)] {
+    std::shared_ptr<System> system;
+    Status status = compute(system);
     std::lock_guard<std::mutex> lock(mutex_);
-    generation = ++generation_;
-    cancelFlag_ = flag;
-    finished_ = false;
-    system_.reset();
-  }
-  worker_ = std::thread([this, flag, generation, request = std::move(request), progress] {
-    std::shared_ptr<const CondensedSystem> system;
-    Status status = Precompute(request, system, flag.get(), progress);
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (generation != generation_)
+    if (generation != slot.generation)
       return; // superseded: never publish a stale result
-    status_ = status;
-    system_ = status ? system : nullptr;
-    finished_ = true;
+    slot.status = status;
+    slot.system = status ? system : nullptr;
+    slot.finished = true;
     done_.notify_all();
   });
 }
 
-Status BackgroundPrecompute::wait(std::shared_ptr<const CondensedSystem>& system) {
+template <class System>
+Status BackgroundPrecompute::waitFor(Slot<System>& slot, std::shared_ptr<System>& system) {
   std::unique_lock<std::mutex> lock(mutex_);
-  done_.wait(lock, [this] { return finished_; });
-  system = system_;
-  return status_;
+  done_.wait(lock, [&slot] { return slot.finished; });
+  system = slot.system;
+  return slot.status;
+}
+
+void BackgroundPrecompute::startLargeDeformation(PrecomputeRequest request,
+                                                 PrecomputedLargeDeformationOptions options) {
+  launch(large_, [request = std::move(request),
+                  options = std::move(options)](std::shared_ptr<LargeDeformationSystem>& system) {
+    return PrecomputeLargeDeformation(request, options, system);
+  });
+}
+
+Status BackgroundPrecompute::waitLargeDeformation(std::shared_ptr<LargeDeformationSystem>& system) {
+  return waitFor(large_, system);
+}
+
+bool BackgroundPrecompute::largeDeformationReady() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return large_.finished;
+}
+
+void BackgroundPrecompute::start(PrecomputeRequest request, ProgressCallback progress) {
+  // The old worker sees its cancel flag at its next stage boundary.
+  cancel();
+  auto flag = std::make_shared<std::atomic<bool>>(false);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cancelFlag_ = flag;
+  }
+  launch(linear_, [flag, request = std::move(request),
+                   progress](std::shared_ptr<const CondensedSystem>& system) {
+    return Precompute(request, system, flag.get(), progress);
+  });
+}
+
+Status BackgroundPrecompute::wait(std::shared_ptr<const CondensedSystem>& system) {
+  return waitFor(linear_, system);
 }
 
 bool BackgroundPrecompute::ready() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return finished_;
+  return linear_.finished;
 }
 
 void BackgroundPrecompute::cancel() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (cancelFlag_)
     cancelFlag_->store(true);
-  if (!finished_) {
+  if (!linear_.finished) {
     // Whoever waits gets "cancelled" unless a new start() supersedes this request.
-    ++generation_;
-    status_ = Status::Error("cancelled");
-    system_.reset();
-    finished_ = true;
+    ++linear_.generation;
+    linear_.status = Status::Error("cancelled");
+    linear_.system.reset();
+    linear_.finished = true;
     done_.notify_all();
   }
 }

@@ -41,22 +41,27 @@ public:
   bool largeDeformationReady() const;
 
 private:
+  // One precompute's worker and what it publishes; a result is published only if no newer request
+  // (a higher generation) came meanwhile.
+  template <class System> struct Slot {
+    explicit Slot(const char* none) : status(Status::Error(none)) {}
+    std::thread worker;
+    std::uint64_t generation = 0;
+    bool finished = true;
+    Status status;
+    std::shared_ptr<System> system;
+  };
+  // Joins the slot's previous worker and runs `compute(system)` on a new one for the next
+  // generation.
+  template <class System, class Compute> void launch(Slot<System>& slot, Compute compute);
+  template <class System> Status waitFor(Slot<System>& slot, std::shared_ptr<System>& system);
   void joinWorker();
 
   mutable std::mutex mutex_;
   std::condition_variable done_;
-  std::thread worker_;
   std::shared_ptr<std::atomic<bool>> cancelFlag_;
-  std::uint64_t generation_ = 0;
-  bool finished_ = true;
-  Status status_ = Status::Error("no precompute was started");
-  std::shared_ptr<const CondensedSystem> system_;
-
-  std::thread largeWorker_;
-  std::uint64_t largeGeneration_ = 0;
-  bool largeFinished_ = true;
-  Status largeStatus_ = Status::Error("no large-deformation precompute was started");
-  std::shared_ptr<LargeDeformationSystem> large_;
+  Slot<const CondensedSystem> linear_{"no precompute was started"};
+  Slot<LargeDeformationSystem> large_{"no large-deformation precompute was started"};
 };
 
 } // namespace faceplan

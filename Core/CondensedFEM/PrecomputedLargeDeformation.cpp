@@ -90,6 +90,9 @@ public:
   std::shared_ptr<Structure> structure;
   FillReducingOrdering ordering;
   SparseMatrix restTangent; // upper, unpinned
+  // The rest state's factor, kept for solves that start from rest (a move back towards zero is
+  // nearer the rest state than the last converged one).
+  std::shared_ptr<const TangentFactor> restFactor;
   StageTimings timings;
 
   std::shared_ptr<const TangentFactor> factor() const {
@@ -216,6 +219,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
                          status.message);
   sys->restTangent = factor->tangent;
   st.unitStrainForce = RestForceNorm(sys->restTangent, LocalPositions(st));
+  sys->restFactor = factor;
   sys->setFactor(std::move(factor));
   sys->timings[Stage::Total].ms = total.elapsedMs();
   out = std::move(sys);
@@ -228,9 +232,9 @@ enum class Failure { None, Smaller, Fallback, Stopped };
 class QuasiNewton {
 public:
   QuasiNewton(LargeDeformationSystem& sys, Problem& pb, PrecomputedLargeDeformationReport& report,
-              StageTimings& timings)
+              StageTimings& timings, std::shared_ptr<const TangentFactor> factor)
       : sys_(sys), st_(*sys.structure), pb_(pb), report_(report), timings_(timings),
-        factor_(sys.factor()) {}
+        factor_(std::move(factor)) {}
 
   std::string why;        // set with Failure::Fallback
   int iterationLimit = 0; // > 0: Failure::Stopped when reached
@@ -494,6 +498,11 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
 
   Eigen::VectorXd u, fromTarget, fromLoad;
   report.warmStarted = warm && warm->system == &sys && warm->u.size() == 3 * st.n;
+  // From rest instead when the new targets and loads are nearer the rest state (zero) than the
+  // warm state's: a move back towards the start is then a short solve with the rest factor.
+  if (report.warmStarted && fullTarget.norm() <= (fullTarget - warm->target).norm() &&
+      fullLoad.norm() <= (fullLoad - warm->load).norm())
+    report.warmStarted = false;
   if (report.warmStarted) {
     u = warm->u;
     pb.prescribed = warm->prescribed;
@@ -508,7 +517,8 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
 
   if (iterationLimit < 0)
     return Status::Error("the quasi-Newton iteration limit must be 0 (none) or positive");
-  QuasiNewton solver(sys, pb, report, result.timings);
+  QuasiNewton solver(sys, pb, report, result.timings,
+                     report.warmStarted ? sys.factor() : sys.restFactor);
   solver.iterationLimit = iterationLimit;
   double reached = 0.0, step = 1.0;
   int halvings = 0;

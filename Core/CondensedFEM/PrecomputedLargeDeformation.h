@@ -117,7 +117,8 @@ struct PrecomputedLargeDeformationReport {
 };
 
 // Solves for `input` (as SolveLargeDeformation) with the precomputed system, from `warm` when it
-// is a converged state of this system, else from the rest state. `converged` (optional) receives
+// is a converged state of this system and the new targets and loads are nearer it than the rest
+// state (then with the latest background factor), else from the rest state with the rest factor. `converged` (optional) receives
 // the converged state (invalid after a fallback to Newton or a stop at the limit).
 // `iterationLimit` > 0 stops after that many quasi-Newton iterations and returns the iterate
 // unconverged, flagged in report.stoppedAtLimit (no fallback); an error if the whole prescribed

@@ -82,8 +82,13 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
     return false;
   const Eigen::Matrix<double, 4, 3>& G = reference.gradients;
   const double V = reference.volume;
-  energy = V * NeoHookeanEnergyDensity(F, p);
-  const Eigen::Matrix3d P = NeoHookeanStress(F, p);
+  // NeoHookeanEnergyDensity and NeoHookeanStress with their shared terms computed once (the same
+  // expressions, so the same values): this is the large-deformation solve's innermost loop.
+  const double a = std::pow(J, -2.0 / 3.0), i1 = F.squaredNorm();
+  energy = V * (0.5 * p.mu * (a * i1 - 3.0) + 0.5 * p.kappa * (J - 1.0) * (J - 1.0));
+  const Eigen::Matrix3d inverseT = F.inverse().transpose();
+  const Eigen::Matrix3d P =
+      p.mu * a * (F - (i1 / 3.0) * inverseT) + p.kappa * (J - 1.0) * J * inverseT;
   // f_a = V P grad N_a.
   const Eigen::Matrix<double, 4, 3> f = V * G * P.transpose();
   for (int a = 0; a < 4; ++a)

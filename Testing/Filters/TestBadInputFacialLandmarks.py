@@ -109,6 +109,20 @@ expect_error("override of an unknown landmark",
 expect_error("override not 'Name x y z'", FacialLandmarks(Input=face, Overrides=["Pronasale 1 2"]), "Name x y z")
 expect_error("override NaN", FacialLandmarks(Input=face, Overrides=["Pronasale nan 0 0"]), "Name x y z")
 expect_error("bony override without a bone", FacialLandmarks(Input=face, Overrides=["Menton 68 0 55"]), "no bone")
+# The point handle's landmark (Placed Landmark): out of range, not finite, off the mesh (the
+# handle's start, the centre of the tissue's bounds, if left there), bony without a bone.
+for value in (-2, 19):
+    f = FacialLandmarks(Input=face)
+    f.SetPropertyWithName("PlacedLandmark", value)
+    expect_error("PlacedLandmark %d" % value, f, "PlacedLandmark", str(value))
+expect_error("placed landmark NaN", FacialLandmarks(Input=face, PlacedLandmark="Pronasale",
+                                                    PlacedLandmarkPosition=[float("nan"), 0.0, 0.0]),
+             "PlacedLandmark Pronasale", "non-finite")
+expect_error("placed landmark at the handle's start", FacialLandmarks(Input=face, PlacedLandmark="Pronasale"),
+             "PlacedLandmark Pronasale", "outside the mesh", "press P")
+expect_error("placed bony landmark without a bone",
+             FacialLandmarks(Input=face, PlacedLandmark="Menton", PlacedLandmarkPosition=[68.0, 0.0, 55.0]),
+             "PlacedLandmark Menton", "no bone")
 # A bone input with NaN displacement.
 mandible.UpdatePipeline()
 nanbone = fetch(mandible).NewInstance()

@@ -91,8 +91,11 @@ for k in (1, 4):
     u_k, f, errors, warnings = run(QuasiNewtonIterationLimit=k)
     check(not errors.messages and f.get("Converged") == "0" and int(float(f["QuasiNewtonIterations"])) == k,
           "limit %d: Converged 0 after %s iterations (%s)" % (k, f.get("QuasiNewtonIterations"), errors.messages))
-    check("not the equilibrium" in f.get("SolverNote", "") and warnings.contains("not the equilibrium"),
-          "limit %d: SolverNote and a warning say it is not the equilibrium (%s)" % (k, f.get("SolverNote")))
+    # The warning is said once: the next update in the same state (k = 4) has the note only.
+    check("not the equilibrium" in f.get("SolverNote", "")
+          and warnings.contains("not the equilibrium") == (k == 1),
+          "limit %d: SolverNote (and, the first time, a warning) say it is not the equilibrium (%s)"
+          % (k, f.get("SolverNote")))
     check(float(f["RelativeResidual"]) > 1e-9, "limit %d: residual above the tolerance (%s)" % (k, f["RelativeResidual"]))
     distances.append(rel(u_k, u_large))
 check(distances[0] > distances[1] > 0.0, "a larger limit is nearer the equilibrium (%s)" % distances)

@@ -6,6 +6,8 @@
 - LiftOff is shown only with a large-deformation model (a visibility decorator on Model 1 and 2);
 - no spreadsheet view is opened for the stage table (no View hint);
 - Output Mode starts at Surface, and a new display is coloured by Displacement (its magnitude);
+- the colour-by list offers the point arrays only: the field-data figures (Backend, Method,
+  SolveTimeMs, ...) stay out of it, and pvpython still reads them by name;
 - the stage table names this update's times: a reused stage reads 0 ms, its old time CachedTimeMs.
 argv[1] is the plugin, argv[2] the Data folder.
 """
@@ -73,6 +75,23 @@ check(scalars is not None and scalars.GetName() == "Displacement",
       "Displacement is the output's active scalars, which a new display is coloured by")
 check(out.GetNumberOfCells() > 0 and all(out.GetCellType(c) == 5 for c in range(0, out.GetNumberOfCells(), 97)),
       "the default output is the boundary surface (triangles)")
+
+# The colour-by list (the display's ColorArrayName domain, which the GUI's colour menu shows):
+# point arrays only, while the field data stay readable with their names and values.
+view = CreateView("RenderView")
+display = Show(fem, view)
+domain = display.GetProperty("ColorArrayName").SMProperty.FindDomain("vtkSMArrayListDomain")
+listed = {(domain.GetString(i), domain.GetFieldAssociation(i)) for i in range(domain.GetNumberOfStrings())}
+FIELD = 2  # vtkDataObject::FIELD_ASSOCIATION_NONE, as the domain names field data
+field_names = [out.GetFieldData().GetArrayName(i) for i in range(out.GetFieldData().GetNumberOfArrays())]
+check(("Displacement", 0) in listed, "Displacement is in the colour-by list: %s" % sorted(listed))
+check(not [name for name, association in listed if association == FIELD],
+      "no field-data array is in the colour-by list: %s" % sorted(listed))
+check({"Backend", "Method", "SolveTimeMs", "Model"} <= set(field_names),
+      "the field data are still there for scripts: %s" % field_names)
+check(set(fem.FieldData.keys()) == set(field_names), "pvpython's FieldData lists them: %s" % fem.FieldData.keys())
+Delete(display)
+Delete(view)
 
 # Stage table: this update's times.
 cut.CurveU = [v + (0.5 if k % 3 == 2 else 0.0) for k, v in enumerate(cut.CurveU)]

@@ -3,8 +3,9 @@
 (the preset's model, linear for speed). Every landmark is found, in its anatomical order; the table's
 movements equal the displacement field at the landmark (probed independently in the tissue volume
 with vtkProbeFilter); the bony landmarks on the moved segment move with it; the points output holds
-the post-operative positions; an override moves one landmark onto the skin. argv[1] is the plugin,
-argv[2] the Data folder.
+the post-operative positions; an override moves one landmark onto the skin, and so does the point
+handle's Placed Landmark, which wins over a list entry for the same landmark and is shown in the
+panel only while a landmark is chosen. argv[1] is the plugin, argv[2] the Data folder.
 """
 import os
 import sys
@@ -115,5 +116,35 @@ s = moved.get("Stomion")
 check(s is not None and abs(s["Pre"][1] - 3.0) < 1.0 and not np.allclose(s["Pre"], pre["Stomion"]),
       "an override places Stomion where the user put it (snapped onto the skin)")
 check(s is not None and np.allclose(moved["Pronasale"]["Pre"], pre["Pronasale"]), "an override leaves the other landmarks")
+
+# The point handle: Placed Landmark places one landmark at the handle's position, after the
+# Overrides list (so it wins for its landmark); None places nothing.
+handle_at = [pre["Stomion"][0] - 0.5, -3.0, pre["Stomion"][2]]
+landmarks.PlacedLandmark = "Stomion"
+landmarks.PlacedLandmarkPosition = handle_at
+placed = table(landmarks)
+s = placed.get("Stomion")
+check(s is not None and abs(s["Pre"][1] + 3.0) < 1.0 and not np.allclose(s["Pre"], moved["Stomion"]["Pre"]),
+      "the handle places Stomion where it is (snapped onto the skin), over the list's entry (%s)"
+      % (s and s["Pre"]))
+check(s is not None and np.allclose(placed["Pronasale"]["Pre"], pre["Pronasale"]), "the handle leaves the other landmarks")
+landmarks.Overrides = []
+landmarks.PlacedLandmark = "None"
+check(np.allclose(table(landmarks)["Stomion"]["Pre"], pre["Stomion"]), "Placed Landmark None places nothing")
+
+# The panel: the handle (ParaView's InteractiveHandle widget on PlacedLandmarkPosition) is shown
+# only while a landmark is chosen.
+sm = landmarks.SMProxy
+groups = [sm.GetPropertyGroup(g) for g in range(sm.GetNumberOfPropertyGroups())]
+handle = [g for g in groups if g.GetPanelWidget() == "InteractiveHandle"]
+check(len(handle) == 1 and handle[0].GetProperty("WorldPosition") is sm.GetProperty("PlacedLandmarkPosition"),
+      "one point handle drives PlacedLandmarkPosition")
+decorator = handle[0].GetHints().FindNestedElementByName("PropertyWidgetDecorator") if handle and handle[0].GetHints() else None
+check(decorator is not None and decorator.GetAttribute("property") == "PlacedLandmark" and
+      decorator.GetAttribute("mode") == "visibility" and decorator.GetAttribute("value") == "-1" and
+      decorator.GetAttribute("inverse") == "1", "the handle is hidden while Placed Landmark is None")
+names = [landmarks.GetProperty("PlacedLandmark").SMProperty.FindDomain("vtkSMEnumerationDomain").GetEntryText(i)
+         for i in range(20)]
+check(names == ["None"] + SKIN + BONE, "Placed Landmark offers None and the 19 landmarks in the table's order: %s" % names)
 
 finish("TestFacialLandmarks")

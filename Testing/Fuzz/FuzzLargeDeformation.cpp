@@ -5,11 +5,14 @@
 // crash or hang; an error has a message; a success is finite, converged to the requested
 // tolerance and has no inverted cell; for tiny moves without lift-off (tiny also against the
 // material's kappa / mu) it agrees with the linear model when that system is reasonably
-// conditioned.
+// conditioned. The precomputed solve (PrecomputedLargeDeformation.h) runs on the same scene with
+// random options, an iteration limit and a warm-started second move: the same promises, except
+// that an iterate stopped at the limit is flagged instead of converged.
 #include "FuzzBytes.h"
 #include "FuzzPrecompute.h"
 
 #include "CondensedFEM/LargeDeformation.h"
+#include "CondensedFEM/PrecomputedLargeDeformation.h"
 #include "Element/NeoHookeanTet.h"
 #include "Support/BoxMeshGenerator.h"
 
@@ -22,6 +25,60 @@ using namespace faceplan;
 using faceplan::fuzz::CheckedPrecompute;
 using faceplan::fuzz::FuzzBytes;
 using faceplan::fuzz::Violation;
+
+namespace {
+
+void CheckSolved(const PrecomputeRequest& request, const SolveResult& result, double volumeRatio) {
+  if (!result.keptDisplacement.allFinite() || !result.allDisplacement.allFinite())
+    Violation("the large-deformation solve succeeded with a non-finite displacement");
+  if (result.keptDisplacement.rows() != Eigen::Index(request.sets.kept.size()))
+    Violation("kept displacement has the wrong number of rows");
+  if (!(volumeRatio > 0.0))
+    Violation("the large-deformation solve succeeded with an inverted cell");
+}
+
+// The precomputed solve of `input`, after a first solve of half of it when `drag` (warm start).
+void PrecomputedSolve(const PrecomputeRequest& request, const SolveInput& input,
+                      const PrecomputedLargeDeformationOptions& options, int limit, bool drag) {
+  std::shared_ptr<LargeDeformationSystem> system;
+  const Status made = PrecomputeLargeDeformation(request, options, system);
+  if (!made) {
+    if (made.message.empty())
+      Violation("a large-deformation precompute error without a message");
+    return;
+  }
+  LargeDeformationState state;
+  if (drag) {
+    SolveInput half = input;
+    half.movableDisplacement *= 0.5;
+    half.gravity *= 0.5;
+    SolveResult result;
+    PrecomputedLargeDeformationReport report;
+    if (!SolvePrecomputedLargeDeformation(*system, half, nullptr, result, report, &state))
+      state = LargeDeformationState();
+  }
+  SolveResult result;
+  PrecomputedLargeDeformationReport report;
+  const Status solved =
+      SolvePrecomputedLargeDeformation(*system, input, &state, result, report, nullptr, limit);
+  if (!solved) {
+    if (solved.message.empty())
+      Violation("a precomputed large-deformation error without a message");
+    return;
+  }
+  CheckSolved(request, result,
+              report.fellBack ? report.newton.smallestVolumeRatio : report.smallestVolumeRatio);
+  if (report.stoppedAtLimit) {
+    if (limit <= 0 || report.iterations != limit)
+      Violation("a precomputed solve stopped without reaching its iteration limit");
+  } else if (!(result.relativeResidual <= options.tolerance)) {
+    Violation("the precomputed large-deformation solve succeeded without converging");
+  }
+  if (report.fellBack && !options.fallBackToNewton)
+    Violation("the precomputed solve fell back to Newton where it was told not to");
+}
+
+} // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   FuzzBytes in(data, size);
@@ -81,6 +138,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       input.gravity[c] = in.scaled(10.0);
   input.recoverInterior = in.flag();
 
+  const bool precomputed = in.flag();
+  PrecomputedLargeDeformationOptions quasiNewton;
+  quasiNewton.tolerance = options.tolerance;
+  quasiNewton.slidingLiftOff = options.slidingLiftOff;
+  quasiNewton.historySize = in.range(0, 10);
+  quasiNewton.maxIterations = in.range(1, 60);
+  quasiNewton.refactorAfter = in.range(0, 20);
+  quasiNewton.maxRefactorizations = in.range(0, 3);
+  quasiNewton.maxSubstepHalvings = in.range(0, 4);
+  quasiNewton.backgroundRefactorization = in.flag();
+  quasiNewton.fallBackToNewton = in.flag();
+  quasiNewton.newton = options;
+  const int limit = in.flag() ? in.range(1, 8) : 0;
+  const bool drag = in.flag();
+  if (precomputed)
+    PrecomputedSolve(request, input, quasiNewton, limit, drag);
+
   SolveResult result;
   LargeDeformationReport report;
   const Status solved = SolveLargeDeformation(request, input, options, result, report);
@@ -89,12 +163,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       Violation("a large-deformation error without a message");
     return 0;
   }
-  if (!result.keptDisplacement.allFinite() || !result.allDisplacement.allFinite())
-    Violation("the large-deformation solve succeeded with a non-finite displacement");
-  if (result.keptDisplacement.rows() != Eigen::Index(request.sets.kept.size()))
-    Violation("kept displacement has the wrong number of rows");
-  if (!(report.smallestVolumeRatio > 0.0))
-    Violation("the large-deformation solve succeeded with an inverted cell");
+  CheckSolved(request, result, report.smallestVolumeRatio);
   if (!(result.relativeResidual <= options.tolerance))
     Violation("the large-deformation solve succeeded without converging");
 

@@ -27,6 +27,7 @@ import time
 import traceback
 
 sys.path.insert(0, os.environ["FACEPLAN_GUI_TESTS"])  # Testing/GUI, set by run_gui_test.py
+import gui_scene  # noqa: E402
 from gui_result import check, result, write_result  # noqa: E402
 
 
@@ -44,29 +45,8 @@ try:
     tissue, mandible, roi, cut, fem = faceplan_pipeline.build(os.environ["FACEPLAN_GUI_DATA"])
     fem.Model = "LinearElastic"  # the linear model's contract (its baseline, its edit timings)
 
-    view = simple.GetActiveViewOrCreate("RenderView")
+    view = gui_scene.show_pipeline(simple, fem, cut)
     check(view is not None, "the GUI has a render view")
-    face = simple.Show(simple.OutputPort(fem, 0), view)
-    simple.ColorBy(face, ("POINTS", "Displacement", "Magnitude"))
-    face.Opacity = 0.3
-    lut = simple.GetColorTransferFunction("Displacement")
-    lut.ApplyPreset("Turbo", True)
-    lut.AutomaticRescaleRangeMode = "Never"
-    lut.RescaleTransferFunction(0.0, 6.0)
-    bone = simple.Show(simple.OutputPort(cut, 0), view)
-    simple.ColorBy(bone, ("POINTS", "Displacement", "Magnitude"))
-    bone.LookupTable = lut
-    surface = simple.Show(simple.OutputPort(cut, 1), view)
-    surface.ColorArrayName = ["POINTS", ""]
-    surface.AmbientColor = surface.DiffuseColor = [0.2, 0.5, 0.9]
-    surface.Opacity = 0.5
-    bone.SetScalarBarVisibility(view, True)
-    lut.RescaleTransferFunction(0.0, 6.0)  # ColorBy rescales to the data: back to the fixed scale
-    simple.Render(view)
-    view.CameraFocalPoint = [85.0, 0.0, 92.0]
-    view.CameraPosition = [-260.0, -250.0, 10.0]
-    view.CameraViewUp = [0.0, 0.0, 1.0]
-    simple.Render(view)
 
     def solve():
         """(tissue displacement, bone displacement, CurveU) after bringing the pipeline up to date."""

@@ -271,13 +271,43 @@ TEST(PrecomputedLargeDeformation, ItFallsBackToNewtonAndSaysSo) {
   EXPECT_NE(s.message.find("did not converge"), std::string::npos) << s.message;
 }
 
+TEST(PrecomputedLargeDeformation, AMoveBackTowardsRestStartsFromRest) {
+  // After the 35 % press, a 5 % press is nearer the rest state than the pressed one: it starts
+  // from rest with the rest factor, and equals the cold solve.
+  const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+  auto system = Precomputed(request);
+  ASSERT_TRUE(system);
+  SolveResult result, cold;
+  PrecomputedLargeDeformationReport report, coldReport;
+  LargeDeformationState pressed, back;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, PlateMove(request, 0.35 * kLz), nullptr,
+                                               result, report, &pressed)
+                  .ok);
+  WaitForRefactorization(*system); // the factor is now the pressed state's
+  const SolveInput small = PlateMove(request, 0.05 * kLz);
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, small, &pressed, result, report, &back).ok);
+  EXPECT_FALSE(report.warmStarted);
+  EXPECT_TRUE(back.valid());
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, small, nullptr, cold, coldReport).ok);
+  EXPECT_EQ(report.iterations, coldReport.iterations) << "the same start and factor";
+  EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, cold.allDisplacement), kAgreement);
+  // A move onwards from the pressed state still starts from it.
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, PlateMove(request, 0.36 * kLz), &pressed,
+                                               result, report)
+                  .ok);
+  EXPECT_TRUE(report.warmStarted);
+}
+
 TEST(PrecomputedLargeDeformation, AnIterationLimitReturnsTheIterateAndSaysSo) {
   // The 35 % press: the iterate after k iterations is flagged, its residual above the tolerance
   // and shrinking with k, its distance to the equilibrium too; a limit the solve does not reach
   // gives the converged answer itself, and a limited solve leaves no state to start from.
   const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
   const SolveInput input = PlateMove(request, 0.35 * kLz);
-  auto system = Precomputed(request);
+  // Every solve with the rest factor: the same iterates whatever the limit.
+  PrecomputedLargeDeformationOptions options;
+  options.backgroundRefactorization = false;
+  auto system = Precomputed(request, options);
   ASSERT_TRUE(system);
   SolveResult exact;
   PrecomputedLargeDeformationReport full;
