@@ -876,7 +876,7 @@ def write_convergence_csv(path, rows):
     solver, the first solve's time (ms since it started) and relative residual at each iterate."""
     with open(path, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["scene", "choice", "solver", "iteration", "ms", "relative_residual"])
+        writer.writerow(["scene", "choice", "solver", "iterate", "ms", "relative_residual"])
         seen = set()
         for r in rows:
             if r.get("failed") or r["axis"] != "model" or r.get("model") != "NeoHookean" or r.get("iteration_limit"):
