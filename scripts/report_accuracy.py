@@ -9,9 +9,12 @@ Deform) and the demos' own scene definitions.
                                         [--scenes demo,lefort1,bsso,genioplasty,ct]
 
 Every configuration runs in its own pvpython process (`--case FILE`), so its peak resident memory
-(VmHWM) is its own. Writes DIR/accuracy.csv (one row per subject), DIR/accuracy.md (the report's
-sections) and DIR/plots/*.png. --check exits 1 unless every series exists, the CT errors shrink as
-the mesh refines and every study's reference is more accurate than its subjects (see `check`).
+(VmHWM) is its own. Writes DIR/accuracy.csv (one row per subject), DIR/accuracy_landmarks.csv (one
+row per subject and soft-tissue landmark), DIR/accuracy_convergence.csv (the large-deformation
+solves' iterates), DIR/accuracy.md (the report's sections) and DIR/plots/*.png. --check exits 1
+unless every series exists with its landmark errors, every configuration carries out its plan, the
+CT errors shrink as the mesh refines and every study's reference is more accurate than its subjects
+(see `check`).
 """
 import argparse
 import csv
@@ -37,10 +40,14 @@ SKIN_BONE_DISTANCE_MM = 3.0
 # in this CT z grows towards the chin and the face looks towards -y), meshed by Tissue Model From
 # CT, and a genioplasty: the chin below a horizontal cut and in front of a coronal one advanced
 # 4 mm, the tissue released within 3 mm of the cuts (ReleaseDistance; tied across the cut the
-# large-deformation solve cannot follow the shear on these meshes).
+# large-deformation solve cannot follow the shear on these meshes). The coronal cut lies behind the
+# symphysis (the mandible below the horizontal cut spans y = 55-95 mm here), so the segment is the
+# whole chin at every CellSize (a cut through its front cortex leaves a sliver of a few bone nodes
+# whose tissue lies within the release distance: on some meshes no tissue moves, and the mesh study
+# would compare plans, not meshes).
 CT_LOWER_FACE_VOI = [0, 63, 0, 63, 53, 92]
 CT_SPACING_Z = 1.5
-CT_CUTS = [([92.0, 45.0, 118.0], [0.0, 0.0, 1.0]), ([92.0, 60.0, 120.0], [0.0, -1.0, 0.0])]
+CT_CUTS = [([92.0, 45.0, 118.0], [0.0, 0.0, 1.0]), ([92.0, 75.0, 120.0], [0.0, -1.0, 0.0])]
 CT_MOVE = [0.0, -4.0, 0.0]
 CT_RELEASE_DISTANCE = 3.0
 CT_SMALLEST_PIECE = 20
@@ -89,23 +96,65 @@ def vm_hwm_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def landmark_positions(simple, tissue, bone):
-    """Undeformed soft-tissue landmark positions {name: (x, y, z)} for the errors at landmarks.
-    Uses the FacialLandmarks filter when the plugin has it (its output: one point per landmark,
-    point array `Name` or `LandmarkName`); returns {} otherwise, and the report says none were
-    measured."""
-    if "FacialLandmarks" not in dir(simple):
-        return {}
-    try:
-        landmarks = simple.FacialLandmarks(Input=tissue, Bone=bone)
-        from paraview import servermanager
-        data = servermanager.Fetch(landmarks)
-        names = data.GetPointData().GetAbstractArray("Name") or data.GetPointData().GetAbstractArray("LandmarkName")
-        if names is None:
-            return {}
-        return {names.GetValue(i): data.GetPoint(i) for i in range(data.GetNumberOfPoints())}
-    except Exception:  # the hook must not break the study while the filter's interface settles
-        return {}
+# The FacialLandmarks frame per scene: the Badin face looks towards -x with z up and its
+# midsagittal plane at y = 0 (the filter's defaults); in the head CT the face looks towards -y, z
+# grows towards the chin and the midsagittal plane is x = const (the middle of the tissue's bounds).
+LANDMARK_FRAME = {
+    "ct": dict(MidsagittalNormal=[1.0, 0.0, 0.0], AnteriorDirection=[0.0, -1.0, 0.0],
+               SuperiorDirection=[0.0, 0.0, -1.0]),
+}
+
+
+# The CT crop starts below the nose and, at this CT's 3.2 mm in-plane spacing, its chin has no
+# soft-tissue prominence: the filter's rules, which start from pronasale (the profile's most anterior
+# point), take the upper lip for pronasale and then find fewer than three prominences below it. So on
+# the CT the lips are placed by hand at the midline profile's features (the filter snaps each to the
+# skin) and its "Pronasale" is left out.
+LANDMARK_OVERRIDES = {
+    "ct": ["LabraleSuperius 99 27.2 89.5", "Stomion 99 43.2 98.5", "LabraleInferius 99 36.8 110.5"],
+}
+LANDMARK_LEFT_OUT = {
+    "ct": {"Pronasale": "the crop holds no nose: the profile's most anterior point is the upper lip, placed by "
+                        "hand as LabraleSuperius"},
+}
+
+
+def landmark_positions(simple, scene, tissue, bone):
+    """The soft-tissue landmarks of the undeformed tissue, by the FacialLandmarks filter (its table,
+    output 0: columns Landmark, Kind, Found, Pre, Note): {"found": {name: [x, y, z]}, "missing":
+    {name: why}, "error": None, or the filter's error when it gave no table, "by_hand": [names]}.
+    `bone` (the bone surfaces; moved back by their Displacement) lets it place SoftTissueMenton."""
+    landmarks = simple.FacialLandmarks(Input=tissue, Bone=bone)
+    frame = dict(LANDMARK_FRAME.get(scene, {}))
+    if scene == "ct":
+        bounds = tissue.GetDataInformation().GetBounds()
+        frame["MidsagittalOrigin"] = [0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+                                      0.5 * (bounds[4] + bounds[5])]
+    for name, value in frame.items():
+        setattr(landmarks, name, value)
+    landmarks.Overrides = LANDMARK_OVERRIDES.get(scene, [])
+    landmarks.UpdatePipeline()
+    algorithm = landmarks.GetClientSideObject()
+    table = algorithm.GetOutputDataObject(0)
+    found, missing = {}, {}
+    if table.GetNumberOfRows() == 0:
+        why = algorithm.GetLastErrorMessage() if hasattr(algorithm, "GetLastErrorMessage") else ""
+        simple.Delete(landmarks)
+        return dict(found=found, missing=missing, error="FacialLandmarks gave no table: " + (why or "no message"))
+    column = {table.GetColumnName(c): table.GetColumn(c) for c in range(table.GetNumberOfColumns())}
+    for r in range(table.GetNumberOfRows()):
+        if column["Kind"].GetValue(r) != "skin":
+            continue
+        name = column["Landmark"].GetValue(r)
+        if name in LANDMARK_LEFT_OUT.get(scene, {}):
+            missing[name] = LANDMARK_LEFT_OUT[scene][name]
+        elif column["Found"].GetValue(r):
+            found[name] = list(column["Pre"].GetTuple3(r))
+        else:
+            missing[name] = column["Note"].GetValue(r)
+    simple.Delete(landmarks)
+    by_hand = [entry.split()[0] for entry in LANDMARK_OVERRIDES.get(scene, [])]
+    return dict(found=found, missing=missing, error=None, by_hand=by_hand)
 
 
 def mesh_ct(simple, data_dir, level, out_dir):
@@ -306,10 +355,18 @@ def run_case(case_file):
     if fd.GetArray("PrecomputeTimeMs") is None:
         raise SystemExit("Condensed FEM Deform produced no result (its error is above)")
     precompute_ms = fd.GetArray("PrecomputeTimeMs").GetValue(0)
+    first_solve_ms = fd.GetArray("SolveTimeMs").GetValue(0)
+    history = fd.GetArray("ConvergenceHistory")
+    convergence = [list(history.GetTuple2(i)) for i in range(history.GetNumberOfTuples())] if history else []
+    solver = fd.GetAbstractArray("LargeDeformationSolver")
+    precomputed = solver is not None and solver.GetValue(0) == "Precomputed"
     # Time per update: the filter re-executed with its inputs unchanged, as after an edit of the
-    # plan that keeps tissue, ROI and contact (a linear model then reuses its precompute).
+    # plan that keeps tissue, ROI and contact (a linear model then reuses its precompute). Not for
+    # the precomputed large-deformation solve: re-executed, it starts from its own converged state
+    # and has nothing left to do, so its time per update is its first solve's, from rest after the
+    # precompute (SolveTimeMs), and that solve's result is the one compared.
     updates = []
-    for _ in range(case["repeats"]):
+    for _ in range(0 if precomputed else case["repeats"]):
         algorithm.Modified()
         t0 = time.perf_counter()
         algorithm.Update()
@@ -334,11 +391,14 @@ def run_case(case_file):
         # The model's own skin surface (Tissue Model From CT's third output), not the crop's top and
         # bottom planes (cut faces of the image) nor the tissue lining cavities in the bone.
         skin &= on_ct_skin(points, case["work"], case["level"])
-    landmarks = landmark_positions(simple, tissue, fem.Bone[0])
+    landmarks = landmark_positions(simple, case["scene"], tissue, bone if bone is not None else fem.Bone[0])
     np.savez_compressed(case["result"] + ".npz", points=points, tris=tris, skin=skin,
                         displacement=displacement[ids])
     result = dict(
-        first_update_s=first, update_ms=1000.0 * statistics.median(updates), updates_s=updates,
+        first_update_s=first, update_ms=first_solve_ms if precomputed else 1000.0 * statistics.median(updates),
+        updates_s=updates, first_solve_ms=first_solve_ms, convergence=convergence,
+        quasi_newton_iterations=number("QuasiNewtonIterations"), converged=number("Converged"),
+        solver_note=text("SolverNote"), iteration_limit=case["props"].get("QuasiNewtonIterationLimit"),
         precompute_ms=precompute_ms, meshing_s=meshing, peak_mb=vm_hwm_mb(), inputs_peak_mb=memory_before,
         tets=tissue_data.GetNumberOfCells(), points=tissue_data.GetNumberOfPoints(),
         skin_nodes=int(skin.sum()), model=text("Model"), method=text("Method"),
@@ -346,7 +406,7 @@ def run_case(case_file):
         relative_residual=number("RelativeResidual"), newton_iterations=number("NewtonIterations"),
         lifted_nodes=number("LiftedNodes"), largest_strain=number("LargestStrain"),
         largest_displacement_mm=float(np.max(np.linalg.norm(displacement, axis=1))),
-        landmarks={k: list(v) for k, v in landmarks.items()})
+        landmarks=landmarks)
     with open(case["result"] + ".json", "w") as f:
         json.dump(result, f, indent=1)
 
@@ -366,13 +426,27 @@ def key_of(cfg):
     return hashlib.sha1(json.dumps(cfg, sort_keys=True).encode()).hexdigest()[:12]
 
 
-def large_deformation_series(has_solver_choice, reference_props):
-    """The model axis's large-deformation subjects beyond the reference: the precomputed solve
-    after k iterations, once the filter offers LargeDeformationSolver. One entry per series."""
+# The precomputed large-deformation solve stopped after k quasi-Newton iterations (the filter's
+# QuasiNewtonIterationLimit): what an update that stops early gives, against its time. From rest
+# the main demo's cut and the CT plan converge in 20-35 iterations; the osteotomy plans, whose
+# lift-off changes restart the L-BFGS history, in 80-90, so their series goes on to 64.
+ITERATION_LIMITS = [1, 2, 4, 8, 16]
+ITERATION_LIMITS_LIFT_OFF = ITERATION_LIMITS + [32, 64]
+
+
+def iteration_label(k):
+    return "large deformation, precomputed, %d iteration%s" % (k, "" if k == 1 else "s")
+
+
+def large_deformation_series(has_solver_choice, reference_props, contact):
+    """The model axis's large-deformation subjects beyond the reference: the precomputed solve to
+    convergence and stopped after k iterations. One entry per subject."""
     series = []
     if has_solver_choice:
-        series.append(("large deformation, precomputed factor",
-                       dict(reference_props, LargeDeformationSolver="Precomputed")))
+        precomputed = dict(reference_props, LargeDeformationSolver="Precomputed")
+        series.append(("large deformation, precomputed factor", precomputed))
+        limits = ITERATION_LIMITS_LIFT_OFF if contact["LiftOff"] else ITERATION_LIMITS
+        series += [(iteration_label(k), dict(precomputed, QuasiNewtonIterationLimit=k)) for k in limits]
     return series
 
 
@@ -391,7 +465,8 @@ def studies(scenes, quick, has_solver_choice, ct_levels):
                      config(scene, operation, Model="NeoHookean", **newton))
         subjects = [("linear model", config(scene, linear_contact))]
         subjects += [(label, config(scene, operation, **props))
-                     for label, props in large_deformation_series(has_solver_choice, reference[1]["props"])]
+                     for label, props in large_deformation_series(has_solver_choice, reference[1]["props"],
+                                                                         CONTACT[reference[1]["contact"]])]
         out.append(dict(scene=scene, axis="model", reference=reference, subjects=subjects))
         if scene != "demo":
             # With every tissue node tied to the moved segment the large-deformation solve finds no
@@ -425,7 +500,8 @@ def studies(scenes, quick, has_solver_choice, ct_levels):
         out.append(dict(scene="ct", axis="model", reference=reference,
                         subjects=[("linear model", config("ct", level=finest))]
                         + [(label, config("ct", level=finest, **props)) for label, props in
-                           large_deformation_series(has_solver_choice, reference[1]["props"])]))
+                           large_deformation_series(has_solver_choice, reference[1]["props"],
+                                                                         CONTACT[reference[1]["contact"]])]))
         # Element order on the coarsest mesh; judged by the quadratic solve one level finer.
         coarse, finer = levels[0], levels[1]
         out.append(dict(scene="ct", axis="element",
@@ -449,25 +525,21 @@ def load(result_base):
     return info, data
 
 
-def skin_error(subject, reference):
-    """|u_subject - u_reference| (mm) at the reference's skin nodes. On another mesh the subject's
-    displacement is interpolated at the closest point of its boundary surface."""
+def surface_values(data, query):
+    """The displacement of `data` (a configuration's boundary: points, tris, displacement) at the
+    closest point of its boundary triangles to each of `query` (n x 3), linearly interpolated in the
+    triangle; returns (values n x 3, distances n)."""
     import numpy as np
-    ref_points = reference["points"][reference["skin"]]
-    ref_u = reference["displacement"][reference["skin"]]
-    if subject["points"].shape == reference["points"].shape and np.allclose(subject["points"], reference["points"]):
-        return np.linalg.norm(subject["displacement"][reference["skin"]] - ref_u, axis=1)
     from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
     from vtkmodules.vtkCommonCore import mutable, vtkPoints
-    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkGenericCell, vtkPolyData
-    from vtkmodules.vtkCommonDataModel import vtkCellLocator
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkCellLocator, vtkGenericCell, vtkPolyData
+    points = data["points"].astype(np.float64)
+    tris = data["tris"].astype(np.int64)
     poly = vtkPolyData()
     pts = vtkPoints()
-    pts.SetData(numpy_to_vtk(subject["points"].astype(np.float64), deep=1))
+    pts.SetData(numpy_to_vtk(points, deep=1))
     poly.SetPoints(pts)
     cells = vtkCellArray()
-    tris = subject["tris"].astype(np.int64)
-    tris = tris[np.all(subject["skin"][tris], axis=1)]  # the subject's skin triangles only
     conn = np.hstack([np.full((len(tris), 1), 3, np.int64), tris]).ravel()
     cells.SetCells(len(tris), numpy_to_vtkIdTypeArray(conn, deep=1))
     poly.SetPolys(cells)
@@ -476,35 +548,61 @@ def skin_error(subject, reference):
     locator.BuildLocator()
     closest, cell = [0.0, 0.0, 0.0], vtkGenericCell()
     cell_id, sub_id, dist2 = mutable(0), mutable(0), mutable(0.0)
-    u = subject["displacement"]
-    values = np.empty_like(ref_u)
-    for k, p in enumerate(ref_points):
+    query = np.asarray(query, np.float64).reshape(-1, 3)
+    found, ids, distances = np.empty_like(query), np.empty(len(query), np.int64), np.empty(len(query))
+    for k, p in enumerate(query):
         locator.FindClosestPoint(p, closest, cell, cell_id, sub_id, dist2)
-        a, b, c = (subject["points"][i] for i in tris[int(cell_id)])
-        ia, ib, ic = tris[int(cell_id)]
-        # Barycentric weights of the closest point in its triangle.
-        v0, v1, v2 = b - a, c - a, np.asarray(closest) - a
-        d00, d01, d11 = v0 @ v0, v0 @ v1, v1 @ v1
-        d20, d21 = v2 @ v0, v2 @ v1
-        den = d00 * d11 - d01 * d01
-        wb = (d11 * d20 - d01 * d21) / den if den > 0 else 0.0
-        wc = (d00 * d21 - d01 * d20) / den if den > 0 else 0.0
-        values[k] = (1.0 - wb - wc) * u[ia] + wb * u[ib] + wc * u[ic]
+        found[k], ids[k], distances[k] = closest, int(cell_id), math.sqrt(float(dist2))
+    # Barycentric weights of each closest point in its triangle.
+    corners = tris[ids]
+    a, b, c = points[corners[:, 0]], points[corners[:, 1]], points[corners[:, 2]]
+    v0, v1, v2 = b - a, c - a, found - a
+    d00, d01, d11 = (v0 * v0).sum(1), (v0 * v1).sum(1), (v1 * v1).sum(1)
+    d20, d21 = (v2 * v0).sum(1), (v2 * v1).sum(1)
+    den = d00 * d11 - d01 * d01
+    safe = np.where(den > 0, den, 1.0)
+    wb = np.where(den > 0, (d11 * d20 - d01 * d21) / safe, 0.0)
+    wc = np.where(den > 0, (d00 * d21 - d01 * d20) / safe, 0.0)
+    u = data["displacement"]
+    values = (1.0 - wb - wc)[:, None] * u[corners[:, 0]] + wb[:, None] * u[corners[:, 1]] + \
+        wc[:, None] * u[corners[:, 2]]
+    return values, distances
+
+
+def same_mesh(subject, reference):
+    import numpy as np
+    return subject["points"].shape == reference["points"].shape and np.allclose(subject["points"],
+                                                                                reference["points"])
+
+
+def skin_error(subject, reference):
+    """|u_subject - u_reference| (mm) at the reference's skin nodes: the same physical points for
+    every subject. On another mesh the subject's displacement is interpolated at the closest point
+    of its boundary surface (all of it: a mask of its own skin would lose a band one element wide
+    where skin meets bone or the crop planes, and points there would take the displacement of
+    triangles up to an element away)."""
+    import numpy as np
+    ref_points = reference["points"][reference["skin"]]
+    ref_u = reference["displacement"][reference["skin"]]
+    if same_mesh(subject, reference):
+        return np.linalg.norm(subject["displacement"][reference["skin"]] - ref_u, axis=1)
+    values, _ = surface_values(subject, ref_points)
     return np.linalg.norm(values - ref_u, axis=1)
 
 
-def landmark_error(subject, reference, info_ref):
-    """Largest error (mm) at the soft-tissue landmarks (nearest skin node of each), or None."""
+def landmark_errors(subject, reference, info_ref):
+    """{landmark: error (mm)} at the soft-tissue landmarks found on the reference's undeformed skin:
+    both displacements interpolated at the landmark (each on its own boundary surface), so every
+    subject is compared at the same physical points. Empty when the reference found none."""
     import numpy as np
-    marks = info_ref.get("landmarks") or {}
-    if not marks:
-        return None
-    errors = skin_error(subject, reference)
-    skin_points = reference["points"][reference["skin"]]
-    worst = 0.0
-    for p in marks.values():
-        worst = max(worst, float(errors[np.argmin(np.linalg.norm(skin_points - np.asarray(p), axis=1))]))
-    return worst
+    found = (info_ref.get("landmarks") or {}).get("found") or {}
+    if not found:
+        return {}
+    names = sorted(found)
+    where = np.array([found[n] for n in names], np.float64)
+    ref_u, _ = surface_values(reference, where)
+    sub_u = ref_u if subject is reference else surface_values(subject, where)[0]
+    return {n: float(e) for n, e in zip(names, np.linalg.norm(sub_u - ref_u, axis=1))}
 
 
 def percentile95(values):
@@ -672,6 +770,8 @@ def main():
     span = (max(ends) - min(starts)) if starts and ends else time.perf_counter() - start
     rows = evaluate(plan, results)
     write_csv(os.path.join(args.out, "accuracy.csv"), rows)
+    write_landmark_csv(os.path.join(args.out, "accuracy_landmarks.csv"), rows)
+    write_convergence_csv(os.path.join(args.out, "accuracy_convergence.csv"), rows)
     failures = check(plan, rows)
     write_markdown(os.path.join(args.out, "accuracy.md"), plan, rows, results, failures, args,
                    span, has_solver_choice, ct_levels)
@@ -731,15 +831,22 @@ def evaluate(plan, results):
                 rows.append(row)
                 continue
             errors = skin_error(data, ref_data)
+            at_landmarks = landmark_errors(data, ref_data, ref_info)
             row.update(
                 tets=info["tets"], max_mm=float(errors.max()), p95_mm=percentile95(errors),
-                landmark_max_mm=landmark_error(data, ref_data, ref_info),
+                landmark_max_mm=max(at_landmarks.values()) if at_landmarks else None, landmarks=at_landmarks,
+                landmarks_missing=(ref_info.get("landmarks") or {}).get("missing") or {},
+                landmarks_by_hand=(ref_info.get("landmarks") or {}).get("by_hand") or [],
+                landmarks_error=(ref_info.get("landmarks") or {}).get("error"),
                 update_ms=info["update_ms"], first_update_s=info["first_update_s"],
                 precompute_ms=info["precompute_ms"], meshing_s=info["meshing_s"], peak_mb=info["peak_mb"],
-                model=info["model"], method=info["method"], element_order=info["element_order"],
+                model=info["model"], solver=info["solver"], method=info["method"], element_order=info["element_order"],
                 newton_iterations=info["newton_iterations"], lifted_nodes=info["lifted_nodes"],
                 largest_strain=info["largest_strain"], largest_displacement_mm=info["largest_displacement_mm"],
-                skin_nodes=int(ref_data["skin"].sum()))
+                skin_nodes=int(ref_data["skin"].sum()), iteration_limit=info.get("iteration_limit"),
+                quasi_newton_iterations=info.get("quasi_newton_iterations"),
+                relative_residual=info.get("relative_residual"), converged=info.get("converged"),
+                solver_note=info.get("solver_note"), convergence=info.get("convergence") or [])
             rows.append(row)
         if study.get("judge"):
             judge_info, judge_data = results[key_of(study["judge"][1])]
@@ -759,8 +866,26 @@ def evaluate(plan, results):
 
 CSV_FIELDS = ["scene", "axis", "choice", "is_reference", "reference", "level", "tets", "max_mm", "p95_mm",
               "landmark_max_mm", "update_ms", "first_update_s", "precompute_ms", "meshing_s", "peak_mb", "model",
-              "method", "element_order", "newton_iterations", "lifted_nodes", "largest_strain",
-              "largest_displacement_mm", "skin_nodes", "failed"]
+              "solver", "method", "element_order", "newton_iterations", "iteration_limit", "quasi_newton_iterations",
+              "relative_residual", "converged", "lifted_nodes", "largest_strain", "largest_displacement_mm",
+              "skin_nodes", "failed"]
+
+
+def write_convergence_csv(path, rows):
+    """The large-deformation solves' iterates (the field data ConvergenceHistory): per scene and
+    solver, the first solve's time (ms since it started) and relative residual at each iterate."""
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["scene", "choice", "solver", "iterate", "ms", "relative_residual"])
+        seen = set()
+        for r in rows:
+            if r.get("failed") or r["axis"] != "model" or r.get("model") != "NeoHookean" or r.get("iteration_limit"):
+                continue
+            if (r["scene"], r["choice"]) in seen:
+                continue
+            seen.add((r["scene"], r["choice"]))
+            for i, (ms, residual) in enumerate(r["convergence"], 1):
+                writer.writerow([r["scene"], r["choice"], r["solver"], i, "%.6g" % ms, "%.6g" % residual])
 
 
 def write_csv(path, rows):
@@ -769,6 +894,35 @@ def write_csv(path, rows):
         writer.writeheader()
         for row in rows:
             writer.writerow({k: ("" if row.get(k) is None else row.get(k, "")) for k in CSV_FIELDS})
+
+
+LANDMARK_CSV_FIELDS = ["scene", "axis", "choice", "is_reference", "reference", "level", "landmark", "found",
+                       "error_mm", "note"]
+
+
+def write_landmark_csv(path, rows):
+    """One row per (subject, soft-tissue landmark): its error in mm, or why the landmark was not
+    found on the study's reference (found 0, no error)."""
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=LANDMARK_CSV_FIELDS)
+        writer.writeheader()
+        for row in rows:
+            if row.get("failed") or "(judge)" in row["axis"]:
+                continue
+            base = {k: row[k] for k in ("scene", "axis", "choice", "is_reference", "reference", "level")}
+            if row.get("landmarks_error"):
+                writer.writerow(dict(base, landmark="", found=0, note=row["landmarks_error"]))
+            for name in LANDMARK_NAMES:
+                if name in row.get("landmarks", {}):
+                    writer.writerow(dict(base, landmark=name, found=1, error_mm="%.6g" % row["landmarks"][name]))
+                elif name in row.get("landmarks_missing", {}):
+                    writer.writerow(dict(base, landmark=name, found=0, note=row["landmarks_missing"][name]))
+
+
+# The soft-tissue landmarks in FacialLandmarks' order (ARCHITECTURE.md, "Names shared across filters").
+LANDMARK_NAMES = ["Pronasale", "Subnasale", "AlarBaseRight", "AlarBaseLeft", "LabraleSuperius", "Stomion",
+                  "LabraleInferius", "CheilionRight", "CheilionLeft", "SoftTissueB", "SoftTissuePogonion",
+                  "SoftTissueMenton"]
 
 
 def mesh_series(rows, scene="ct"):
@@ -834,9 +988,26 @@ def check(plan, rows):
             for name in ("max_mm", "p95_mm", "update_ms", "peak_mb"):
                 if r.get(name) is None or not math.isfinite(r[name]) or r[name] < 0:
                     failures.append("%s %s %s: %s is %r" % (r["scene"], r["axis"], r["choice"], name, r[name]))
+            if r.get("iteration_limit") and r.get("converged") is None:
+                failures.append("%s %s %s: stopped after %d iterations without the field data Converged" % (
+                    r["scene"], r["axis"], r["choice"], r["iteration_limit"]))
+            if r.get("landmark_max_mm") is None:
+                failures.append("%s %s %s: no error at the soft-tissue landmarks (%s)" % (
+                    r["scene"], r["axis"], r["choice"], r.get("landmarks_error") or "none found on the reference"))
+            elif not all(math.isfinite(e) and e >= 0 for e in r["landmarks"].values()):
+                failures.append("%s %s %s: a landmark error is not finite" % (r["scene"], r["axis"], r["choice"]))
         mine = [r for r in everything if not r.get("failed")]
         if len(mine) != len(everything) and not study["axis"].startswith("contact"):
             continue  # already a failure above; the figures below would be incomplete
+        # Every configuration must carry out the plan: a mesh on which the moved segment carries no
+        # tissue (a thin segment whose nodes all lie within the release distance) would compare
+        # another plan, not another mesh.
+        reference_move = max((r["largest_displacement_mm"] for r in mine if r["is_reference"]), default=0.0)
+        for r in mine:
+            if not r["largest_displacement_mm"] >= 0.5 * reference_move:
+                failures.append("%s %s %s: the plan moves the tissue by %.2f mm at most, under half the "
+                                "reference's %.2f mm" % (r["scene"], r["axis"], r["choice"],
+                                                        r["largest_displacement_mm"], reference_move))
         if study["axis"] == "mesh":
             failures += check_mesh_study(mine)
         if study.get("judge"):
@@ -934,6 +1105,87 @@ def cost_ms(row):
     return row["update_ms"]
 
 
+def landmark_coverage(main_rows):
+    """Which soft-tissue landmarks each scene's reference gives, and why the others are missing."""
+    parts = []
+    for scene in dict.fromkeys(r["scene"] for r in main_rows):
+        mine = [r for r in main_rows if r["scene"] == scene]
+        ref = ([r for r in mine if r["axis"] == "model" and r["is_reference"]] or
+               [r for r in mine if r["is_reference"]])[0]
+        if ref.get("landmarks_error"):
+            parts.append("**%s** none: %s" % (scene, ref["landmarks_error"]))
+            continue
+        found, missing = sorted(ref.get("landmarks", {}), key=LANDMARK_NAMES.index), ref.get("landmarks_missing", {})
+        found = [n + (" (placed by hand)" if n in ref.get("landmarks_by_hand", []) else "") for n in found]
+        if not missing:
+            parts.append("**%s** all %d" % (scene, len(found)))
+            continue
+        reasons = {}
+        for name in LANDMARK_NAMES:
+            if name in missing:
+                reasons.setdefault(missing[name], []).append(name)
+        parts.append("**%s** %s; not %s" % (
+            scene, ", ".join(found) if found else "none",
+            "; ".join("%s (%s)" % (", ".join(names), why) for why, names in reasons.items())))
+    return "; ".join(parts)
+
+
+def iteration_section(w, main_rows):
+    """The precomputed large-deformation solve stopped after k iterations, per scene."""
+    limited = [r for r in main_rows if r["axis"] == "model" and r.get("iteration_limit")]
+    if not limited:
+        return
+    w("### The large-deformation solve stopped early")
+    w("")
+    w("![residual against iterations and time, and skin error against iterations](plots/large_deformation_iterations.png)")
+    w("")
+    w("The precomputed large-deformation solve (L-BFGS with the precompute's factor) stopped after k quasi-Newton "
+      "iterations (QuasiNewtonIterationLimit), from rest after the precompute: what an update that is cut short "
+      "gives, against its time. Its output is that iterate, marked Converged 0, not the equilibrium. Against the "
+      "Newton reference of each scene's model axis; the fully converged precomputed solve (k = –) and the "
+      "reference's own solve time are given for comparison. Each solve's iterates are in `%s`.%s" % (
+          "accuracy_convergence.csv",
+          " On the osteotomy plans, whose lips may lift off the teeth, the first iterations converge towards the "
+          "equilibrium with the contact of the rest state: the skin error stalls there, the residual jumps where "
+          "the contact changes (Newton's rule on iterates converged to 1e-6), and the error falls again after it."
+          if any(r["scene"] in ("lefort1", "bsso", "genioplasty") for r in limited) else ""))
+    w("")
+    w("| scene | k | iterations run | relative residual | converged | per update ms | largest mm | 95th pct mm | "
+      "landmarks mm |")
+    w("|---|---|---|---|---|---|---|---|---|")
+    for scene in dict.fromkeys(r["scene"] for r in limited):
+        mine = sorted((r for r in limited if r["scene"] == scene), key=lambda r: r["iteration_limit"])
+        full = [r for r in main_rows if r["scene"] == scene and r["axis"] == "model" and not r.get("iteration_limit")
+                and r.get("solver") == "Precomputed"]
+        ref = [r for r in main_rows if r["scene"] == scene and r["axis"] == "model" and r["is_reference"]]
+        for r in mine + full + ref:
+            k = r["iteration_limit"] or ("– (reference, Newton)" if r["is_reference"] else "–")
+            w("| %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                scene, k, fmt(r.get("quasi_newton_iterations") if not r["is_reference"] else r.get("newton_iterations")),
+                fmt(r.get("relative_residual"), 2), {1.0: "yes", 0.0: "no"}.get(r.get("converged"), "yes"),
+                fmt(r["update_ms"]), fmt(r["max_mm"]), fmt(r["p95_mm"]), fmt(r["landmark_max_mm"])))
+    w("")
+
+
+def landmark_table(w, main_rows):
+    """Per landmark and scene, the linear model's error against the large-deformation reference (mm);
+    the other subjects' are in the landmark CSV."""
+    linear = {r["scene"]: r for r in main_rows if r["axis"] == "model" and r["choice"] == "linear model"
+              and r.get("landmarks")}
+    if not linear:
+        return
+    w("The linear model's error at each soft-tissue landmark against the large-deformation reference (mm; "
+      "– where the scene's reference has no such landmark):")
+    w("")
+    w("| landmark | " + " | ".join(linear) + " |")
+    w("|---|" + "---|" * len(linear))
+    for name in LANDMARK_NAMES:
+        cells = [fmt(r["landmarks"].get(name)) for r in linear.values()]
+        if any(c != "–" for c in cells):
+            w("| %s | %s |" % (name, " | ".join(cells)))
+    w("")
+
+
 def write_markdown(path, plan, rows, results, failures, args, seconds, has_solver_choice, ct_levels):
     no_result = [r for r in rows if r.get("failed") and "(judge)" not in r["axis"]]
     rows = [r for r in rows if not r.get("failed")]
@@ -955,7 +1207,7 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
     w("")
     w("* **Error:** |u − u_reference| at the skin nodes (boundary nodes of the tissue farther than %g mm "
       "from every bone): largest and 95th percentile over the skin, in mm. Where the meshes differ (mesh "
-      "axis), the subject's displacement is taken at the closest point of its boundary to each reference "
+      "axis), the subject's displacement is taken at the closest point of its boundary surface to each reference "
       "skin node." % SKIN_BONE_DISTANCE_MM)
     w("* **Time per update:** Condensed FEM Deform re-executed with its inputs unchanged, as after an edit "
       "of the plan that keeps tissue, ROI and contact (the linear model reuses its precompute and only "
@@ -963,11 +1215,11 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
       "**Precompute:** the filter's PrecomputeTimeMs (factorization and condensation, done once per tissue, "
       "ROI and contact); for a CT mesh, its meshing time is listed beside it. **Peak memory:** the peak "
       "resident memory (VmHWM) of the pvpython process that ran the configuration (one process per configuration, %d at a time), ParaView included." % args.jobs)
-    w("* **Soft-tissue landmarks:** %s" % (
-        "largest error at the FacialLandmarks points (nearest skin node)." if any(
-            r.get("landmark_max_mm") is not None for r in main_rows) else
-        "not measured in this run (the plugin has no FacialLandmarks filter yet); the study takes them "
-        "from that filter when it is present."))
+    w("* **Soft-tissue landmarks:** |u − u_reference| at the skin landmarks the FacialLandmarks filter finds "
+      "on the reference's undeformed tissue and bone (its definitions, docs/CLINICAL.md), both displacements "
+      "interpolated at the landmark on their own boundary surface, so every subject is compared at the same "
+      "points; the table gives the largest over the landmarks found, `%s` each one. Found per scene (on the "
+      "model axis's reference): %s." % ("accuracy_landmarks.csv", landmark_coverage(main_rows)))
     w("")
     w("![skin error against time per update](plots/model_error_vs_time.png)")
     w("")
@@ -978,7 +1230,10 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
       "linear model with the same contact (lift-off needs the large-deformation model, so the linear model "
       "keeps sliding tissue on the teeth)%s." % (
           ", LargeDeformationSolver Newton" if has_solver_choice else "",
-          "; and the precomputed large-deformation solve" if has_solver_choice else
+          "; the precomputed large-deformation solve (the default solver: L-BFGS with a factor made once), "
+          "converged and stopped after k = %s iterations (%s with lift-off)" % (
+              ", ".join(map(str, ITERATION_LIMITS)), ", ".join(map(str, ITERATION_LIMITS_LIFT_OFF)))
+          if has_solver_choice else
           "; the precomputed large-deformation solve is added as a series when the filter offers "
           "LargeDeformationSolver"))
     w("* **element:** quadratic tetrahedra (mean dilatation) with the linear model: quadratic elements are "
@@ -995,21 +1250,27 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
     w("* **CT plan:** the lower face of the head CT (slices %d–%d), CellSize %s mm, the tissue's face-connected "
       "pieces of fewer than %d cells left out (the mesher leaves a few cells hanging on an edge next to the "
       "bone, which the solve rightly refuses), the chin below a horizontal and in front of a coronal cut "
-      "advanced %g mm, tissue released within %g mm of the cuts (ReleaseDistance; tied across the cut, the "
+      "(behind the symphysis, so that the segment is the whole chin on every mesh) advanced %g mm, tissue "
+      "released within %g mm of the cuts (ReleaseDistance; tied across the cut, the "
       "large-deformation solve cannot follow the shear on these meshes). Its skin: the model's own skin "
       "surface (Tissue Model From CT's third output) away from the crop planes." % (
           CT_LOWER_FACE_VOI[4], CT_LOWER_FACE_VOI[5], ", ".join("%g" % h for h in ct_levels), CT_SMALLEST_PIECE,
           -CT_MOVE[1], CT_RELEASE_DISTANCE))
     w("")
-    w("Precompute is – for the large-deformation model: it has none, every update is a full solve.")
+    w("Precompute is – for the large-deformation model solved by Newton's method: it has none, every update is "
+      "a full solve. The precomputed large-deformation solve's time per update is its first solve, from rest "
+      "after the precompute (an edit from a converged plan starts from that plan and needs fewer iterations).")
     w("")
     w("| scene | axis | choice | largest mm | 95th pct mm | landmarks mm | per update ms | precompute ms | peak MB | tets |")
     w("|---|---|---|---|---|---|---|---|---|---|")
     for r in main_rows:
+        if r.get("iteration_limit"):
+            continue  # the precomputed solve stopped early: its own table below
         choice = ("**%s** (reference)" % r["choice"]) if r["is_reference"] else r["choice"]
         w("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %d |" % (
             r["scene"], r["axis"], choice, fmt(r["max_mm"]), fmt(r["p95_mm"]), fmt(r["landmark_max_mm"]),
-            fmt(r["update_ms"]), fmt(r["precompute_ms"] if r["model"] == "LinearElastic" else None),
+            fmt(r["update_ms"]), fmt(r["precompute_ms"] if r["model"] == "LinearElastic" or
+                                     r.get("solver") == "Precomputed" else None),
             fmt(r["peak_mb"]), r["tets"]))
     w("")
     if no_result:
@@ -1029,6 +1290,8 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
                     for s, r in refs.items()) + ".")
         w("")
 
+    landmark_table(w, main_rows)
+    iteration_section(w, main_rows)
     w("## Discretization")
     w("")
     w("![skin error against CellSize and element order](plots/discretization.png)")
@@ -1048,22 +1311,30 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
         w("")
         subjects = [r for r in mesh if not r["is_reference"]]
         largest_falls = all(b["max_mm"] < a["max_mm"] for a, b in zip(subjects, subjects[1:]))
+        p95_falls = all(b["p95_mm"] < a["p95_mm"] for a, b in zip(subjects, subjects[1:]))
+        text = "The 95th-percentile skin error %s as the mesh refines (%s mm); the largest %s (%s mm)%s. " % (
+            "shrinks" if p95_falls else "does not shrink steadily",
+            " → ".join(fmt(r["p95_mm"]) for r in subjects),
+            "too" if largest_falls else "does not fall steadily",
+            " → ".join(fmt(r["max_mm"]) for r in subjects),
+            "" if largest_falls else ": it sits at a few skin nodes next to the cut, where which nodes are tied "
+            "to the segment or released changes with the mesh")
         if estimate is not None:
-            w("The 95th-percentile skin error falls with CellSize at an observed order p = %.2f (the two "
-              "next-finest meshes against the finest); by Richardson extrapolation the finest mesh's own "
-              "95th-percentile error is about %s mm%s." % (
-                  order, fmt(estimate), ", below every coarser mesh's" if estimate < min(
-                      r["p95_mm"] for r in subjects) else ", not below every coarser mesh's"))
+            text += ("It falls at an observed order p = %.2f (the two next-finest meshes against the finest); "
+                     "by Richardson extrapolation the finest mesh's own 95th-percentile error is about %s mm%s." % (
+                         order, fmt(estimate), ", below every coarser mesh's" if estimate < min(
+                             r["p95_mm"] for r in subjects) else ", not below every coarser mesh's"))
+        elif len(subjects) < 2:
+            text += "With one coarser mesh, the finest mesh's own error cannot be extrapolated."
         else:
-            w("**Caveat:** the 95th-percentile skin error falls towards the finest mesh, but more slowly than "
-              "any convergent series u(h) = u* + C h^p would (p > 0), so the finest mesh's own error cannot be "
-              "extrapolated: differences between CT meshes of the size of the next-finest mesh's error (%s mm) "
-              "may remain at the finest CellSize. Part of it is the model itself changing with the mesh: the "
-              "skin and bone surfaces move with SurfaceDistance, and which tissue nodes lie within the release "
-              "distance of the cut changes." % fmt(subjects[-1]["p95_mm"]))
-        w(" The largest error %s: it sits at a few skin nodes next to the cut, where which nodes are tied "
-          "to the segment or released changes with the mesh." % (
-              "falls too" if largest_falls else "does not fall steadily"))
+            text += ("**Caveat:** from the next-coarser mesh to the next-finest it falls more slowly than any "
+                     "convergent series u(h) = u* + C h^p (p > 0) would against a reference this close, so the "
+                     "finest mesh's own error cannot be extrapolated: differences of up to the next-finest "
+                     "mesh's error (%s mm) may remain at the finest CellSize. Part of it is the plan itself "
+                     "changing with the mesh: the skin and bone surfaces move with SurfaceDistance, and which "
+                     "tissue nodes are tied to the chin or released within the release distance of the cuts "
+                     "changes." % fmt(subjects[-1]["p95_mm"]))
+        w(text)
         w("")
     element = [r for r in main_rows if r["axis"] == "element"]
     if element:
@@ -1095,7 +1366,9 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
     w("| scene | " + " | ".join("≤ %g mm at the skin" % t for t in targets) + " |")
     w("|---|" + "---|" * len(targets))
     for scene in scenes:
-        candidates = [r for r in main_rows if r["scene"] == scene and r["axis"] in ("model", "mesh")]
+        # Not the solve stopped early: it is not the equilibrium of any model.
+        candidates = [r for r in main_rows if r["scene"] == scene and r["axis"] in ("model", "mesh")
+                      and not r.get("iteration_limit")]
         cells = []
         for t in targets:
             ok = [r for r in candidates if r["max_mm"] <= t]
@@ -1125,7 +1398,9 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
                 fmt(r["max_mm"]), fmt(r["p95_mm"]), fmt(r["update_ms"]), fmt(r["lifted_nodes"])))
         w("")
     w("Checks (`--check`; CTest runs them on the quick subset), on the 95th-percentile skin error: every "
-      "series exists; on the CT plan the error shrinks as the mesh refines and, where it can be "
+      "series exists, each with its errors at the soft-tissue landmarks (the runs stopped after k iterations "
+      "labelled unconverged); every configuration carries out the plan (moves the tissue by at least half the "
+      "reference's largest displacement); on the CT plan the error shrinks as the mesh refines and, where it can be "
       "extrapolated, the finest mesh's own error is below every coarser mesh's; the quadratic reference is closer than linear "
       "elements to a finer quadratic solve; the model and contact references ran the large-deformation "
       "model. The same checks reject the CT studies with reference and subject swapped. This run: %s." % (
@@ -1142,6 +1417,61 @@ def write_markdown(path, plan, rows, results, failures, args, seconds, has_solve
     w("")
     with open(path, "w") as f:
         f.write("\n".join(lines))
+
+
+def plot_iterations(plt, plot_dir, main_rows, scenes):
+    """The large-deformation solves' relative residual against iterations and against time (the
+    first solve's ConvergenceHistory: precomputed solid, Newton dashed), and the skin error of the
+    precomputed solve stopped after k iterations."""
+    model = [r for r in main_rows if r["axis"] == "model" and r.get("model") == "NeoHookean"]
+    if not any(r.get("iteration_limit") for r in model):
+        return
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.3))
+    for n, scene in enumerate(scenes):
+        colour = "C%d" % n
+        for r in model:
+            if r["scene"] != scene or r.get("iteration_limit") or not r["convergence"]:
+                continue
+            style = "-" if r.get("solver") == "Precomputed" else "--"
+            ms = [p[0] for p in r["convergence"]]
+            residual = [p[1] for p in r["convergence"]]
+            a.plot(range(1, len(residual) + 1), residual, style, color=colour, lw=1)
+            b.plot(ms, residual, style, color=colour, lw=1)
+        limited = sorted((r for r in model if r["scene"] == scene and r.get("iteration_limit")),
+                         key=lambda r: r["iteration_limit"])
+        if limited:
+            c.plot([r["iteration_limit"] for r in limited], [r["max_mm"] for r in limited], "o-", color=colour,
+                   label=scene + ": largest")
+            c.plot([r["iteration_limit"] for r in limited], [r["p95_mm"] for r in limited], "s:", color=colour,
+                   ms=4, label=scene + ": 95th percentile")
+    for axis in (a, b):
+        axis.set_yscale("log")
+        axis.set_ylabel("relative residual")
+        axis.grid(True, which="both", alpha=0.3)
+    a.set_xlabel("iterate (ConvergenceHistory entry)")
+    a.set_title("Residual against iterates")
+    b.set_xscale("log")
+    b.set_xlabel("time since the solve started (ms)")
+    b.set_title("Residual against time")
+    for n, scene in enumerate(scenes):
+        a.plot([], [], color="C%d" % n, label=scene)
+    a.plot([], [], "-", color="grey", label="precomputed (L-BFGS)")
+    a.plot([], [], "--", color="grey", label="Newton (reference)")
+    a.legend(fontsize=7)
+    c.set_xscale("log", base=2)
+    ks = sorted({r["iteration_limit"] for r in model if r.get("iteration_limit")})
+    c.set_xticks(ks)
+    c.set_xticklabels([str(k) for k in ks])
+    c.minorticks_off()
+    c.set_yscale("log")
+    c.set_xlabel("quasi-Newton iterations k (stopped there)")
+    c.set_ylabel("error at the skin against the reference (mm)")
+    c.set_title("Stopped after k iterations")
+    c.grid(True, which="both", alpha=0.3)
+    c.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(plot_dir, "large_deformation_iterations.png"), dpi=110)
+    plt.close(fig)
 
 
 def plot(plot_dir, rows):
@@ -1167,12 +1497,25 @@ def plot(plot_dir, rows):
             if key in seen:
                 continue
             seen.add(key)
+            if r.get("iteration_limit"):
+                continue
             ax.scatter(r["update_ms"], max(r["max_mm"], floor), color=colour, marker=markers[r["axis"]],
                        facecolors="none" if r["is_reference"] else colour, s=45)
+        # The precomputed solve stopped after k iterations: a line from k = 1 to the converged solve.
+        series = sorted((r for r in mine if r["axis"] == "model" and r.get("solver") == "Precomputed"),
+                        key=lambda r: r.get("iteration_limit") or 1e9)
+        if len(series) > 1:
+            ax.plot([r["update_ms"] for r in series], [max(r["max_mm"], floor) for r in series], color=colour,
+                    lw=0.8, marker=".", ms=5)
+            for r in series:
+                if r.get("iteration_limit"):
+                    ax.annotate(str(r["iteration_limit"]), (r["update_ms"], max(r["max_mm"], floor)), fontsize=6,
+                                color=colour, textcoords="offset points", xytext=(2, 2))
         ax.plot([], [], color=colour, marker="o", linestyle="", label=scene)
     for axis, m in markers.items():
         ax.plot([], [], color="grey", marker=m, linestyle="", label="axis: " + axis)
     ax.plot([], [], color="grey", marker="o", markerfacecolor="none", linestyle="", label="reference (0 mm drawn at %g)" % floor)
+    ax.plot([], [], color="grey", marker=".", lw=0.8, label="precomputed solve stopped after k iterations")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.axhline(1.0, color="grey", lw=0.6, ls=":")
@@ -1185,6 +1528,8 @@ def plot(plot_dir, rows):
     fig.tight_layout()
     fig.savefig(os.path.join(plot_dir, "model_error_vs_time.png"), dpi=110)
     plt.close(fig)
+
+    plot_iterations(plt, plot_dir, main_rows, scenes)
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
     mesh = [r for r in mesh_series(main_rows) if not r["is_reference"]]
