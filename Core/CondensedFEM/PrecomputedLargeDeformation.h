@@ -28,22 +28,20 @@
 // with no change left: the constrained equilibrium Newton finds (the tests compare them).
 //
 // Warm start: a solve may start from the last converged state (only the prescribed values or
-// loads changed); the prescribed values and loads then go from that state's to the new ones.
-// A sub-step that inverts a cell or does not converge is halved. When the solve does not converge
-// within its bounds it falls back to Newton (SolveLargeDeformation) and says so in the report; it
-// never returns an unconverged answer.
+// loads changed); the prescribed values and loads then go from that state's to the new ones. A
+// move back towards rest starts from rest with the rest factor instead. A sub-step that inverts a
+// cell or does not converge is halved. When the solve does not converge within its bounds it falls
+// back to Newton (SolveLargeDeformation) and says so in the report; it never returns an unconverged
+// answer unless the caller set an iteration limit, and then it says so.
 //
-// Why L-BFGS with the factor (Benchmarks/results/large_deformation_drag.txt has the figures,
-// measured through pvpython on the Badin face's osteotomy scenes with lift-off, on a heavily loaded
-// 2-core machine): an iteration costs one force evaluation and one substitution, no tangent and no
-// factorization. From a converged state with the refreshed factor a 0.5 mm drag step took 4-8
-// iterations (Le Fort I: 1.1 s against Newton's 35 s, side by side), because the predictor with
-// that factor is Newton's own first step. From rest with the rest-pose factor the whole 5 mm move
-// took 80-99 iterations and 2 refactorizations (Le Fort I: 17 s against Newton's 32 s): the rest
-// tangent is a poor model of strains near 100 %, and each lift-off change restarts the history. A
-// Newton- Krylov variant (the tangent assembled, CG preconditioned by the same factor) was not
-// measured: it pays the tangent's element matrices and assembly every outer iteration on top of the
-// same substitutions.
+// Why L-BFGS with the factor (the figures: BENCHMARKS.md, "large deformations"): an iteration costs
+// one force evaluation and one substitution, no tangent and no factorization, against Newton's
+// numeric factorization per iteration. From a converged state with the refreshed factor a small
+// drag step takes a few iterations, because the predictor with that factor is Newton's own first
+// step. From rest the rest tangent is a poor model of strains near 100 % and each lift-off change
+// restarts the history, so a whole move takes tens of iterations and a refactorization or two. A
+// Newton-Krylov variant (the tangent assembled, CG preconditioned by the same factor) would pay the
+// tangent's element matrices and assembly every outer iteration on top of the same substitutions.
 #include "CondensedFEM/CondensedFEM.h"
 #include "CondensedFEM/LargeDeformation.h"
 
@@ -118,11 +116,11 @@ struct PrecomputedLargeDeformationReport {
 
 // Solves for `input` (as SolveLargeDeformation) with the precomputed system, from `warm` when it
 // is a converged state of this system and the new targets and loads are nearer it than the rest
-// state (then with the latest background factor), else from the rest state with the rest factor. `converged` (optional) receives
-// the converged state (invalid after a fallback to Newton or a stop at the limit).
-// `iterationLimit` > 0 stops after that many quasi-Newton iterations and returns the iterate
-// unconverged, flagged in report.stoppedAtLimit (no fallback); an error if the whole prescribed
-// move was not yet applied then.
+// state (then with the latest background factor), else from the rest state with the rest factor.
+// `converged` (optional) receives the converged state (invalid after a fallback to Newton or a stop
+// at the limit). `iterationLimit` > 0 stops after that many quasi-Newton iterations and returns the
+// iterate unconverged, flagged in report.stoppedAtLimit (no fallback); an error if the whole
+// prescribed move was not yet applied then.
 Status SolvePrecomputedLargeDeformation(LargeDeformationSystem& system, const SolveInput& input,
                                         const LargeDeformationState* warm, SolveResult& result,
                                         PrecomputedLargeDeformationReport& report,
