@@ -25,18 +25,14 @@ namespace faceplan {
 namespace large_deformation {
 
 bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
-              std::vector<double>* packed) {
+              std::vector<double>* packed, EvaluationScratch* scratch) {
   const TetMesh& mesh = *st.mesh;
   const Eigen::Index m = mesh.numTets();
-  // Kept per thread between calls: a solve evaluates many times, and fresh megabytes each time
-  // cost more in page faults than the element loop itself.
-  // (Named through references: a lambda run on another thread would see that thread's own.)
-  thread_local std::vector<double> energyBuffer;
-  thread_local std::vector<ElementVector> forceBuffer;
-  thread_local std::vector<char> validBuffer;
-  std::vector<double>& energy = energyBuffer;
-  std::vector<ElementVector>& force = forceBuffer;
-  std::vector<char>& valid = validBuffer;
+  EvaluationScratch local;
+  EvaluationScratch& buffers = scratch ? *scratch : local;
+  std::vector<double>& energy = buffers.energy;
+  std::vector<ElementVector>& force = buffers.force;
+  std::vector<char>& valid = buffers.valid;
   energy.resize(static_cast<size_t>(m));
   force.resize(static_cast<size_t>(m));
   valid.assign(static_cast<size_t>(m), 1);
@@ -428,7 +424,7 @@ public:
 private:
   bool evaluate(const Eigen::VectorXd& u, Evaluation& ev, bool withTangent) {
     StageClock clock;
-    const bool ok = Evaluate(*pb_.st, u, ev, withTangent ? &packed_ : nullptr);
+    const bool ok = Evaluate(*pb_.st, u, ev, withTangent ? &packed_ : nullptr, &scratch_);
     timings_[Stage::ElementStiffness].ms += clock.lapMs();
     if (ok && withTangent) {
       AssembleFromPacked(packed_.data(), pb_.pattern);
@@ -465,6 +461,7 @@ private:
   LargeDeformationReport& report_;
   StageTimings& timings_;
   std::vector<double> packed_;
+  EvaluationScratch scratch_;
   int lastIterations_ = 0;
   double lastResidual_ = 0.0;
   StageClock clock_;

@@ -66,8 +66,15 @@ struct Evaluation {
   double energy = 0.0;
   Eigen::VectorXd force;
 };
+// Per-cell buffers a solver keeps for its evaluations: a solve evaluates many times, and fresh
+// megabytes each time cost more in page faults than the element loop itself. Optional.
+struct EvaluationScratch {
+  std::vector<double> energy;
+  std::vector<ElementVector> force;
+  std::vector<char> valid;
+};
 bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
-              std::vector<double>* packed);
+              std::vector<double>* packed, EvaluationScratch* scratch = nullptr);
 
 void ZeroPrescribed(const std::vector<char>& prescribed, Eigen::VectorXd& v);
 

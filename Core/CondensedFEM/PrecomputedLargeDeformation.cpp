@@ -285,7 +285,7 @@ private:
   bool evaluate(const Eigen::VectorXd& u, Evaluation& ev) {
     StageClock clock;
     ++report_.evaluations;
-    const bool ok = Evaluate(st_, u, ev, nullptr);
+    const bool ok = Evaluate(st_, u, ev, nullptr, &scratch_);
     timings_[Stage::ElementStiffness].ms += clock.lapMs();
     return ok;
   }
@@ -459,6 +459,7 @@ private:
   PrecomputedLargeDeformationReport& report_;
   StageTimings& timings_;
   std::shared_ptr<const TangentFactor> factor_;
+  EvaluationScratch scratch_;
   std::deque<Eigen::VectorXd> s_, y_;
   std::deque<double> rho_;
   int sinceFactor_ = 0;
