@@ -35,9 +35,9 @@ bool SameMaterials(const Materials& a, const Materials& b) {
 
 Status TissueCache::update(vtkUnstructuredGrid* tissue, const Settings& settings) {
   DataStamp stamp = StampOf(tissue);
-  const MaterialSettings materialSettings{settings.youngsModulus, settings.poissonRatio,
-                                          settings.density, settings.lengthUnit,
-                                          settings.useCellMaterials};
+  const MaterialSettings materialSettings{settings.youngsModulus,    settings.poissonRatio,
+                                          settings.density,          settings.lengthUnit,
+                                          settings.useCellMaterials, settings.lipSeal};
   if (valid_ && stamp == stamp_ && materialSettings == materialSettings_)
     return Status::Ok();
 
@@ -47,6 +47,18 @@ Status TissueCache::update(vtkUnstructuredGrid* tissue, const Settings& settings
   if (status) {
     ToTetMesh(tissue, mesh);
     status = ToMaterials(tissue, settings, materials);
+  }
+  // LipSeal: the facing surfaces within the gap tied by bridging cells, which the solvers take as
+  // tissue; the output keeps the input's cells.
+  LipSealInfo lipSeal;
+  if (status && settings.lipSeal > 0.0) {
+    LipSealOptions options;
+    options.gap = settings.lipSeal;
+    TetMesh sealed;
+    Materials sealedMaterials;
+    status = AddLipSeal(mesh, materials, options, sealed, sealedMaterials, lipSeal);
+    mesh = std::move(sealed);
+    materials = std::move(sealedMaterials);
   }
   if (!status) {
     valid_ = false;
@@ -65,6 +77,7 @@ Status TissueCache::update(vtkUnstructuredGrid* tissue, const Settings& settings
     materials_ = std::move(materials);
     ++generation_;
   }
+  lipSeal_ = lipSeal;
   stamp_ = std::move(stamp);
   materialSettings_ = materialSettings;
   valid_ = true;

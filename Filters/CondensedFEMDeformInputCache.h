@@ -16,6 +16,7 @@
 #include "FacePlanDataStamp.h"
 
 #include "Common/Status.h"
+#include "Mesh/LipSeal.h"
 #include "Mesh/TetMesh.h"
 
 #include "vtkType.h"
@@ -37,16 +38,19 @@ public:
   const TetMesh& mesh() const { return mesh_; }
   const Materials& materials() const { return materials_; }
   const TissueBoundary& boundary() const { return boundary_; }
+  // With LipSeal, mesh() and materials() carry the bridges after the tissue's own cells.
+  const LipSealInfo& lipSeal() const { return lipSeal_; }
   unsigned long generation() const { return generation_; }
 
 private:
   struct MaterialSettings {
     double youngsModulus, poissonRatio, density, lengthUnit;
     bool useCellMaterials;
+    double lipSeal;
     bool operator==(const MaterialSettings& o) const {
       return youngsModulus == o.youngsModulus && poissonRatio == o.poissonRatio &&
              density == o.density && lengthUnit == o.lengthUnit &&
-             useCellMaterials == o.useCellMaterials;
+             useCellMaterials == o.useCellMaterials && lipSeal == o.lipSeal;
     }
   };
   bool valid_ = false;
@@ -55,6 +59,7 @@ private:
   TetMesh mesh_;
   Materials materials_;
   TissueBoundary boundary_;
+  LipSealInfo lipSeal_;
   unsigned long generation_ = 0;
 };
 

@@ -31,6 +31,7 @@ struct Settings {
   int largeDeformationSolver = 0; // LargeDeformationSolverChoice
   int iterationLimit = 0;         // Precomputed: stop after this many iterations (0: none)
   bool liftOff = false;
+  double lipSeal = 0.0; // mesh units; 0 ties no facing tissue surfaces (Core/Mesh/LipSeal.h)
 
   OutputMode output() const { return static_cast<OutputMode>(outputMode); }
   MethodChoice methodChoice() const { return static_cast<MethodChoice>(method); }

@@ -95,6 +95,9 @@ Status ValidateProperties(const Settings& s) {
   if (!(s.releaseDistance >= 0.0) || !std::isfinite(s.releaseDistance))
     return Error("ReleaseDistance must be zero or positive and finite (got ", s.releaseDistance,
                  ")");
+  if (!(s.lipSeal >= 0.0) || !std::isfinite(s.lipSeal))
+    return Error("LipSeal must be zero or a positive, finite gap in mesh units (got ", s.lipSeal,
+                 ")");
   if (s.useGravity) {
     if (!(s.density >= 0.0) || !std::isfinite(s.density))
       return Error("Density must be zero or positive and finite with UseGravity on (got ",

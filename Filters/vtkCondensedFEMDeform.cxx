@@ -220,6 +220,9 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
     return false;
   }
   const TissueBoundary& boundary = cache.tissue.boundary();
+  if (settings.lipSeal > 0.0 && cache.tissue.lipSeal().bridges == 0)
+    warn("LipSeal: no facing tissue surfaces within " + std::to_string(settings.lipSeal) +
+         " mesh units, so nothing is tied");
   this->UpdateProgress(0.05);
 
   // 3. contact, rebuilt when the tissue, the distance, the release distance or the undeformed
@@ -327,6 +330,8 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   AddFieldData(outcome, settings, output);
   faceplan::fielddata::AddScalar(output->GetFieldData(), "ReleasedNodes",
                                  static_cast<double>(ReleasedCount(contact)));
+  faceplan::fielddata::AddScalar(output->GetFieldData(), "LipSealBridges",
+                                 static_cast<double>(cache.tissue.lipSeal().bridges));
   BuildStageTable(outcome, table);
   this->UpdateProgress(1.0);
   return true;
@@ -353,6 +358,7 @@ Settings vtkCondensedFEMDeform::CurrentSettings() const {
   s.largeDeformationSolver = this->LargeDeformationSolver;
   s.iterationLimit = this->QuasiNewtonIterationLimit;
   s.liftOff = this->LiftOff;
+  s.lipSeal = this->LipSeal;
   s.verify = this->Verify;
   return s;
 }
@@ -378,5 +384,6 @@ void vtkCondensedFEMDeform::PrintSelf(ostream& os, vtkIndent indent) {
      << indent << "LargeDeformationSolver: " << this->LargeDeformationSolver << "\n"
      << indent << "QuasiNewtonIterationLimit: " << this->QuasiNewtonIterationLimit << "\n"
      << indent << "LiftOff: " << this->LiftOff << "\n"
+     << indent << "LipSeal: " << this->LipSeal << "\n"
      << indent << "Verify: " << this->Verify << "\n";
 }

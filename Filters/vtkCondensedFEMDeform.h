@@ -186,6 +186,16 @@ public:
   ///@}
 
   ///@{
+  /// Closed lips: the tissue's facing boundary surfaces (the upper and lower lip across the oral
+  /// fissure) within this gap (mesh units) are tied to each other, each face to the nearest node
+  /// facing it, by bridging cells 1000 times as stiff as the tissue (Core/Mesh/LipSeal.h). The
+  /// output keeps the input's cells; field data `LipSealBridges` counts the ties. 0 (default) ties
+  /// nothing.
+  vtkSetMacro(LipSeal, double);
+  vtkGetMacro(LipSeal, double);
+  ///@}
+
+  ///@{
   /// Tied tissue nodes within this distance (mesh units) of a cut line or cut face (bone points of
   /// another SegmentId) or of the ROI's boundary (the other side of ROIMask) are released: they
   /// become free nodes, as when the surgeon detaches the tissue there. 0 (default) releases none.
@@ -236,6 +246,7 @@ protected:
   int LargeDeformationSolver = PRECOMPUTED;
   int QuasiNewtonIterationLimit = 0;
   bool LiftOff = false;
+  double LipSeal = 0.0;
 
 private:
   vtkCondensedFEMDeform(const vtkCondensedFEMDeform&) = delete;
