@@ -18,14 +18,24 @@ SCENES = {
 }
 
 
+# Closed lips (CondensedFEMDeform's LipSeal, mm). The Badin face is meshed with the jaw open (the
+# incisal edges 4.4 mm apart vertically) and the lips 0.6-2.4 mm apart across the oral fissure; in
+# occlusion, where plans are made and the clinical studies' cephalograms are taken, these lips are
+# closed. 2.5 mm ties the whole fissure (its widest facing distance is 2.4 mm, at the midline) and
+# nothing else on the face (docs/CLINICAL.md, section 5).
+LIP_SEAL = 2.5
+
+
 def configure_contact(fem):
     """Tissue contact that matches the operation: tied to bone (the segment carries its tissue
-    along), free where the surgeon detached it (the Released array of the operation preset) and
-    sliding over the teeth (ContactModel ByArray with the preset's Sliding array). Returns what was
-    set, for the printed summary."""
+    along), free where the surgeon detached it (the Released array of the operation preset),
+    sliding over the teeth (ContactModel ByArray with the preset's Sliding array), and the lips
+    closed on each other (LipSeal). Returns what was set, for the printed summary."""
     fem.ContactModel = "ByArray"
     fem.ReleaseDistance = 0.0
-    return ["ContactModel=ByArray (Sliding on the teeth)", "Released where degloved"]
+    fem.LipSeal = LIP_SEAL
+    return ["ContactModel=ByArray (Sliding on the teeth)", "Released where degloved",
+            "LipSeal=%g mm (closed lips)" % LIP_SEAL]
 
 
 def configure_model(fem):
