@@ -21,6 +21,10 @@ from faceplan_test_util import ErrorCatcher, WarningCatcher, check, fetch, finis
 LoadPlugin(sys.argv[1])
 tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], "lefort1")
 osteotomy_scenes.configure_contact(fem)
+# The solver contracts on the open lips: the scenes' LipSeal adds bridges 1000 times as stiff as the
+# tissue, with which the two solvers' converged results agree to 2e-7 rather than 1e-8 and the first
+# Precomputed iterate is still a load step (TestCondensedFEMDeformLipSeal covers the sealed scene).
+fem.LipSeal = 0.0
 fem.OutputMode = "Surface"
 
 
