@@ -123,10 +123,16 @@ for r in range(table.GetNumberOfRows()):
     print("  %-18s %10.3f ms  reused=%d" % (table.GetValue(r, 0).ToString(), table.GetValue(r, 1).ToDouble(),
                                            table.GetValue(r, 2).ToInt()))
 strain = fd.GetArray("LargestStrain")
-print("largest strain: %.1f %% (principal Green-Lagrange, %s model; %d load steps, %d Newton iterations, "
-      "smallest volume ratio %.2f, %d tissue nodes lifted off the teeth)" % (
+# The iterations the solver that ran reports: Newton's (LoadSteps, NewtonIterations) or the
+# Precomputed solver's (QuasiNewtonIterations).
+solver = fd.GetAbstractArray("LargeDeformationSolver")
+iterations = ", ".join("%d %s" % (fd.GetArray(name).GetValue(0), label) for name, label in (
+    ("LoadSteps", "load steps"), ("NewtonIterations", "Newton iterations"),
+    ("QuasiNewtonIterations", "quasi-Newton iterations")) if fd.GetArray(name) is not None)
+print("largest strain: %.1f %% (principal Green-Lagrange, %s model, %s solver; %s; smallest volume ratio %.2f, "
+      "%d tissue nodes lifted off the teeth)" % (
           100.0 * strain.GetValue(0), fd.GetAbstractArray("Model").GetValue(0),
-          fd.GetArray("LoadSteps").GetValue(0), fd.GetArray("NewtonIterations").GetValue(0),
+          solver.GetValue(0) if solver is not None else "linear", iterations,
           fd.GetArray("SmallestVolumeRatio").GetValue(0), fd.GetArray("LiftedNodes").GetValue(0)))
 landmarks = paraview.simple.FacialLandmarks(Input=fem, Bone=skeleton)  # the bands of the preset's Operation
 landmarks.UpdatePipeline()
