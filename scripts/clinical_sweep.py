@@ -2,9 +2,10 @@
 """Soft:hard movement ratios of FacePlan's predictions over a sweep of plans, against the published
 clinical bands (docs/CLINICAL.md). Each operation is the model a user gets from Osteotomy's Operation
 preset (scripts/osteotomy_scenes.py: the preset's cut, Released and Sliding; ContactModel ByArray;
-Model NeoHookean with LiftOff), moved by advancements of 2-10 mm, setbacks, impactions and small
-rotations; FacialLandmarks measures the landmarks. Writes <out>/sweep.csv and <out>/ratios.png
-(ratio against movement, the bands shaded) and prints the table.
+LipSeal, the lips closed; Model NeoHookean with LiftOff), moved by advancements of 2-10 mm,
+setbacks, impactions and small rotations; FacialLandmarks measures the landmarks. Writes
+<out>/sweep.csv and <out>/ratios.png (ratio against movement, the bands shaded) and prints the
+table.
 
     pvpython scripts/clinical_sweep.py <FacePlan.so> <Data dir> <out dir> [--linear] [--quick]
 """
