@@ -7,6 +7,7 @@
 #include "Mesh/InputValidation.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/FillReducingOrdering.h"
+#include "SparseSolver/SinglePrecisionFactor.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,15 +26,19 @@ namespace {
 // columns zero, their diagonal kept), and the unpinned tangent for the predictor's products.
 struct TangentFactor {
   CholmodFactor factor;
+  SinglePrecisionFactor single; // empty unless options.singlePrecisionFactor
   SparseMatrix tangent;
+  // The state it was made at, its contact and its internal force: a predictor may start there.
+  Eigen::VectorXd state, force;
+  std::vector<char> prescribed;
 };
 
 // Assembles the tangent at u into `pattern` and factors it. False (with a message) when a cell is
 // inverted or the pinned tangent is not positive definite.
 Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
                      AssemblyPattern& pattern, const Eigen::VectorXd& u,
-                     const std::vector<char>& prescribed, std::shared_ptr<TangentFactor>& out,
-                     StageTimings* timings) {
+                     const std::vector<char>& prescribed, bool singlePrecision,
+                     std::shared_ptr<TangentFactor>& out, StageTimings* timings) {
   StageClock clock;
   Evaluation ev;
   std::vector<double> packed;
@@ -44,6 +49,9 @@ Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
   AssembleFromPacked(packed.data(), pattern);
   auto made = std::make_shared<TangentFactor>();
   made->tangent = pattern.upper;
+  made->state = u;
+  made->force = std::move(ev.force);
+  made->prescribed = prescribed;
   std::vector<int> entries, diagonal;
   FindPinnedEntries(pattern.upper, prescribed, entries, diagonal);
   double* values = pattern.upper.valuePtr();
@@ -57,6 +65,8 @@ Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
   Status status = made->factor.analyze(pattern.upper, &ordering);
   if (status)
     status = made->factor.factorize(pattern.upper);
+  if (status && singlePrecision)
+    status = made->single.assign(made->factor);
   if (timings)
     (*timings)[Stage::Factorization].ms += clock.lapMs();
   if (!status)
@@ -105,12 +115,15 @@ public:
   }
 
   // Queues a refactorization at (u, prescribed); a newer request replaces a queued one.
-  void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed) {
+  // ahead: a state to factor at instead, if no cell is inverted there.
+  void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed,
+                              const Eigen::VectorXd* ahead = nullptr) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (stop_)
         return;
       pendingU_ = u;
+      pendingAhead_ = ahead ? *ahead : Eigen::VectorXd();
       pendingPrescribed_ = prescribed;
       pending_ = true;
       if (!worker_.joinable()) {
@@ -142,14 +155,20 @@ private:
       if (stop_)
         return;
       const Eigen::VectorXd u = std::move(pendingU_);
+      const Eigen::VectorXd ahead = std::move(pendingAhead_);
       const std::vector<char> prescribed = std::move(pendingPrescribed_);
       pending_ = false;
       busy_ = true;
       lock.unlock();
       std::shared_ptr<TangentFactor> made;
       // A tangent that is not positive definite keeps the previous factor.
-      const Status status =
-          FactorTangent(*structure, ordering, pattern, u, prescribed, made, nullptr);
+      Status status = Status::Error("no state ahead");
+      if (ahead.size() == u.size())
+        status = FactorTangent(*structure, ordering, pattern, ahead, prescribed,
+                               options.singlePrecisionFactor, made, nullptr);
+      if (!status)
+        status = FactorTangent(*structure, ordering, pattern, u, prescribed,
+                               options.singlePrecisionFactor, made, nullptr);
       lock.lock();
       if (status) {
         factor_ = std::move(made);
@@ -166,7 +185,7 @@ private:
   std::thread worker_;
   std::shared_ptr<const TangentFactor> factor_;
   AssemblyPattern workerPattern_; // the worker's only
-  Eigen::VectorXd pendingU_;
+  Eigen::VectorXd pendingU_, pendingAhead_;
   std::vector<char> pendingPrescribed_;
   bool pending_ = false, busy_ = false, stop_ = false;
   int backgroundCount_ = 0;
@@ -212,8 +231,8 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   sys->timings[Stage::Reordering].ms = clock.lapMs();
   const Eigen::VectorXd rest = Eigen::VectorXd::Zero(3 * st.n);
   std::shared_ptr<TangentFactor> factor;
-  status = FactorTangent(st, sys->ordering, sys->solvePattern, rest, st.prescribed, factor,
-                         &sys->timings);
+  status = FactorTangent(st, sys->ordering, sys->solvePattern, rest, st.prescribed,
+                         options.singlePrecisionFactor, factor, &sys->timings);
   if (!status)
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
@@ -225,6 +244,9 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   out = std::move(sys);
   return Status::Ok();
 }
+
+// A warm solve whose prescribed change is at most this fraction of the move is a drag step.
+constexpr double kDragFraction = 1.0;
 
 // Why a sub-step failed: a smaller one may mend it, or the solve falls back.
 enum class Failure { None, Smaller, Fallback, Stopped };
@@ -256,9 +278,10 @@ public:
         return f;
 
       const std::vector<char> before = pb_.prescribed;
-      const bool changed = UpdateContact(pb_, u, 1.0);
+      const bool changed = UpdateContact(pb_, u, 1.0, &lastForce_);
       if (!changed && tolerance == tight)
         return Failure::None;
+      bool moved = false;
       if (changed) {
         ++report_.contactUpdates;
         if (++updates > sys_.options.maxContactUpdates) {
@@ -266,12 +289,19 @@ public:
           return Failure::Smaller;
         }
         for (int dof : st_.liftOffDofs)
-          if (pb_.prescribed[dof] && !before[dof])
+          if (pb_.prescribed[dof] && !before[dof] && u[dof] != pb_.target[dof]) {
             u[dof] = pb_.target[dof];
+            moved = true;
+          }
         clearHistory();
         tolerance = std::max(tight, kSettleTolerance);
       } else {
         tolerance = tight;
+      }
+      if (!moved) { // the converged evaluation still holds at u
+        cached_.energy = lastEnergy_;
+        cached_.force = lastForce_;
+        haveCached_ = true;
       }
     }
   }
@@ -293,22 +323,43 @@ private:
   // H0 r = P F^-1 P r.
   Eigen::VectorXd applyFactor(const Eigen::VectorXd& r) {
     StageClock clock;
-    Eigen::MatrixXd x;
-    // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
-    // whose thread hand-offs cost more than they save (most of all on a loaded machine).
-    ScopedBlasThreads serial(1, BlasScope::Pinned);
-    const Status solved = factor_->factor.solveConcurrently(r, x);
+    Eigen::VectorXd out;
+    Status solved;
+    if (sys_.options.singlePrecisionFactor) {
+      solved = factor_->single.solve(r, out);
+    } else {
+      Eigen::MatrixXd x;
+      // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
+      // whose thread hand-offs cost more than they save (most of all on a loaded machine).
+      ScopedBlasThreads serial(1, BlasScope::Pinned);
+      solved = factor_->factor.solveConcurrently(r, x);
+      if (solved)
+        out = x.col(0);
+    }
     ++report_.factorSolves;
     timings_[Stage::Solve].ms += clock.lapMs();
     if (!solved)
       return Eigen::VectorXd();
-    Eigen::VectorXd out = x.col(0);
     ZeroPrescribed(pb_.prescribed, out);
     return out;
   }
 
-  // The prescribed DOFs go to their targets and the free ones follow the factored tangent.
+  // The prescribed DOFs go to their targets and the free ones follow the factored tangent. From the
+  // factor's own state when its prescribed values are nearer the targets than u's (a drag's
+  // factor, made one step ahead): the predictor is then Newton's step there.
   bool predict(Eigen::VectorXd& u) {
+    if (factor_->state.size() == u.size() && factor_->prescribed == pb_.prescribed) {
+      double fromU = 0.0, fromFactor = 0.0;
+      for (Eigen::Index i = 0; i < u.size(); ++i)
+        if (pb_.prescribed[i]) {
+          fromU += (pb_.target[i] - u[i]) * (pb_.target[i] - u[i]);
+          fromFactor += (pb_.target[i] - factor_->state[i]) * (pb_.target[i] - factor_->state[i]);
+        }
+      if (fromFactor < fromU) {
+        u = factor_->state;
+        startForce_ = &factor_->force;
+      }
+    }
     Eigen::VectorXd move = Eigen::VectorXd::Zero(u.size());
     for (Eigen::Index i = 0; i < u.size(); ++i)
       if (pb_.prescribed[i]) {
@@ -367,7 +418,8 @@ private:
     if (report_.refactorizations >= sys_.options.maxRefactorizations)
       return false;
     std::shared_ptr<TangentFactor> made;
-    if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed, made, &timings_))
+    if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed,
+                       sys_.options.singlePrecisionFactor, made, &timings_))
       return false;
     factor_ = std::move(made);
     ++report_.refactorizations;
@@ -388,6 +440,7 @@ private:
       lastResidual_ = b.scale > 0.0 ? b.residual.norm() / b.scale : 0.0;
       report_.convergence.emplace_back(clock_.elapsedMs(), lastResidual_);
       if (b.residual.norm() <= tolerance * b.scale) {
+        lastEnergy_ = ev.energy;
         lastForce_ = std::move(ev.force);
         return Failure::None;
       }
@@ -467,6 +520,7 @@ private:
   Evaluation cached_; // the predictor's accepted state
   bool haveCached_ = false;
   const Eigen::VectorXd* startForce_ = nullptr;
+  double lastEnergy_ = 0.0;   // at the last converged state
   Eigen::VectorXd lastForce_; // at the last converged state
   StageClock clock_;
 };
@@ -588,8 +642,20 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     result.timings[Stage::Total].ms = total.elapsedMs();
     return Status::Ok(); // not a converged state: nothing to refactor at or to start from
   }
-  if (sys.options.backgroundRefactorization)
-    sys.requestRefactorization(u, pb.prescribed);
+  if (sys.options.backgroundRefactorization) {
+    // A drag: a warm solve whose move changed little. Its next edit is most likely the same change
+    // again, so the tangent is factored there, one step ahead, where the next solve's iterates
+    // will be (any positive definite factor serves as the initial Hessian; this one is the
+    // nearest to the next solve's).
+    const bool drag = report.warmStarted && fullLoad == warm->load &&
+                      (fullTarget - warm->target).norm() <= kDragFraction * fullTarget.norm();
+    if (drag && sys.options.factorAhead) {
+      const Eigen::VectorXd ahead = 2.0 * u - warm->u;
+      sys.requestRefactorization(u, pb.prescribed, &ahead);
+    } else {
+      sys.requestRefactorization(u, pb.prescribed);
+    }
+  }
   if (converged) {
     converged->system = &sys;
     converged->u = std::move(u);

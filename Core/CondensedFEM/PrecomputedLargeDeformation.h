@@ -66,6 +66,12 @@ struct PrecomputedLargeDeformationOptions {
   int maxContactUpdates = 100;
   // After a converged solve, factor the tangent at its state on a background thread.
   bool backgroundRefactorization = true;
+  // After a drag step (a warm solve with a small change of the move), factor where the same
+  // change again would lead (2 u - u_before) rather than at u.
+  bool factorAhead = true;
+  // The initial inverse Hessian from a single-precision copy of the factor (half the bytes a
+  // substitution reads); the residual, and so the result, stay double precision.
+  bool singlePrecisionFactor = true;
   // When the solve does not converge: Newton (true) or an error (false, for tests).
   bool fallBackToNewton = true;
   LargeDeformationOptions newton; // the fallback's (slidingLiftOff and tolerance are set from here)
