@@ -225,6 +225,47 @@ TEST(PrecomputedLargeDeformation, ADragOnTheShellEqualsTheColdSolve) {
   EXPECT_FALSE(report.warmStarted);
 }
 
+TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations) {
+  // The same change of the move, step after step, each refactorization awaited: with the tangent
+  // factored where the next step would lead (and the predictor starting there) every step equals
+  // the cold solve and the steps after the first take fewer iterations than with the tangent
+  // factored at the converged state.
+  const PrecomputeRequest request = ShellRequest(4, 2);
+  // The cold solves on a system of their own: their refactorizations must not replace the drag's.
+  PrecomputedLargeDeformationOptions coldOptions;
+  coldOptions.backgroundRefactorization = false;
+  auto coldSystem = Precomputed(request, coldOptions);
+  ASSERT_TRUE(coldSystem);
+  int iterations[2] = {0, 0};
+  for (int ahead = 0; ahead < 2; ++ahead) {
+    PrecomputedLargeDeformationOptions options;
+    options.factorAhead = ahead == 1;
+    auto system = Precomputed(request, options);
+    ASSERT_TRUE(system);
+    LargeDeformationState state;
+    SolveInput input;
+    input.recoverInterior = true;
+    for (int step = 0; step < 6; ++step) {
+      input.movableDisplacement = SmoothRoiField(request, 3.0 + 0.25 * step);
+      SolveResult warm, cold;
+      PrecomputedLargeDeformationReport report, coldReport;
+      LargeDeformationState next;
+      ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, &state, warm, report, &next).ok);
+      EXPECT_FALSE(report.fellBack) << report.fallbackReason;
+      WaitForRefactorization(*system);
+      state = next;
+      if (step >= 2)
+        iterations[ahead] += report.iterations;
+      ASSERT_TRUE(
+          SolvePrecomputedLargeDeformation(*coldSystem, input, nullptr, cold, coldReport).ok);
+      EXPECT_LT(RelativeMaxNodeDifference(warm.allDisplacement, cold.allDisplacement), kAgreement)
+          << "step " << step << (ahead ? ", factored ahead" : "");
+    }
+  }
+  EXPECT_LT(iterations[1], iterations[0])
+      << "factored ahead: " << iterations[1] << " iterations, at the state: " << iterations[0];
+}
+
 TEST(PrecomputedLargeDeformation, AMoveThatMustInvertCellsIsAClearError) {
   // The plate pushed 1.5 block heights down: no state without inverted cells reaches it. The
   // precomputed solve falls back to Newton, whose load steps cannot go further either.
