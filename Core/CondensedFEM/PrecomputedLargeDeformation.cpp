@@ -9,6 +9,7 @@
 #include "SparseSolver/FillReducingOrdering.h"
 #include "SparseSolver/SinglePrecisionFactor.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
@@ -195,7 +196,8 @@ namespace {
 
 Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
   if (!(o.tolerance > 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
-      o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0)
+      o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
+      o.maxCoupledReleases < 0)
     return Status::Error("invalid large-deformation options");
   return Status::Ok();
 }
@@ -288,6 +290,17 @@ public:
           why = "the lift-off contact did not settle";
           return Failure::Smaller;
         }
+        {
+          int rel = 0, pin = 0, relF = 0, pinF = 0;
+          for (int dof : st_.liftOffDofs) {
+            rel += before[dof] && !pb_.prescribed[dof];
+            pin += !before[dof] && pb_.prescribed[dof];
+            relF += factor_->prescribed[dof] && !pb_.prescribed[dof];
+            pinF += !factor_->prescribed[dof] && pb_.prescribed[dof];
+          }
+          fprintf(stderr, "CONTACTDBG released %d pinned %d; vs factor released %d pinned %d\n",
+                  rel, pin, relF, pinF);
+        }
         for (int dof : st_.liftOffDofs)
           if (pb_.prescribed[dof] && !before[dof] && u[dof] != pb_.target[dof]) {
             u[dof] = pb_.target[dof];
@@ -320,8 +333,81 @@ private:
     return ok;
   }
 
-  // H0 r = P F^-1 P r.
+  // H0 r: P F^-1 P r, with the few DOFs that lift-off has freed since the factor was made
+  // coupled back in (see prepareReleased).
   Eigen::VectorXd applyFactor(const Eigen::VectorXd& r) {
+    prepareReleased();
+    if (released_.dofs.empty())
+      return substitute(r);
+    const ReleasedDofs& c = released_;
+    Eigen::VectorXd b = r;
+    for (int d : c.dofs)
+      b[d] = 0.0;
+    Eigen::VectorXd x = substitute(b);
+    if (x.size() == 0)
+      return x;
+    Eigen::VectorXd xr(static_cast<Eigen::Index>(c.dofs.size()));
+    for (size_t k = 0; k < c.dofs.size(); ++k)
+      xr[k] = r[c.dofs[k]];
+    xr -= c.w.transpose() * b;
+    xr = c.schurInverse * xr;
+    x -= c.w * xr;
+    for (size_t k = 0; k < c.dofs.size(); ++k)
+      x[c.dofs[k]] = xr[k];
+    return x;
+  }
+
+  // Lift-off DOFs free now but pinned in the factor (R) have only their diagonal there, decoupled
+  // from the rest: after a drag step releases a node, the initial Hessian would miss its coupling
+  // and L-BFGS would need several iterations to learn it. For a few such DOFs the inverse of the
+  // tangent with them free is exact through their Schur complement: with G = P F^-1 P and A_R the
+  // factor state's tangent columns of R (their pinned and R rows zeroed), W = G A_R and
+  // S = A_RR - A_R^T W, H0 [b; b_R] = [G b - W x_R; x_R] with x_R = S^-1 (b_R - W^T b). It costs
+  // one substitution per DOF, once per contact change.
+  void prepareReleased() {
+    if (released_.factor == factor_.get() && released_.prescribed == pb_.prescribed)
+      return;
+    released_ = ReleasedDofs();
+    released_.factor = factor_.get();
+    released_.prescribed = pb_.prescribed;
+    if (factor_->prescribed.size() != pb_.prescribed.size())
+      return;
+    std::vector<int> dofs;
+    for (int d : st_.liftOffDofs)
+      if (factor_->prescribed[d] && !pb_.prescribed[d])
+        dofs.push_back(d);
+    if (dofs.empty() || static_cast<int>(dofs.size()) > sys_.options.maxCoupledReleases)
+      return;
+    const Eigen::Index n = pb_.prescribed.size(), k = static_cast<Eigen::Index>(dofs.size());
+    Eigen::MatrixXd columns(n, k), w(n, k);
+    Eigen::MatrixXd arr(k, k);
+    for (Eigen::Index j = 0; j < k; ++j) {
+      Eigen::VectorXd unit = Eigen::VectorXd::Zero(n);
+      unit[dofs[j]] = 1.0;
+      Eigen::VectorXd column = factor_->tangent.selfadjointView<Eigen::Upper>() * unit;
+      for (Eigen::Index i = 0; i < k; ++i)
+        arr(i, j) = column[dofs[i]];
+      ZeroPrescribed(pb_.prescribed, column);
+      for (int d : dofs)
+        column[d] = 0.0;
+      const Eigen::VectorXd wj = substitute(column);
+      if (wj.size() == 0)
+        return;
+      columns.col(j) = column;
+      w.col(j) = wj;
+    }
+    Eigen::MatrixXd schur = arr - columns.transpose() * w;
+    schur = 0.5 * (schur + schur.transpose()).eval();
+    Eigen::LLT<Eigen::MatrixXd> llt(schur);
+    if (llt.info() != Eigen::Success)
+      return; // not positive definite (the factor's state is far): the diagonal instead
+    released_.dofs = std::move(dofs);
+    released_.w = std::move(w);
+    released_.schurInverse = llt.solve(Eigen::MatrixXd::Identity(k, k));
+  }
+
+  // P F^-1 P r.
+  Eigen::VectorXd substitute(const Eigen::VectorXd& r) {
     StageClock clock;
     Eigen::VectorXd out;
     Status solved;
@@ -515,6 +601,13 @@ private:
   EvaluationScratch scratch_;
   std::deque<Eigen::VectorXd> s_, y_;
   std::deque<double> rho_;
+  struct ReleasedDofs {
+    const TangentFactor* factor = nullptr;
+    std::vector<char> prescribed; // the contact it was prepared for
+    std::vector<int> dofs;        // empty: no correction
+    Eigen::MatrixXd w;
+    Eigen::MatrixXd schurInverse; // S^-1 (k x k, k small)
+  } released_;
   int sinceFactor_ = 0;
   double lastResidual_ = 0.0;
   Evaluation cached_; // the predictor's accepted state

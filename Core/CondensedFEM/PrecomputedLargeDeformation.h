@@ -69,6 +69,9 @@ struct PrecomputedLargeDeformationOptions {
   // After a drag step (a warm solve with a small change of the move), factor where the same
   // change again would lead (2 u - u_before) rather than at u.
   bool factorAhead = true;
+  // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
+  // through their Schur complement, one substitution each, when there are at most this many.
+  int maxCoupledReleases = 8;
   // The initial inverse Hessian from a single-precision copy of the factor (half the bytes a
   // substitution reads); the residual, and so the result, stay double precision.
   bool singlePrecisionFactor = true;
