@@ -17,11 +17,26 @@
 #include <mutex>
 #include <thread>
 
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
+
 namespace faceplan {
 
 using namespace large_deformation;
 
 namespace {
+
+// The background refactorization runs at the lowest priority (and the threads it starts inherit
+// it): during a drag the next edit's solve, which the user waits for, then has the cores, and the
+// refactorization fills the time between edits.
+void YieldToInteractiveWork() {
+#ifdef __linux__
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
+#endif
+}
 
 // A numeric factor of the tangent at state u with the DOFs `prescribed` pinned (their rows and
 // columns zero, their diagonal kept), and the unpinned tangent for the predictor's products.
@@ -149,6 +164,7 @@ public:
 
 private:
   void work() {
+    YieldToInteractiveWork();
     AssemblyPattern& pattern = workerPattern_;
     std::unique_lock<std::mutex> lock(mutex_);
     while (true) {
