@@ -709,11 +709,19 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
       u = std::move(trial);
       reached = to;
       ++report.substeps;
-      halvings = 0;
+      // Back up towards whole steps (as Newton's load steps do): a halving was for one hard
+      // stretch of the move, not for the rest of it.
+      if (halvings > 0) {
+        --halvings;
+        step *= 2.0;
+      }
       continue;
     }
     pb.prescribed = contact;
     ++report.rejectedSubsteps;
+    // The step never gets smaller than 2^-maxSubstepHalvings of the move: past that point a
+    // cell inverts whatever the step (the move's limit for this mesh), and halving on would
+    // creep towards it without end.
     if (f == Failure::Fallback || ++halvings > sys.options.maxSubstepHalvings) {
       why = solver.why.empty() ? "a cell would invert at the smallest sub-step" : solver.why;
       break;
