@@ -306,17 +306,6 @@ public:
           why = "the lift-off contact did not settle";
           return Failure::Smaller;
         }
-        {
-          int rel = 0, pin = 0, relF = 0, pinF = 0;
-          for (int dof : st_.liftOffDofs) {
-            rel += before[dof] && !pb_.prescribed[dof];
-            pin += !before[dof] && pb_.prescribed[dof];
-            relF += factor_->prescribed[dof] && !pb_.prescribed[dof];
-            pinF += !factor_->prescribed[dof] && pb_.prescribed[dof];
-          }
-          fprintf(stderr, "CONTACTDBG released %d pinned %d; vs factor released %d pinned %d\n",
-                  rel, pin, relF, pinF);
-        }
         for (int dof : st_.liftOffDofs)
           if (pb_.prescribed[dof] && !before[dof] && u[dof] != pb_.target[dof]) {
             u[dof] = pb_.target[dof];
