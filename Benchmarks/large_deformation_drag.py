@@ -11,7 +11,8 @@ Per scene and solver (medians of repeats; the bone's filters are updated before 
   same steps back to back with no pause ("continuous"; the background refactorization may lag);
 - the precompute's time (the first update).
 It also writes every iterate's time and relative residual (field data ConvergenceHistory) of one full
-move and one drag step per scene and solver to a CSV.
+move, the first drag step and the last one per scene and solver to a CSV
+(Benchmarks/plot_large_deformation_convergence.py plots it).
 
     pvpython Benchmarks/large_deformation_drag.py <FacePlan.so> <Data dir> [--repeats 5]
         [--drag-steps 6] [--scenes lefort1,bsso,genioplasty,cut] [--json FILE] [--csv FILE]
@@ -136,6 +137,8 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
         drag_iter.append(f.get("QuasiNewtonIterations", f.get("NewtonIterations", float("nan"))))
         if k == 1:
             histories.append((name, solver, "drag_step", f["history"]))
+        elif k == steps:  # a drag step that follows one (the factor made ahead of it)
+            histories.append((name, solver, "later_drag_step", f["history"]))
         time.sleep(args.pause if solver == "Precomputed" else 0.0)
     if solver == "Precomputed":
         for k in range(steps - 1, -1, -1):  # back again, step after step with no pause

@@ -27,60 +27,71 @@ namespace large_deformation {
 bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
               std::vector<double>* packed, EvaluationScratch* scratch) {
   const TetMesh& mesh = *st.mesh;
-  const Eigen::Index m = mesh.numTets();
+  const std::int64_t m = mesh.numTets();
   EvaluationScratch local;
   EvaluationScratch& buffers = scratch ? *scratch : local;
-  std::vector<double>& energy = buffers.energy;
-  std::vector<ElementVector>& force = buffers.force;
-  std::vector<char>& valid = buffers.valid;
-  energy.resize(static_cast<size_t>(m));
-  force.resize(static_cast<size_t>(m));
-  valid.assign(static_cast<size_t>(m), 1);
+  // A fixed number of cell ranges, each summing its cells' forces into its own vector in cell
+  // order, the ranges then added in order: the same sums on any number of threads, and each
+  // range writes the nodes of neighbouring cells (a gather per node from per-cell forces reads
+  // scattered memory and costs more than the cells' stress).
+  const std::int64_t ranges =
+      std::min<std::int64_t>(EvaluationScratch::kRanges, std::max<std::int64_t>(m, 1));
+  buffers.energy.assign(static_cast<size_t>(ranges), 0.0);
+  buffers.valid.assign(static_cast<size_t>(ranges), 1);
+  buffers.force.resize(static_cast<size_t>(ranges));
   if (packed)
     packed->resize(static_cast<size_t>(m) * kPackedElementSize);
-  ParallelFor(m, 4000, [&](std::int64_t begin, std::int64_t end) {
+  ParallelFor(ranges, 2, [&](std::int64_t firstRange, std::int64_t lastRange) {
     CornerDisplacements corner;
     ElementMatrix tangent;
-    for (std::int64_t e = begin; e < end; ++e) {
-      int node[4];
-      for (int a = 0; a < 4; ++a) {
-        node[a] = mesh.tets(e, a);
-        corner.row(a) = st.toGlobal(node[a], u.segment<3>(3 * node[a])).transpose();
-      }
-      ElementVector f;
-      if (!NeoHookeanTetState(st.cells[e], st.materials[e], corner, energy[e], f,
-                              packed ? &tangent : nullptr)) {
-        valid[e] = 0;
-        continue;
-      }
-      for (int a = 0; a < 4; ++a) {
-        const int fa = st.frameOf[node[a]];
-        if (fa < 0)
-          continue;
-        const Eigen::Matrix3d& Q = st.frames[fa];
-        f.segment<3>(3 * a) = Q.transpose() * f.segment<3>(3 * a);
+    for (std::int64_t r = firstRange; r < lastRange; ++r) {
+      Eigen::VectorXd& force = buffers.force[r];
+      force.setZero(3 * st.n);
+      double energy = 0.0;
+      const std::int64_t begin = m * r / ranges, end = m * (r + 1) / ranges;
+      for (std::int64_t e = begin; e < end; ++e) {
+        int node[4];
+        for (int a = 0; a < 4; ++a) {
+          node[a] = mesh.tets(e, a);
+          corner.row(a) = st.toGlobal(node[a], u.segment<3>(3 * node[a])).transpose();
+        }
+        ElementVector f;
+        double cellEnergy = 0.0;
+        if (!NeoHookeanTetState(st.cells[e], st.materials[e], corner, cellEnergy, f,
+                                packed ? &tangent : nullptr)) {
+          buffers.valid[r] = 0;
+          break;
+        }
+        energy += cellEnergy;
+        for (int a = 0; a < 4; ++a) {
+          const int fa = st.frameOf[node[a]];
+          if (fa >= 0) {
+            const Eigen::Matrix3d& Q = st.frames[fa];
+            f.segment<3>(3 * a) = Q.transpose() * f.segment<3>(3 * a);
+            if (packed) {
+              tangent.middleRows<3>(3 * a) = (Q.transpose() * tangent.middleRows<3>(3 * a)).eval();
+              tangent.middleCols<3>(3 * a) = (tangent.middleCols<3>(3 * a) * Q).eval();
+            }
+          }
+          force.segment<3>(3 * node[a]) += f.segment<3>(3 * a);
+        }
         if (packed) {
-          tangent.middleRows<3>(3 * a) = (Q.transpose() * tangent.middleRows<3>(3 * a)).eval();
-          tangent.middleCols<3>(3 * a) = (tangent.middleCols<3>(3 * a) * Q).eval();
+          double* o = packed->data() + static_cast<size_t>(e) * kPackedElementSize;
+          for (int p = 0; p < 12; ++p)
+            for (int q = p; q < 12; ++q)
+              *o++ = tangent(p, q);
         }
       }
-      force[e] = f;
-      if (packed) {
-        double* o = packed->data() + static_cast<size_t>(e) * kPackedElementSize;
-        for (int p = 0; p < 12; ++p)
-          for (int q = p; q < 12; ++q)
-            *o++ = tangent(p, q);
-      }
+      buffers.energy[r] = energy;
     }
   });
-  if (std::find(valid.begin(), valid.end(), 0) != valid.end())
+  if (std::find(buffers.valid.begin(), buffers.valid.end(), 0) != buffers.valid.end())
     return false;
   out.energy = 0.0;
-  out.force = Eigen::VectorXd::Zero(3 * st.n);
-  for (Eigen::Index e = 0; e < m; ++e) {
-    out.energy += energy[e];
-    for (int a = 0; a < 4; ++a)
-      out.force.segment<3>(3 * mesh.tets(e, a)) += force[e].segment<3>(3 * a);
+  out.force.setZero(3 * st.n);
+  for (std::int64_t r = 0; r < ranges; ++r) {
+    out.energy += buffers.energy[r];
+    out.force += buffers.force[r];
   }
   return std::isfinite(out.energy) && out.force.allFinite();
 }
@@ -216,11 +227,13 @@ Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd
   return b;
 }
 
-bool UpdateContact(Problem& pb, const Eigen::VectorXd& u, double s) {
+bool UpdateContact(Problem& pb, const Eigen::VectorXd& u, double s, const Eigen::VectorXd* force) {
   if (pb.st->liftOffDofs.empty())
     return false;
   Evaluation ev;
-  if (!Evaluate(*pb.st, u, ev, nullptr))
+  if (force && force->size() == u.size())
+    ev.force = *force;
+  else if (!Evaluate(*pb.st, u, ev, nullptr))
     return false;
   const Eigen::VectorXd reaction = ev.force - s * pb.externalLoad;
   const double forceTolerance = 1e-12 * std::max(ev.force.norm(), pb.linearForce);

@@ -66,11 +66,12 @@ struct Evaluation {
   double energy = 0.0;
   Eigen::VectorXd force;
 };
-// Per-cell buffers a solver keeps for its evaluations: a solve evaluates many times, and fresh
-// megabytes each time cost more in page faults than the element loop itself. Optional.
+// Buffers a solver keeps for its evaluations: a solve evaluates many times, and fresh megabytes
+// each time cost more in page faults than the element loop itself. Optional.
 struct EvaluationScratch {
+  static constexpr int kRanges = 8; // cell ranges, each with its own force sum
   std::vector<double> energy;
-  std::vector<ElementVector> force;
+  std::vector<Eigen::VectorXd> force;
   std::vector<char> valid;
 };
 bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
@@ -97,8 +98,10 @@ Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd
 
 // Unilateral contact at a converged state u for the load fraction s: a node in contact whose
 // contact force pulls it onto the bone (a negative normal residual) lifts off, a lifted node that
-// has gone into the bone comes back into contact. True when a node changed.
-bool UpdateContact(Problem& pb, const Eigen::VectorXd& u, double s);
+// has gone into the bone comes back into contact. True when a node changed. `force`: the internal
+// force at u when the caller has it (else it is evaluated).
+bool UpdateContact(Problem& pb, const Eigen::VectorXd& u, double s,
+                   const Eigen::VectorXd* force = nullptr);
 
 struct DeformationMeasures {
   double smallestVolumeRatio = 1.0;

@@ -7,7 +7,9 @@
 #include "Mesh/InputValidation.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/FillReducingOrdering.h"
+#include "SparseSolver/SinglePrecisionFactor.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
@@ -15,25 +17,44 @@
 #include <mutex>
 #include <thread>
 
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
+
 namespace faceplan {
 
 using namespace large_deformation;
 
 namespace {
 
+// The background refactorization runs at the lowest priority (and the threads it starts inherit
+// it): during a drag the next edit's solve, which the user waits for, then has the cores, and the
+// refactorization fills the time between edits.
+void YieldToInteractiveWork() {
+#ifdef __linux__
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
+#endif
+}
+
 // A numeric factor of the tangent at state u with the DOFs `prescribed` pinned (their rows and
 // columns zero, their diagonal kept), and the unpinned tangent for the predictor's products.
 struct TangentFactor {
   CholmodFactor factor;
+  SinglePrecisionFactor single; // empty unless options.singlePrecisionFactor
   SparseMatrix tangent;
+  // The state it was made at, its contact and its internal force: a predictor may start there.
+  Eigen::VectorXd state, force;
+  std::vector<char> prescribed;
 };
 
 // Assembles the tangent at u into `pattern` and factors it. False (with a message) when a cell is
 // inverted or the pinned tangent is not positive definite.
 Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
                      AssemblyPattern& pattern, const Eigen::VectorXd& u,
-                     const std::vector<char>& prescribed, std::shared_ptr<TangentFactor>& out,
-                     StageTimings* timings) {
+                     const std::vector<char>& prescribed, bool singlePrecision,
+                     std::shared_ptr<TangentFactor>& out, StageTimings* timings) {
   StageClock clock;
   Evaluation ev;
   std::vector<double> packed;
@@ -44,6 +65,9 @@ Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
   AssembleFromPacked(packed.data(), pattern);
   auto made = std::make_shared<TangentFactor>();
   made->tangent = pattern.upper;
+  made->state = u;
+  made->force = std::move(ev.force);
+  made->prescribed = prescribed;
   std::vector<int> entries, diagonal;
   FindPinnedEntries(pattern.upper, prescribed, entries, diagonal);
   double* values = pattern.upper.valuePtr();
@@ -57,6 +81,8 @@ Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
   Status status = made->factor.analyze(pattern.upper, &ordering);
   if (status)
     status = made->factor.factorize(pattern.upper);
+  if (status && singlePrecision)
+    status = made->single.assign(made->factor);
   if (timings)
     (*timings)[Stage::Factorization].ms += clock.lapMs();
   if (!status)
@@ -105,12 +131,15 @@ public:
   }
 
   // Queues a refactorization at (u, prescribed); a newer request replaces a queued one.
-  void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed) {
+  // ahead: a state to factor at instead, if no cell is inverted there.
+  void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed,
+                              const Eigen::VectorXd* ahead = nullptr) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (stop_)
         return;
       pendingU_ = u;
+      pendingAhead_ = ahead ? *ahead : Eigen::VectorXd();
       pendingPrescribed_ = prescribed;
       pending_ = true;
       if (!worker_.joinable()) {
@@ -135,6 +164,7 @@ public:
 
 private:
   void work() {
+    YieldToInteractiveWork();
     AssemblyPattern& pattern = workerPattern_;
     std::unique_lock<std::mutex> lock(mutex_);
     while (true) {
@@ -142,14 +172,20 @@ private:
       if (stop_)
         return;
       const Eigen::VectorXd u = std::move(pendingU_);
+      const Eigen::VectorXd ahead = std::move(pendingAhead_);
       const std::vector<char> prescribed = std::move(pendingPrescribed_);
       pending_ = false;
       busy_ = true;
       lock.unlock();
       std::shared_ptr<TangentFactor> made;
       // A tangent that is not positive definite keeps the previous factor.
-      const Status status =
-          FactorTangent(*structure, ordering, pattern, u, prescribed, made, nullptr);
+      Status status = Status::Error("no state ahead");
+      if (ahead.size() == u.size())
+        status = FactorTangent(*structure, ordering, pattern, ahead, prescribed,
+                               options.singlePrecisionFactor, made, nullptr);
+      if (!status)
+        status = FactorTangent(*structure, ordering, pattern, u, prescribed,
+                               options.singlePrecisionFactor, made, nullptr);
       lock.lock();
       if (status) {
         factor_ = std::move(made);
@@ -166,7 +202,7 @@ private:
   std::thread worker_;
   std::shared_ptr<const TangentFactor> factor_;
   AssemblyPattern workerPattern_; // the worker's only
-  Eigen::VectorXd pendingU_;
+  Eigen::VectorXd pendingU_, pendingAhead_;
   std::vector<char> pendingPrescribed_;
   bool pending_ = false, busy_ = false, stop_ = false;
   int backgroundCount_ = 0;
@@ -176,7 +212,8 @@ namespace {
 
 Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
   if (!(o.tolerance > 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
-      o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0)
+      o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
+      o.maxCoupledReleases < 0)
     return Status::Error("invalid large-deformation options");
   return Status::Ok();
 }
@@ -212,8 +249,8 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   sys->timings[Stage::Reordering].ms = clock.lapMs();
   const Eigen::VectorXd rest = Eigen::VectorXd::Zero(3 * st.n);
   std::shared_ptr<TangentFactor> factor;
-  status = FactorTangent(st, sys->ordering, sys->solvePattern, rest, st.prescribed, factor,
-                         &sys->timings);
+  status = FactorTangent(st, sys->ordering, sys->solvePattern, rest, st.prescribed,
+                         options.singlePrecisionFactor, factor, &sys->timings);
   if (!status)
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
@@ -225,6 +262,9 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   out = std::move(sys);
   return Status::Ok();
 }
+
+// A warm solve whose prescribed change is at most this fraction of the move is a drag step.
+constexpr double kDragFraction = 1.0;
 
 // Why a sub-step failed: a smaller one may mend it, or the solve falls back.
 enum class Failure { None, Smaller, Fallback, Stopped };
@@ -256,9 +296,10 @@ public:
         return f;
 
       const std::vector<char> before = pb_.prescribed;
-      const bool changed = UpdateContact(pb_, u, 1.0);
+      const bool changed = UpdateContact(pb_, u, 1.0, &lastForce_);
       if (!changed && tolerance == tight)
         return Failure::None;
+      bool moved = false;
       if (changed) {
         ++report_.contactUpdates;
         if (++updates > sys_.options.maxContactUpdates) {
@@ -266,12 +307,19 @@ public:
           return Failure::Smaller;
         }
         for (int dof : st_.liftOffDofs)
-          if (pb_.prescribed[dof] && !before[dof])
+          if (pb_.prescribed[dof] && !before[dof] && u[dof] != pb_.target[dof]) {
             u[dof] = pb_.target[dof];
+            moved = true;
+          }
         clearHistory();
         tolerance = std::max(tight, kSettleTolerance);
       } else {
         tolerance = tight;
+      }
+      if (!moved) { // the converged evaluation still holds at u
+        cached_.energy = lastEnergy_;
+        cached_.force = lastForce_;
+        haveCached_ = true;
       }
     }
   }
@@ -290,25 +338,119 @@ private:
     return ok;
   }
 
-  // H0 r = P F^-1 P r.
+  // H0 r: P F^-1 P r, with the few DOFs that lift-off has freed since the factor was made
+  // coupled back in (see prepareReleased).
   Eigen::VectorXd applyFactor(const Eigen::VectorXd& r) {
+    prepareReleased();
+    if (released_.dofs.empty())
+      return substitute(r);
+    const ReleasedDofs& c = released_;
+    Eigen::VectorXd b = r;
+    for (int d : c.dofs)
+      b[d] = 0.0;
+    Eigen::VectorXd x = substitute(b);
+    if (x.size() == 0)
+      return x;
+    Eigen::VectorXd xr(static_cast<Eigen::Index>(c.dofs.size()));
+    for (size_t k = 0; k < c.dofs.size(); ++k)
+      xr[k] = r[c.dofs[k]];
+    xr -= c.w.transpose() * b;
+    xr = c.schurInverse * xr;
+    x -= c.w * xr;
+    for (size_t k = 0; k < c.dofs.size(); ++k)
+      x[c.dofs[k]] = xr[k];
+    return x;
+  }
+
+  // Lift-off DOFs free now but pinned in the factor (R) have only their diagonal there, decoupled
+  // from the rest: after a drag step releases a node, the initial Hessian would miss its coupling
+  // and L-BFGS would need several iterations to learn it. For a few such DOFs the inverse of the
+  // tangent with them free is exact through their Schur complement: with G = P F^-1 P and A_R the
+  // factor state's tangent columns of R (their pinned and R rows zeroed), W = G A_R and
+  // S = A_RR - A_R^T W, H0 [b; b_R] = [G b - W x_R; x_R] with x_R = S^-1 (b_R - W^T b). It costs
+  // one substitution per DOF, once per contact change.
+  void prepareReleased() {
+    if (released_.factor == factor_.get() && released_.prescribed == pb_.prescribed)
+      return;
+    released_ = ReleasedDofs();
+    released_.factor = factor_.get();
+    released_.prescribed = pb_.prescribed;
+    if (factor_->prescribed.size() != pb_.prescribed.size())
+      return;
+    std::vector<int> dofs;
+    for (int d : st_.liftOffDofs)
+      if (factor_->prescribed[d] && !pb_.prescribed[d])
+        dofs.push_back(d);
+    if (dofs.empty() || static_cast<int>(dofs.size()) > sys_.options.maxCoupledReleases)
+      return;
+    const Eigen::Index n = pb_.prescribed.size(), k = static_cast<Eigen::Index>(dofs.size());
+    Eigen::MatrixXd columns(n, k), w(n, k);
+    Eigen::MatrixXd arr(k, k);
+    for (Eigen::Index j = 0; j < k; ++j) {
+      Eigen::VectorXd unit = Eigen::VectorXd::Zero(n);
+      unit[dofs[j]] = 1.0;
+      Eigen::VectorXd column = factor_->tangent.selfadjointView<Eigen::Upper>() * unit;
+      for (Eigen::Index i = 0; i < k; ++i)
+        arr(i, j) = column[dofs[i]];
+      ZeroPrescribed(pb_.prescribed, column);
+      for (int d : dofs)
+        column[d] = 0.0;
+      const Eigen::VectorXd wj = substitute(column);
+      if (wj.size() == 0)
+        return;
+      columns.col(j) = column;
+      w.col(j) = wj;
+    }
+    Eigen::MatrixXd schur = arr - columns.transpose() * w;
+    schur = 0.5 * (schur + schur.transpose()).eval();
+    Eigen::LLT<Eigen::MatrixXd> llt(schur);
+    if (llt.info() != Eigen::Success)
+      return; // not positive definite (the factor's state is far): the diagonal instead
+    released_.dofs = std::move(dofs);
+    released_.w = std::move(w);
+    released_.schurInverse = llt.solve(Eigen::MatrixXd::Identity(k, k));
+  }
+
+  // P F^-1 P r.
+  Eigen::VectorXd substitute(const Eigen::VectorXd& r) {
     StageClock clock;
-    Eigen::MatrixXd x;
-    // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
-    // whose thread hand-offs cost more than they save (most of all on a loaded machine).
-    ScopedBlasThreads serial(1, BlasScope::Pinned);
-    const Status solved = factor_->factor.solveConcurrently(r, x);
+    Eigen::VectorXd out;
+    Status solved;
+    if (sys_.options.singlePrecisionFactor) {
+      solved = factor_->single.solve(r, out);
+    } else {
+      Eigen::MatrixXd x;
+      // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
+      // whose thread hand-offs cost more than they save (most of all on a loaded machine).
+      ScopedBlasThreads serial(1, BlasScope::Pinned);
+      solved = factor_->factor.solveConcurrently(r, x);
+      if (solved)
+        out = x.col(0);
+    }
     ++report_.factorSolves;
     timings_[Stage::Solve].ms += clock.lapMs();
     if (!solved)
       return Eigen::VectorXd();
-    Eigen::VectorXd out = x.col(0);
     ZeroPrescribed(pb_.prescribed, out);
     return out;
   }
 
-  // The prescribed DOFs go to their targets and the free ones follow the factored tangent.
+  // The prescribed DOFs go to their targets and the free ones follow the factored tangent. From the
+  // factor's own state when its prescribed values are nearer the targets than u's (a drag's
+  // factor, made one step ahead): the predictor is then Newton's step there.
   bool predict(Eigen::VectorXd& u) {
+    if (factor_->state.size() == u.size() && factor_->prescribed == pb_.prescribed) {
+      double fromU = 0.0, fromFactor = 0.0;
+      for (Eigen::Index i = 0; i < u.size(); ++i)
+        if (pb_.prescribed[i]) {
+          fromU += (pb_.target[i] - u[i]) * (pb_.target[i] - u[i]);
+          fromFactor += (pb_.target[i] - factor_->state[i]) * (pb_.target[i] - factor_->state[i]);
+        }
+      if (fromFactor < fromU) {
+        u = factor_->state;
+        startForce_ = &factor_->force;
+      }
+    }
     Eigen::VectorXd move = Eigen::VectorXd::Zero(u.size());
     for (Eigen::Index i = 0; i < u.size(); ++i)
       if (pb_.prescribed[i]) {
@@ -367,7 +509,8 @@ private:
     if (report_.refactorizations >= sys_.options.maxRefactorizations)
       return false;
     std::shared_ptr<TangentFactor> made;
-    if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed, made, &timings_))
+    if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed,
+                       sys_.options.singlePrecisionFactor, made, &timings_))
       return false;
     factor_ = std::move(made);
     ++report_.refactorizations;
@@ -388,6 +531,7 @@ private:
       lastResidual_ = b.scale > 0.0 ? b.residual.norm() / b.scale : 0.0;
       report_.convergence.emplace_back(clock_.elapsedMs(), lastResidual_);
       if (b.residual.norm() <= tolerance * b.scale) {
+        lastEnergy_ = ev.energy;
         lastForce_ = std::move(ev.force);
         return Failure::None;
       }
@@ -462,11 +606,19 @@ private:
   EvaluationScratch scratch_;
   std::deque<Eigen::VectorXd> s_, y_;
   std::deque<double> rho_;
+  struct ReleasedDofs {
+    const TangentFactor* factor = nullptr;
+    std::vector<char> prescribed; // the contact it was prepared for
+    std::vector<int> dofs;        // empty: no correction
+    Eigen::MatrixXd w;
+    Eigen::MatrixXd schurInverse; // S^-1 (k x k, k small)
+  } released_;
   int sinceFactor_ = 0;
   double lastResidual_ = 0.0;
   Evaluation cached_; // the predictor's accepted state
   bool haveCached_ = false;
   const Eigen::VectorXd* startForce_ = nullptr;
+  double lastEnergy_ = 0.0;   // at the last converged state
   Eigen::VectorXd lastForce_; // at the last converged state
   StageClock clock_;
 };
@@ -546,11 +698,19 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
       u = std::move(trial);
       reached = to;
       ++report.substeps;
-      halvings = 0;
+      // Back up towards whole steps (as Newton's load steps do): a halving was for one hard
+      // stretch of the move, not for the rest of it.
+      if (halvings > 0) {
+        --halvings;
+        step *= 2.0;
+      }
       continue;
     }
     pb.prescribed = contact;
     ++report.rejectedSubsteps;
+    // The step never gets smaller than 2^-maxSubstepHalvings of the move: past that point a
+    // cell inverts whatever the step (the move's limit for this mesh), and halving on would
+    // creep towards it without end.
     if (f == Failure::Fallback || ++halvings > sys.options.maxSubstepHalvings) {
       why = solver.why.empty() ? "a cell would invert at the smallest sub-step" : solver.why;
       break;
@@ -588,8 +748,20 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     result.timings[Stage::Total].ms = total.elapsedMs();
     return Status::Ok(); // not a converged state: nothing to refactor at or to start from
   }
-  if (sys.options.backgroundRefactorization)
-    sys.requestRefactorization(u, pb.prescribed);
+  if (sys.options.backgroundRefactorization) {
+    // A drag: a warm solve whose move changed little. Its next edit is most likely the same change
+    // again, so the tangent is factored there, one step ahead, where the next solve's iterates
+    // will be (any positive definite factor serves as the initial Hessian; this one is the
+    // nearest to the next solve's).
+    const bool drag = report.warmStarted && fullLoad == warm->load &&
+                      (fullTarget - warm->target).norm() <= kDragFraction * fullTarget.norm();
+    if (drag && sys.options.factorAhead) {
+      const Eigen::VectorXd ahead = 2.0 * u - warm->u;
+      sys.requestRefactorization(u, pb.prescribed, &ahead);
+    } else {
+      sys.requestRefactorization(u, pb.prescribed);
+    }
+  }
   if (converged) {
     converged->system = &sys;
     converged->u = std::move(u);

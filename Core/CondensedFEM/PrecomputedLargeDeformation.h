@@ -13,14 +13,21 @@
 // follow the factored tangent. The two-loop recursion is written here: LBFGS++ scales a multiple of
 // the identity as its initial Hessian and has no hook for a factor, nor for a step that must keep
 // every cell's det F > 0 (the line search here rejects such steps). Every accepted step keeps det F
-// > 0. After a converged solve the tangent at the converged state is factored again on a background
-// thread (with that state's contact), so the next edit of a drag, a small change from there,
-// starts from an exact Newton predictor and converges in a few cheap iterations. Within a solve, a
-// sub-step that has not converged after `refactorAfter` iterations factors the current tangent
-// (modified Newton with a refresh) and restarts the L-BFGS history.
+// > 0. After a converged solve the tangent is factored again on a background thread (with that
+// state's contact): at the converged state, or, after a drag step (a warm solve whose move changed
+// little), one step ahead, at 2 u - u_before, where the same change again would lead. A solve
+// whose targets are nearer the factor's state than its start starts there, so its predictor is
+// Newton's own step at the state the factor was made at and the drag's next step converges in a
+// couple of iterations. Within a solve, a sub-step that has not converged after `refactorAfter`
+// iterations factors the current tangent (modified Newton with a refresh) and restarts the L-BFGS
+// history. The substitutions use a single-precision copy of the factor (SinglePrecisionFactor):
+// they read half the bytes, and the initial Hessian need not be exact, as the residual that decides
+// convergence is evaluated in double precision.
 //
 // Lift-off (unilateral contact): the factor is made with the contact of its state pinned. A DOF
-// free now but pinned in the factor gets the factor's diagonal (its row is decoupled); a DOF
+// free now but pinned in the factor is coupled back in through its Schur complement when there are
+// few such DOFs (a drag step releasing a node or two), else it gets the factor's diagonal (its row
+// decoupled); a DOF
 // pinned now but free in the factor is projected out (the initial inverse Hessian is P F^-1 P, P
 // zeroing the pinned DOFs), which stays symmetric positive definite on the free DOFs, so L-BFGS
 // minimises the energy over exactly the free DOFs. The active set is updated with Newton's rule
@@ -38,10 +45,11 @@
 // one force evaluation and one substitution, no tangent and no factorization, against Newton's
 // numeric factorization per iteration. From a converged state with the refreshed factor a small
 // drag step takes a few iterations, because the predictor with that factor is Newton's own first
-// step. From rest the rest tangent is a poor model of strains near 100 % and each lift-off change
-// restarts the history, so a whole move takes tens of iterations and a refactorization or two. A
-// Newton-Krylov variant (the tangent assembled, CG preconditioned by the same factor) would pay the
-// tangent's element matrices and assembly every outer iteration on top of the same substitutions.
+// step, and one or two when the factor was made ahead. From rest the rest tangent is a poor model
+// of strains near 100 % and each lift-off change restarts the history, so a whole move takes tens
+// of iterations and a refactorization or two. A Newton-Krylov variant (the tangent assembled, CG
+// preconditioned by the same factor) would pay the tangent's element matrices and assembly every
+// outer iteration on top of the same substitutions.
 #include "CondensedFEM/CondensedFEM.h"
 #include "CondensedFEM/LargeDeformation.h"
 
@@ -66,6 +74,15 @@ struct PrecomputedLargeDeformationOptions {
   int maxContactUpdates = 100;
   // After a converged solve, factor the tangent at its state on a background thread.
   bool backgroundRefactorization = true;
+  // After a drag step (a warm solve with a small change of the move), factor where the same
+  // change again would lead (2 u - u_before) rather than at u.
+  bool factorAhead = true;
+  // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
+  // through their Schur complement, one substitution each, when there are at most this many.
+  int maxCoupledReleases = 8;
+  // The initial inverse Hessian from a single-precision copy of the factor (half the bytes a
+  // substitution reads); the residual, and so the result, stay double precision.
+  bool singlePrecisionFactor = true;
   // When the solve does not converge: Newton (true) or an error (false, for tests).
   bool fallBackToNewton = true;
   LargeDeformationOptions newton; // the fallback's (slidingLiftOff and tolerance are set from here)

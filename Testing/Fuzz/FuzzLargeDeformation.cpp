@@ -152,6 +152,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   quasiNewton.newton = options;
   const int limit = in.flag() ? in.range(1, 8) : 0;
   const bool drag = in.flag();
+  quasiNewton.singlePrecisionFactor = in.flag();
+  quasiNewton.factorAhead = in.flag();
+  quasiNewton.maxCoupledReleases = in.range(0, 8);
   if (precomputed)
     PrecomputedSolve(request, input, quasiNewton, limit, drag);
 

@@ -1,0 +1,298 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "SparseSolver/SinglePrecisionFactor.h"
+
+#include "Common/BlasThreads.h"
+#include "Common/WorkerThreads.h"
+#include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/SupernodalTree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+#include <vector>
+
+extern "C" {
+void strsv_(const char* uplo, const char* trans, const char* diag, const int* n, const float* a,
+            const int* lda, float* x, const int* incx);
+void sgemv_(const char* trans, const int* m, const int* n, const float* alpha, const float* a,
+            const int* lda, const float* x, const int* incx, const float* beta, float* y,
+            const int* incy);
+}
+
+namespace faceplan {
+
+namespace {
+
+// Below this many entries a supernode's block is done with plain loops: a BLAS call's overhead
+// would be most of its time.
+constexpr int kBlasEntries = 512;
+
+} // namespace
+
+struct SinglePrecisionFactor::Impl {
+  int n = 0;
+  std::vector<int> super, pi, s, perm;
+  std::vector<std::int64_t> px;
+  std::vector<float> values;
+  // The split for two threads: top supernodes (ascending), each side's supernodes (ascending), and
+  // per column its index among the top part's columns (-1 elsewhere).
+  std::vector<int> top, side[2];
+  std::vector<int> topIndex;
+  int topColumns = 0;
+  bool split = false;
+
+  int columns(int k) const { return super[k + 1] - super[k]; }
+  int rowsOf(int k) const { return pi[k + 1] - pi[k]; }
+
+  // Forward sweep through supernode k: y[k's columns] = L11^-1 y[...], then the rows below get
+  // L21 y subtracted, into `accumulate` (indexed by topIndex) for top rows when it is given.
+  void forward(int k, float* y, float* accumulate, std::vector<float>& t) const {
+    const int nc = columns(k), nr = rowsOf(k), m = nr - nc;
+    const float* L = values.data() + px[k];
+    float* y1 = y + super[k];
+    const int* rows = s.data() + pi[k] + nc;
+    if (nc * nr >= kBlasEntries) {
+      const int one = 1;
+      const float alpha = 1.0f, beta = 0.0f;
+      strsv_("L", "N", "N", &nc, L, &nr, y1, &one);
+      if (m > 0) {
+        t.resize(m);
+        sgemv_("N", &m, &nc, &alpha, L + nc, &nr, y1, &one, &beta, t.data(), &one);
+      }
+    } else {
+      for (int j = 0; j < nc; ++j) {
+        const float* col = L + std::int64_t(j) * nr;
+        const float v = (y1[j] /= col[j]);
+        for (int i = j + 1; i < nc; ++i)
+          y1[i] -= col[i] * v;
+      }
+      t.assign(m, 0.0f);
+      for (int j = 0; j < nc; ++j) {
+        const float* col = L + std::int64_t(j) * nr + nc;
+        const float v = y1[j];
+        for (int i = 0; i < m; ++i)
+          t[i] += col[i] * v;
+      }
+    }
+    for (int i = 0; i < m; ++i) {
+      const int r = rows[i];
+      if (accumulate && topIndex[r] >= 0)
+        accumulate[topIndex[r]] += t[i];
+      else
+        y[r] -= t[i];
+    }
+  }
+
+  // Backward sweep through supernode k: y[k's columns] -= L21^T y[rows below], then L11^-T.
+  void backward(int k, float* y, std::vector<float>& t) const {
+    const int nc = columns(k), nr = rowsOf(k), m = nr - nc;
+    const float* L = values.data() + px[k];
+    float* y1 = y + super[k];
+    const int* rows = s.data() + pi[k] + nc;
+    t.resize(m);
+    for (int i = 0; i < m; ++i)
+      t[i] = y[rows[i]];
+    if (nc * nr >= kBlasEntries) {
+      const int one = 1;
+      const float alpha = -1.0f, beta = 1.0f;
+      if (m > 0)
+        sgemv_("T", &m, &nc, &alpha, L + nc, &nr, t.data(), &one, &beta, y1, &one);
+      strsv_("L", "T", "N", &nc, L, &nr, y1, &one);
+    } else {
+      for (int j = 0; j < nc; ++j) {
+        const float* col = L + std::int64_t(j) * nr + nc;
+        float sum = 0.0f;
+        for (int i = 0; i < m; ++i)
+          sum += col[i] * t[i];
+        y1[j] -= sum;
+      }
+      for (int j = nc - 1; j >= 0; --j) {
+        const float* col = L + std::int64_t(j) * nr;
+        float sum = 0.0f;
+        for (int i = j + 1; i < nc; ++i)
+          sum += col[i] * y1[i];
+        y1[j] = (y1[j] - sum) / col[j];
+      }
+    }
+  }
+
+  // Chooses the top part and two sides that minimise the top's work plus the larger side's
+  // (greedy: the heaviest subtree below the top joins it, and each step's split is tried).
+  void chooseSplit(const SupernodalStructure& tree) {
+    const int ns = tree.nsuper;
+    const std::vector<int> parent = SupernodeParents(tree, SupernodeOfColumns(tree));
+    std::vector<double> work(ns), subtree(ns);
+    std::vector<std::vector<int>> children(ns);
+    double total = 0.0;
+    for (int k = 0; k < ns; ++k) {
+      work[k] = double(columns(k)) * rowsOf(k);
+      total += work[k];
+    }
+    for (int k = 0; k < ns; ++k) {
+      subtree[k] += work[k];
+      if (parent[k] >= 0) {
+        subtree[parent[k]] += subtree[k];
+        children[parent[k]].push_back(k);
+      }
+    }
+    std::vector<char> inTop(ns, 0);
+    std::vector<int> candidates;
+    double topWork = 0.0;
+    for (int k = 0; k < ns; ++k)
+      if (parent[k] < 0)
+        candidates.push_back(k);
+    double best = total;
+    std::vector<char> bestTop;
+    std::vector<int> bestSide; // per candidate root: 0 or 1, as bestRoots
+    std::vector<int> bestRoots;
+    for (int step = 0; step < 256 && !candidates.empty() && topWork < best; ++step) {
+      std::sort(candidates.begin(), candidates.end(),
+                [&](int a, int b) { return subtree[a] > subtree[b]; });
+      double bin[2] = {0.0, 0.0};
+      std::vector<int> side(candidates.size());
+      for (size_t c = 0; c < candidates.size(); ++c) {
+        const int b = bin[0] <= bin[1] ? 0 : 1;
+        side[c] = b;
+        bin[b] += subtree[candidates[c]];
+      }
+      const double makespan = topWork + std::max(bin[0], bin[1]);
+      if (makespan < best && std::min(bin[0], bin[1]) > 0.0) {
+        best = makespan;
+        bestTop = inTop;
+        bestRoots = candidates;
+        bestSide = side;
+      }
+      const int heaviest = candidates.front();
+      candidates.erase(candidates.begin());
+      inTop[heaviest] = 1;
+      topWork += work[heaviest];
+      for (int c : children[heaviest])
+        candidates.push_back(c);
+    }
+    // Two threads only where they save a tenth of the work.
+    split = !bestTop.empty() && best < 0.9 * total;
+    if (!split)
+      return;
+    std::vector<int> owner(ns, -1); // -1: top
+    for (size_t c = 0; c < bestRoots.size(); ++c)
+      owner[bestRoots[c]] = bestSide[c];
+    for (int k = ns - 1; k >= 0; --k)
+      if (!bestTop[k] && owner[k] < 0 && parent[k] >= 0)
+        owner[k] = owner[parent[k]];
+    topIndex.assign(n, -1);
+    topColumns = 0;
+    for (int k = 0; k < ns; ++k) {
+      if (bestTop[k]) {
+        top.push_back(k);
+        for (int c = super[k]; c < super[k + 1]; ++c)
+          topIndex[c] = topColumns++;
+      } else {
+        side[owner[k]].push_back(k);
+      }
+    }
+  }
+};
+
+SinglePrecisionFactor::SinglePrecisionFactor() : impl_(std::make_unique<Impl>()) {}
+SinglePrecisionFactor::~SinglePrecisionFactor() = default;
+
+Status SinglePrecisionFactor::assign(const CholmodFactor& factor, int threads) {
+  impl_ = std::make_unique<Impl>();
+  const cholmod_factor_struct* L = factor.numericFactor();
+  if (!L)
+    return Status::Error("internal: a single-precision copy needs a numeric factor");
+  SupernodalStructure tree;
+  Status status = NumericSupernodalStructure(*L, tree);
+  if (!status)
+    return status;
+  Impl& d = *impl_;
+  d.n = tree.n;
+  d.super.assign(tree.super, tree.super + tree.nsuper + 1);
+  d.pi.assign(tree.pi, tree.pi + tree.nsuper + 1);
+  d.s.assign(tree.s, tree.s + d.pi.back());
+  const int* px = static_cast<const int*>(L->px);
+  d.px.assign(px, px + tree.nsuper + 1);
+  const int* perm = static_cast<const int*>(L->Perm);
+  if (perm)
+    d.perm.assign(perm, perm + d.n);
+  else
+    for (int k = 0; k < d.n; ++k)
+      d.perm.push_back(k);
+  const double* x = static_cast<const double*>(L->x);
+  d.values.resize(static_cast<size_t>(d.px.back()));
+  for (size_t k = 0; k < d.values.size(); ++k)
+    d.values[k] = static_cast<float>(x[k]);
+  for (float v : d.values)
+    if (!std::isfinite(v)) {
+      impl_ = std::make_unique<Impl>();
+      return Status::Error("the factor does not fit single precision");
+    }
+  if (threads > 1 && WorkerThreads(2) > 1)
+    d.chooseSplit(tree);
+  return Status::Ok();
+}
+
+Status SinglePrecisionFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  const Impl& d = *impl_;
+  if (d.values.empty() || b.size() != d.n)
+    return Status::Error("internal: single-precision solve before assign, or a wrong size");
+  const double scale = b.cwiseAbs().maxCoeff();
+  x.setZero(d.n);
+  if (!(scale > 0.0))
+    return std::isfinite(scale) ? Status::Ok() : Status::Error("the right-hand side is not finite");
+  std::vector<float> y(d.n);
+  for (int k = 0; k < d.n; ++k)
+    y[k] = static_cast<float>(b[d.perm[k]] / scale);
+  // One BLAS thread: these triangular solves and products are too small for threaded BLAS.
+  ScopedBlasThreads serial(1, BlasScope::Pinned);
+  if (!d.split) {
+    std::vector<float> t;
+    const int ns = static_cast<int>(d.super.size()) - 1;
+    for (int k = 0; k < ns; ++k)
+      d.forward(k, y.data(), nullptr, t);
+    for (int k = ns - 1; k >= 0; --k)
+      d.backward(k, y.data(), t);
+  } else {
+    std::vector<float> accumulate[2] = {std::vector<float>(d.topColumns, 0.0f),
+                                        std::vector<float>(d.topColumns, 0.0f)};
+    auto forwardSide = [&](int side) {
+      std::vector<float> t;
+      for (int k : d.side[side])
+        d.forward(k, y.data(), accumulate[side].data(), t);
+    };
+    auto backwardSide = [&](int side) {
+      std::vector<float> t;
+      for (auto it = d.side[side].rbegin(); it != d.side[side].rend(); ++it)
+        d.backward(*it, y.data(), t);
+    };
+    std::thread other(forwardSide, 1);
+    forwardSide(0);
+    other.join();
+    for (int k : d.top)
+      for (int c = d.super[k]; c < d.super[k + 1]; ++c)
+        y[c] -= accumulate[0][d.topIndex[c]] + accumulate[1][d.topIndex[c]];
+    std::vector<float> t;
+    for (int k : d.top)
+      d.forward(k, y.data(), nullptr, t);
+    for (auto it = d.top.rbegin(); it != d.top.rend(); ++it)
+      d.backward(*it, y.data(), t);
+    std::thread back(backwardSide, 1);
+    backwardSide(0);
+    back.join();
+  }
+  for (int k = 0; k < d.n; ++k)
+    x[d.perm[k]] = static_cast<double>(y[k]) * scale;
+  if (!x.allFinite())
+    return Status::Error("the single-precision substitution overflowed");
+  return Status::Ok();
+}
+
+Eigen::Index SinglePrecisionFactor::rows() const {
+  return impl_->n;
+}
+
+double SinglePrecisionFactor::valueBytes() const {
+  return 4.0 * double(impl_->values.size());
+}
+
+} // namespace faceplan

@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// SparseSolver/SinglePrecisionFactor: the single-precision substitutions with a copy of a
+// supernodal factor solve the factored matrix to single precision's accuracy (relative to the
+// double substitution), on one thread and split over two, the same either way; a factor that is
+// not numeric is refused.
+#include "CondensedFEM/CondensedSystem.h"
+#include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/SinglePrecisionFactor.h"
+#include "Support/FEMTestScenes.h"
+
+#include <gtest/gtest.h>
+
+using namespace faceplan;
+using namespace faceplan::testing;
+
+namespace {
+
+struct Factored {
+  std::shared_ptr<const CondensedSystem> system;
+  CholmodFactor factor;
+};
+
+void Factor(Factored& f) {
+  ASSERT_TRUE(Precompute(ShellRequest(12, 4), f.system).ok);
+  ASSERT_TRUE(f.factor.analyze(f.system->kff).ok);
+  ASSERT_TRUE(f.factor.factorize(f.system->kff).ok);
+}
+
+} // namespace
+
+TEST(SinglePrecisionFactor, SolvesTheFactoredMatrixToSinglePrecision) {
+  Factored f;
+  Factor(f);
+  const SparseMatrix& k = f.system->kff;
+  Eigen::VectorXd b = Eigen::VectorXd::Random(k.rows());
+  Eigen::MatrixXd exact;
+  ASSERT_TRUE(f.factor.solve(b, exact).ok);
+  for (int threads : {1, 2}) {
+    SinglePrecisionFactor single;
+    ASSERT_TRUE(single.assign(f.factor, threads).ok);
+    EXPECT_EQ(single.rows(), k.rows());
+    Eigen::VectorXd x;
+    ASSERT_TRUE(single.solve(b, x).ok);
+    const double error = (x - exact.col(0)).norm() / exact.col(0).norm();
+    EXPECT_LT(error, 1e-4) << threads << " thread(s)";
+    EXPECT_GT(error, 1e-12) << "a double-precision solve, not a single-precision one";
+    const Eigen::VectorXd residual = k.selfadjointView<Eigen::Upper>() * x - b;
+    EXPECT_LT(residual.norm() / b.norm(), 1e-4);
+    // A scaled right-hand side gives the scaled solution (b is scaled before it is rounded).
+    Eigen::VectorXd scaled;
+    ASSERT_TRUE(single.solve(1e-200 * b, scaled).ok);
+    EXPECT_LT((scaled - 1e-200 * x).norm(), 1e-6 * 1e-200 * x.norm());
+  }
+  // One thread and two threads: the same sums in a different order only.
+  SinglePrecisionFactor one, two;
+  ASSERT_TRUE(one.assign(f.factor, 1).ok);
+  ASSERT_TRUE(two.assign(f.factor, 2).ok);
+  Eigen::VectorXd x1, x2;
+  ASSERT_TRUE(one.solve(b, x1).ok);
+  ASSERT_TRUE(two.solve(b, x2).ok);
+  EXPECT_LT((x1 - x2).norm() / x1.norm(), 1e-5);
+  EXPECT_EQ(one.valueBytes(), two.valueBytes());
+  EXPECT_GT(one.valueBytes(), 0.0);
+}
+
+TEST(SinglePrecisionFactor, ZeroAndBadInput) {
+  Factored f;
+  Factor(f);
+  SinglePrecisionFactor single;
+  Eigen::VectorXd x;
+  EXPECT_FALSE(single.solve(Eigen::VectorXd::Ones(f.system->kff.rows()), x).ok)
+      << "a solve before assign";
+  ASSERT_TRUE(single.assign(f.factor).ok);
+  ASSERT_TRUE(single.solve(Eigen::VectorXd::Zero(f.system->kff.rows()), x).ok);
+  EXPECT_EQ(x.norm(), 0.0);
+  EXPECT_FALSE(single.solve(Eigen::VectorXd::Ones(3), x).ok) << "a wrong size";
+  Eigen::VectorXd nan = Eigen::VectorXd::Ones(f.system->kff.rows());
+  nan[0] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(single.solve(nan, x).ok);
+  CholmodFactor unfactored;
+  EXPECT_FALSE(single.assign(unfactored).ok);
+}
