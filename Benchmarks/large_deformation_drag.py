@@ -15,7 +15,8 @@ move, the first drag step and the last one per scene and solver to a CSV
 (Benchmarks/plot_large_deformation_convergence.py plots it).
 
     pvpython Benchmarks/large_deformation_drag.py <FacePlan.so> <Data dir> [--repeats 5]
-        [--drag-steps 6] [--scenes lefort1,bsso,genioplasty,cut] [--json FILE] [--csv FILE]
+        [--drag-steps 6] [--scenes lefort1,bsso,genioplasty,cut] [--lip-seal MM] [--json FILE]
+        [--csv FILE]
 """
 import argparse
 import builtins
@@ -40,6 +41,8 @@ parser.add_argument("--newton-repeats", type=int, default=3)
 parser.add_argument("--drag-steps", type=int, default=6)
 parser.add_argument("--pause", type=float, default=1.5, help="seconds before a 'paused' update")
 parser.add_argument("--scenes", default="lefort1,bsso,genioplasty,cut")
+parser.add_argument("--lip-seal", type=float,
+                    help="LipSeal (mm) of the osteotomy scenes instead of the demos' (0: open lips)")
 parser.add_argument("--json")
 parser.add_argument("--csv")
 args = parser.parse_args()
@@ -76,6 +79,8 @@ def timed_update(fem, bone_filters):
 def osteotomy_scene(name):
     tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(args.data, name)
     osteotomy_scenes.configure_contact(fem)
+    if args.lip_seal is not None:
+        fem.LipSeal = args.lip_seal
     fem.Model = "NeoHookean"
     fem.LiftOff = 1
     full = list(osteotomy_scenes.SCENES[name][2])
