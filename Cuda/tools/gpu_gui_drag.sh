@@ -9,6 +9,7 @@
 #   OUT=<dir> PACK=out/gui-pack.tar.xz PLUGIN_DIR=out/gui-plugin Cuda/tools/gpu_gui_drag.sh run [ROUNDS]
 # On a host with ParaView, Xvfb and a FacePlan build with the plugin, `run` without PACK uses them.
 # The figures go to $OUT/gui_drag_gpu.txt (and each round's result JSON and logs beside it).
+# FACEPLAN_GLX_VENDOR=mesa tries the same steps on a host without NVIDIA's GLX (and fails the check).
 set -uo pipefail
 [ -n "${PACK:-}" ] && PACK=$(realpath "$PACK")
 [ -n "${PLUGIN_DIR:-}" ] && PLUGIN_DIR=$(realpath "$PLUGIN_DIR")
@@ -87,7 +88,7 @@ EOF
   cat "$out/machine.txt"
   local status=0 round
   for round in $(seq 1 "$rounds"); do
-    DISPLAY=$display __GLX_VENDOR_LIBRARY_NAME=nvidia python3 Testing/GUI/run_gui_test.py \
+    DISPLAY=$display __GLX_VENDOR_LIBRARY_NAME=${FACEPLAN_GLX_VENDOR:-nvidia} python3 Testing/GUI/run_gui_test.py \
       --script TestGUIDrag.py --paraview "$paraview" --paraview-arg=--no-mpi --plugin "$plugin" \
       --source-dir "$PWD" --work-dir "/tmp/gui-drag-r$round" --timeout 240 >"$out/round$round.log" 2>&1 ||
       status=1
