@@ -60,6 +60,6 @@ pack_unpack() {
 # libraries first, then the plugin's and the host's GPU driver and CUDA.
 pack_environment() {
   local root=$1 plugin_dir=$2
-  export LD_LIBRARY_PATH=$root/usr/lib/x86_64-linux-gnu:$plugin_dir:/usr/local/nvidia/lib64:/usr/local/nvidia/lib:/usr/local/cuda/lib64:/usr/local/cuda/lib:${LD_LIBRARY_PATH:-}
+  export LD_LIBRARY_PATH=$root/usr/lib/x86_64-linux-gnu:$root/usr/lib:$plugin_dir:/usr/local/nvidia/lib64:/usr/local/nvidia/lib:/usr/local/cuda/lib64:/usr/local/cuda/lib:${LD_LIBRARY_PATH:-}
   export PYTHONHOME=$root/usr
 }
