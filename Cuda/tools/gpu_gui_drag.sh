@@ -7,6 +7,8 @@
 # files a GUI.Drag run under xvfb-run opens (paraview_pack.sh), with the plugin beside:
 #   Cuda/tools/gpu_gui_drag.sh pack [PART_SIZE]  -> out/gui-pack.tar.xz (or its parts), out/gui-plugin/
 #   OUT=<dir> PACK=out/gui-pack.tar.xz PLUGIN_DIR=out/gui-plugin Cuda/tools/gpu_gui_drag.sh run [ROUNDS]
+# PACK names the pack or, when that file is absent, the prefix of its parts (PART_SIZE 50M: parts that
+# fit a transfer of 64 MiB, carried one by one to a host that keeps them between calls).
 # On a host with ParaView, Xvfb and a FacePlan build with the plugin, `run` without PACK uses them.
 # The figures go to $OUT/gui_drag_gpu.txt (and each round's result JSON and logs beside it).
 # FACEPLAN_GLX_VENDOR=mesa tries the same steps on a host without NVIDIA's GLX (and fails the check).
