@@ -5,8 +5,8 @@
 # CUDA run did not run on CUDA (pipeline_latency.py checks the filter's Backend field).
 # On a host with ParaView and a FacePlan build with the plugin and CUDA:
 #   OUT=<dir> [FACEPLAN_BUILD_DIR=build] Cuda/tools/gpu_pipeline_latency.sh run [ROUNDS] [EDITS]
-# A GPU host without ParaView runs Debian's pvpython from a pack of the files it opens (found with
-# strace on a machine with ParaView, less the C runtime every host has), with the plugin beside:
+# A GPU host without ParaView runs Debian's pvpython from a pack of the files it opens
+# (paraview_pack.sh), with the plugin beside:
 #   Cuda/tools/gpu_pipeline_latency.sh pack      -> out/pvpython-pack.tar.xz, out/pvpython-plugin/
 #          (pack --stage-only: only the files, in /tmp/pvpython-pack, to try them first)
 #   OUT=<dir> PACK=out/pvpython-pack.tar.xz PLUGIN_DIR=out/pvpython-plugin \
@@ -15,6 +15,7 @@ set -uo pipefail
 [ -n "${PACK:-}" ] && PACK=$(realpath "$PACK")
 [ -n "${PLUGIN_DIR:-}" ] && PLUGIN_DIR=$(realpath "$PLUGIN_DIR")
 cd "$(dirname "$0")/../.."
+. Cuda/tools/paraview_pack.sh
 ROOT=/tmp/pvroot
 
 pack() {
@@ -29,36 +30,14 @@ pack() {
   strace -f -e trace=openat,open -o /tmp/pvpython.trace pvpython --no-mpi Benchmarks/pipeline_latency.py \
     --plugin "$plugin" --data "$PWD/Data" --shell-scene out/pipeline_latency/shell100k.vtk --edits 2 \
     --shell-only >/dev/null 2>&1 || { echo "the traced pvpython run failed"; return 1; }
-  rm -rf "$stage" && mkdir -p "$stage/usr/lib/x86_64-linux-gnu" "$stage/usr/bin"
-  # realpath -s: /usr/bin/../lib/x.so (pvpython's RUNPATH) becomes /usr/lib/x.so, links kept.
-  grep -v ENOENT /tmp/pvpython.trace | grep -oE '"/[^"]+"' | tr -d '"' | xargs realpath -s | sort -u |
-    grep -vE '^/(work|tmp|proc|sys|dev|etc|usr/local/cuda)/' |
-    grep -vE '/(libc|libm|libpthread|libdl|librt|libresolv|libstdc\+\+|libgcc_s)\.so|/ld-linux|/libnss_|nvidia|/libcuda\.|-nspkg\.pth$' |
-    while read -r f; do
-      [ -f "$f" ] || continue
-      case "$f" in
-        */__pycache__/*.pyc) # Python uses a cached module only beside its source, same mtime
-          local src
-          src="$(dirname "$(dirname "$f")")/$(basename "$f" | sed 's/\.cpython-[0-9]*\.pyc$//').py"
-          mkdir -p "$stage/usr$(dirname "${f#/usr}")"
-          cp -L --preserve=timestamps "$f" "$stage/usr${f#/usr}"
-          [ -f "$src" ] && cp -L --preserve=timestamps "$src" "$stage/usr${src#/usr}" ;;
-        */python3*/*|/usr/bin/*) # kept in place: Python finds modules by path
-          mkdir -p "$stage/usr$(dirname "${f#/usr}")"
-          cp -L --preserve=timestamps "$f" "$stage/usr${f#/usr}" ;;
-        *.so|*.so.*) # by the name the loader asked for, where Debian keeps it (VTK finds its
-          # Python packages relative to its libraries)
-          cp -L "$f" "$stage/usr/lib/x86_64-linux-gnu/$(basename "$f")" ;;
-        *) mkdir -p "$stage/usr$(dirname "${f#/usr}")" && cp -L "$f" "$stage/usr${f#/usr}" ;;
-      esac
-    done
+  pack_stage /tmp/pvpython.trace "$stage"
   cp -L "$(command -v pvpython)" "$stage/usr/bin/pvpython" # the executable is not opened by openat
   cp out/pipeline_latency/shell100k.vtk "$stage/"
   [ "${1:-}" = --stage-only ] && return 0 # to try the staged files first
   rm -rf out/pvpython-plugin && mkdir -p out/pvpython-plugin
   cp "$plugin" "$(dirname "$plugin")/libFacePlanFilters.so" out/pvpython-plugin/
-  tar -C "$stage" -cf - . | xz -T2 -9 >out/pvpython-pack.tar.xz
-  ls -l out/pvpython-pack.tar.xz out/pvpython-plugin
+  pack_write "$stage" out/pvpython-pack.tar.xz
+  ls -l out/pvpython-plugin
 }
 
 run() {
@@ -66,10 +45,8 @@ run() {
   local pvpython plugin scene build=${FACEPLAN_BUILD_DIR:-build}
   mkdir -p "$out"
   if [ -n "${PACK:-}" ]; then
-    rm -rf "$ROOT" && mkdir -p "$ROOT"
-    xz -dc "$PACK" | tar -xf - -C "$ROOT" || { echo "the pvpython pack is incomplete"; return 1; }
-    export LD_LIBRARY_PATH=$ROOT/usr/lib/x86_64-linux-gnu:$PLUGIN_DIR:/usr/local/cuda/lib64:/usr/local/cuda/lib:${LD_LIBRARY_PATH:-}
-    export PYTHONHOME=$ROOT/usr
+    pack_unpack "$PACK" "$ROOT" || return 1
+    pack_environment "$ROOT" "$PLUGIN_DIR"
     pvpython=$ROOT/usr/bin/pvpython plugin=$PLUGIN_DIR/FacePlan.so scene=$ROOT/shell100k.vtk
   else
     pvpython=$(command -v pvpython) || { echo "no pvpython: set PACK (see the header)"; return 1; }

@@ -19,7 +19,8 @@ with the drag setting README.md recommends (faceplan_pipeline.drag_render_settin
 main figures; then once more with Model NeoHookean (keys `large_deformation_*`). It also times an unchanged frame (render + paint) with each, which is what software
 rendering costs whatever the pipeline does, and repeats the moves with the drag setting in a view
 of a quarter of the pixels (View > Preview). Each figure set says whether it reaches the target of
-30 updates per second (`*target_met`).
+30 updates per second (`*target_met`). The OpenGL that drew the frames goes into the info too
+(`gl_vendor`, `gl_renderer`, `gl_version`, from the render window's ReportCapabilities()).
 Checks: every move changes the face, no move starts a new precompute. The frame times go into the
 result's info (the wrapper prints them; BENCHMARKS.md records them); they are not checked, since a
 test must not depend on the machine's speed.
@@ -207,7 +208,14 @@ try:
     check(all(state["changed"]),
           "every move changes the face (%d of %d)" % (sum(state["changed"]), len(state["changed"])))
     check(precomputes() == before, "no move starts a new precompute")
-    result["info"]["render_view"] = view.GetRenderWindow().GetClassName()
+    window = view.GetRenderWindow()
+    result["info"]["render_view"] = window.GetClassName()
+    # Which OpenGL drew the frames (llvmpipe, or a GPU's driver): the figures mean nothing without it.
+    capabilities = window.ReportCapabilities() or ""
+    for key, label in (("gl_vendor", "OpenGL vendor string:"), ("gl_renderer", "OpenGL renderer string:"),
+                       ("gl_version", "OpenGL version string:")):
+        line = next((l for l in capabilities.splitlines() if l.startswith(label)), "")
+        result["info"][key] = line[len(label):].strip() or None
     simple.Render(view)
 except Exception:
     result["error"] = traceback.format_exc()

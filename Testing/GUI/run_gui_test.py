@@ -6,6 +6,7 @@ browser, Bezier Cut properties panel, render view) into a PNG, closes the GUI an
 
     python3 run_gui_test.py --paraview <exe> --plugin <FacePlan.so> --source-dir <repo>
                             --work-dir <dir> [--script <name>.py] [--screenshot <png>] [--timeout <s>]
+                            [--paraview-arg <arg>]...
 
 Run it with an X display (faceplan_with_display.sh). Exit 0: every check passed; 1: a check failed,
 the script raised, or the GUI did not report in time; 77 (CTest SKIP): no display.
@@ -37,10 +38,12 @@ class XImage(ctypes.Structure):
 
 
 def open_x():
-    name = ctypes.util.find_library("X11")
-    if not name:
+    # find_library searches the system's library cache only; the soname also finds a libX11 on
+    # LD_LIBRARY_PATH (a ParaView run from a folder of its own).
+    try:
+        x11 = ctypes.CDLL(ctypes.util.find_library("X11") or "libX11.so.6")
+    except OSError:
         return None, None
-    x11 = ctypes.CDLL(name)
     x11.XOpenDisplay.restype = ctypes.c_void_p
     x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
     dpy = x11.XOpenDisplay(None)
@@ -134,6 +137,8 @@ def main():
     ap.add_argument("--script", default="TestGUIUndoRedo.py")
     ap.add_argument("--screenshot")
     ap.add_argument("--timeout", type=float, default=150.0)
+    ap.add_argument("--paraview-arg", action="append", default=[],
+                    help="one more argument for paraview (e.g. --no-mpi), repeatable")
     a = ap.parse_args()
 
     x11, dpy = open_x()
@@ -158,7 +163,8 @@ def main():
     name = os.path.splitext(a.script)[0]
     log_path = os.path.join(a.work_dir, "paraview_gui.log")
     log = open(log_path, "w")
-    proc = subprocess.Popen([a.paraview, "--dr", "-geometry", "1280x1024+0+0", "--script=" + script], env=env,
+    proc = subprocess.Popen([a.paraview, "--dr", "-geometry", "1280x1024+0+0", "--script=" + script]
+                            + a.paraview_arg, env=env,
                             stdout=log, stderr=subprocess.STDOUT)
     deadline = time.time() + a.timeout
     try:
