@@ -21,17 +21,13 @@ import sys
 import traceback
 
 sys.path.insert(0, os.environ["FACEPLAN_GUI_TESTS"])  # Testing/GUI, set by run_gui_test.py
-from gui_result import check, result, write_result  # noqa: E402
+from gui_result import check, result, watch_messages, write_result  # noqa: E402
 
 
 try:
     from paraview import simple
-    from vtkmodules.vtkCommonCore import vtkOutputWindow
 
-    said = []
-    output_window = vtkOutputWindow.GetInstance()
-    for event in ("WarningEvent", "ErrorEvent"):
-        output_window.AddObserver(event, lambda obj, name: said.append(name))
+    said = watch_messages()
 
     sys.path.insert(0, os.environ["FACEPLAN_GUI_SCRIPTS"])
     import osteotomy_scenes

@@ -21,20 +21,15 @@ import traceback
 
 sys.path.insert(0, os.environ["FACEPLAN_GUI_TESTS"])  # Testing/GUI, set by run_gui_test.py
 import gui_scene  # noqa: E402
-from gui_result import check, result, write_result  # noqa: E402
+from gui_result import check, result, watch_messages, write_result  # noqa: E402
 
 
 try:
     import numpy as np
     from paraview import simple
     from vtkmodules.util.numpy_support import vtk_to_numpy
-    from vtkmodules.vtkCommonCore import vtkOutputWindow
 
-    said = []
-    output_window = vtkOutputWindow.GetInstance()
-    for event in ("WarningEvent", "ErrorEvent"):
-        output_window.AddObserver(event, lambda obj, name: said.append(name))
-    result["info"]["output_window"] = output_window.GetClassName()
+    said = watch_messages()
 
     sys.path.insert(0, os.environ["FACEPLAN_GUI_SCRIPTS"])
     import faceplan_pipeline

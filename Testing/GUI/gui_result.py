@@ -15,6 +15,21 @@ def check(cond, what):
     return bool(cond)
 
 
+def watch_messages():
+    """The warnings and errors the session says from now on: a list filled by observers on the
+    GUI's vtkOutputWindow, which fires WarningEvent / ErrorEvent after showing the text (the GUI
+    pops its Output Messages window at each), so observing it hides none. Also records the output
+    window's class in result["info"]."""
+    from vtkmodules.vtkCommonCore import vtkOutputWindow
+
+    said = []
+    output_window = vtkOutputWindow.GetInstance()
+    for event in ("WarningEvent", "ErrorEvent"):
+        output_window.AddObserver(event, lambda obj, name: said.append(name))
+    result["info"]["output_window"] = output_window.GetClassName()
+    return said
+
+
 def write_result():
     path = os.environ.get("FACEPLAN_GUI_RESULT", "faceplan_gui_result.json")
     tmp = path + ".tmp"
