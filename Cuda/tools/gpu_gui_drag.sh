@@ -13,20 +13,13 @@
 # The figures go to $OUT/gui_drag_gpu.txt (and each round's result JSON and logs beside it).
 # FACEPLAN_GLX_VENDOR=mesa tries the same steps on a host without NVIDIA's GLX (and fails the check).
 set -uo pipefail
-[ -n "${PACK:-}" ] && PACK=$(realpath "$PACK")
-[ -n "${PLUGIN_DIR:-}" ] && PLUGIN_DIR=$(realpath "$PLUGIN_DIR")
+. "$(dirname "$0")/paraview_pack.sh"
 cd "$(dirname "$0")/../.."
-. Cuda/tools/paraview_pack.sh
-ROOT=/tmp/pvroot
 
-find_plugin() {
-  find "${FACEPLAN_BUILD_DIR:-build}" -name FacePlan.so -path '*paraview*plugins*' | head -n 1
-}
 
 pack() {
   local plugin stage=/tmp/gui-pack trace=/tmp/gui-pack.trace
-  plugin=$(find_plugin)
-  [ -n "$plugin" ] || { echo "no FacePlan.so: build with the plugin first"; return 1; }
+  plugin=$(pack_find_plugin "with the plugin") || return 1
   # Every file this very run opens: Xvfb (and xkbcomp, Mesa's swrast for its GLX), paraview, Qt.
   strace -f -e trace=openat,open,execve -o "$trace" xvfb-run -a -s "-screen 0 1280x1024x24" \
     python3 Testing/GUI/run_gui_test.py --script TestGUIDrag.py --paraview "$(command -v paraview)" \
@@ -73,8 +66,7 @@ EOF
   else
     xvfb=$(command -v Xvfb) || { echo "no Xvfb: set PACK (see the header)"; return 1; }
     paraview=$(command -v paraview) || { echo "no paraview: set PACK (see the header)"; return 1; }
-    plugin=$(find_plugin)
-    [ -n "$plugin" ] || { echo "no FacePlan.so: build with the plugin first"; return 1; }
+    plugin=$(pack_find_plugin "with the plugin") || return 1
   fi
   if [ -n "${PACK:-}" ] && ldd "$ROOT/usr/bin/paraview" "$ROOT/usr/bin/Xvfb" "$plugin" | grep "not found"; then
     echo "missing libraries"

@@ -12,17 +12,13 @@
 #   OUT=<dir> PACK=out/pvpython-pack.tar.xz PLUGIN_DIR=out/pvpython-plugin \
 #     Cuda/tools/gpu_pipeline_latency.sh run [ROUNDS] [EDITS]
 set -uo pipefail
-[ -n "${PACK:-}" ] && PACK=$(realpath "$PACK")
-[ -n "${PLUGIN_DIR:-}" ] && PLUGIN_DIR=$(realpath "$PLUGIN_DIR")
+. "$(dirname "$0")/paraview_pack.sh"
 cd "$(dirname "$0")/../.."
-. Cuda/tools/paraview_pack.sh
-ROOT=/tmp/pvroot
 
 pack() {
   local build=${FACEPLAN_BUILD_DIR:-build} stage=/tmp/pvpython-pack
   local plugin
-  plugin=$(find "$build" -name FacePlan.so -path '*paraview*plugins*' | head -n 1)
-  [ -n "$plugin" ] || { echo "no FacePlan.so under $build: build with the plugin and CUDA first"; return 1; }
+  plugin=$(pack_find_plugin "with the plugin and CUDA") || return 1
   mkdir -p out/pipeline_latency
   [ -f out/pipeline_latency/shell100k.vtk ] ||
     "$build/bin/export_shell_scene" --subdivisions 18 --layers 5 --out out/pipeline_latency/shell100k.vtk
@@ -50,8 +46,7 @@ run() {
     pvpython=$ROOT/usr/bin/pvpython plugin=$PLUGIN_DIR/FacePlan.so scene=$ROOT/shell100k.vtk
   else
     pvpython=$(command -v pvpython) || { echo "no pvpython: set PACK (see the header)"; return 1; }
-    plugin=$(find "$build" -name FacePlan.so -path '*paraview*plugins*' | head -n 1)
-    [ -n "$plugin" ] || { echo "no FacePlan.so under $build: build with the plugin and CUDA first"; return 1; }
+    plugin=$(pack_find_plugin "with the plugin and CUDA") || return 1
     scene=out/pipeline_latency/shell100k.vtk
     mkdir -p out/pipeline_latency
     [ -f "$scene" ] || "$build/bin/export_shell_scene" --subdivisions 18 --layers 5 --out "$scene"

@@ -4,6 +4,20 @@
 # of files one run opened on a machine with ParaView (found with strace), less the C runtime every
 # host has and the GPU driver the host brings, in Debian's layout under a root folder, as a .tar.xz;
 # a pack larger than what one transfer carries travels as parts <pack>.part-aa, -ab, ...
+# Sourced before the caller changes to the repository root: PACK and PLUGIN_DIR are made absolute.
+
+[ -n "${PACK:-}" ] && PACK=$(realpath "$PACK")
+[ -n "${PLUGIN_DIR:-}" ] && PLUGIN_DIR=$(realpath "$PLUGIN_DIR")
+ROOT=/tmp/pvroot # where a pack is unpacked
+
+# pack_find_plugin HOW: prints the FacePlan plugin under $FACEPLAN_BUILD_DIR (default build), or
+# says to build it HOW first and fails.
+pack_find_plugin() {
+  local build=${FACEPLAN_BUILD_DIR:-build} plugin
+  plugin=$(find "$build" -name FacePlan.so -path '*paraview*plugins*' | head -n 1)
+  [ -n "$plugin" ] || { echo "no FacePlan.so under $build: build $1 first" >&2; return 1; }
+  echo "$plugin"
+}
 
 # pack_stage TRACE STAGE: copies every file the run traced in TRACE (strace -f -e
 # trace=openat,open,execve,... -o TRACE) opened into STAGE, under the path Debian keeps it at.
