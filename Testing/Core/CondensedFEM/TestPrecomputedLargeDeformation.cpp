@@ -12,6 +12,8 @@
 #include <functional>
 #include <gtest/gtest.h>
 
+#include <string>
+
 using namespace faceplan;
 using namespace faceplan::testing;
 
@@ -79,6 +81,25 @@ Precomputed(const PrecomputeRequest& request, PrecomputedLargeDeformationOptions
   const Status s = PrecomputeLargeDeformation(request, options, system);
   EXPECT_TRUE(s.ok) << s.message;
   return system;
+}
+
+// One step of a drag whose refactorization is awaited: the warm solve from `state` (advanced to its
+// result) and, on `coldSystem` (a system of its own, whose refactorizations cannot replace the
+// drag's), the cold solve of the same input, which the warm one must equal. Their reports go to
+// `warm` and `cold`.
+void AwaitedDragStep(LargeDeformationSystem& system, LargeDeformationSystem& coldSystem,
+                     const SolveInput& input, LargeDeformationState& state,
+                     PrecomputedLargeDeformationReport& warm,
+                     PrecomputedLargeDeformationReport& cold) {
+  SolveResult warmResult, coldResult;
+  LargeDeformationState next;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(system, input, &state, warmResult, warm, &next).ok);
+  EXPECT_FALSE(warm.fellBack) << warm.fallbackReason;
+  WaitForRefactorization(system);
+  state = next;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(coldSystem, input, nullptr, coldResult, cold).ok);
+  EXPECT_LT(RelativeMaxNodeDifference(warmResult.allDisplacement, coldResult.allDisplacement),
+            kAgreement);
 }
 
 SolveResult Newton(const PrecomputeRequest& request, const SolveInput& input, bool liftOff,
@@ -225,24 +246,17 @@ TEST(PrecomputedLargeDeformation, NodesReleasedInADragAreCoupledBackIntoTheIniti
         return Eigen::RowVector3d(x * (std::cos(angle) - 1.0), 0.0,
                                   x * std::sin(angle) - 0.1 * kLz);
       });
-      SolveResult warm, cold;
+      SCOPED_TRACE("step " + std::to_string(step));
       PrecomputedLargeDeformationReport report, coldReport;
-      LargeDeformationState next;
-      ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, &state, warm, report, &next).ok);
-      EXPECT_FALSE(report.fellBack) << report.fallbackReason;
-      WaitForRefactorization(*system);
-      state = next;
+      ASSERT_NO_FATAL_FAILURE(
+          AwaitedDragStep(*system, *coldSystem, input, state, report, coldReport));
+      EXPECT_EQ(report.liftedNodes, coldReport.liftedNodes);
       if (step > 1) {
         iterations[coupled] += report.iterations;
         if (coupled && report.liftedNodes > lastLifted)
           ++releasingSteps;
       }
       lastLifted = report.liftedNodes;
-      ASSERT_TRUE(
-          SolvePrecomputedLargeDeformation(*coldSystem, input, nullptr, cold, coldReport).ok);
-      EXPECT_LT(RelativeMaxNodeDifference(warm.allDisplacement, cold.allDisplacement), kAgreement)
-          << "step " << step;
-      EXPECT_EQ(report.liftedNodes, coldReport.liftedNodes) << "step " << step;
     }
   }
   EXPECT_GT(releasingSteps, 1) << "the drag released nodes on several steps";
@@ -283,7 +297,6 @@ TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations)
   // the cold solve and the steps after the first take fewer iterations than with the tangent
   // factored at the converged state.
   const PrecomputeRequest request = ShellRequest(4, 2);
-  // The cold solves on a system of their own: their refactorizations must not replace the drag's.
   PrecomputedLargeDeformationOptions coldOptions;
   coldOptions.backgroundRefactorization = false;
   auto coldSystem = Precomputed(request, coldOptions);
@@ -299,19 +312,12 @@ TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations)
     input.recoverInterior = true;
     for (int step = 0; step < 6; ++step) {
       input.movableDisplacement = SmoothRoiField(request, 3.0 + 0.25 * step);
-      SolveResult warm, cold;
+      SCOPED_TRACE("step " + std::to_string(step) + (ahead ? ", factored ahead" : ""));
       PrecomputedLargeDeformationReport report, coldReport;
-      LargeDeformationState next;
-      ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, &state, warm, report, &next).ok);
-      EXPECT_FALSE(report.fellBack) << report.fallbackReason;
-      WaitForRefactorization(*system);
-      state = next;
+      ASSERT_NO_FATAL_FAILURE(
+          AwaitedDragStep(*system, *coldSystem, input, state, report, coldReport));
       if (step >= 2)
         iterations[ahead] += report.iterations;
-      ASSERT_TRUE(
-          SolvePrecomputedLargeDeformation(*coldSystem, input, nullptr, cold, coldReport).ok);
-      EXPECT_LT(RelativeMaxNodeDifference(warm.allDisplacement, cold.allDisplacement), kAgreement)
-          << "step " << step << (ahead ? ", factored ahead" : "");
     }
   }
   EXPECT_LT(iterations[1], iterations[0])
