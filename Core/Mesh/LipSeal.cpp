@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "Mesh/LipSeal.h"
 
+#include "Mesh/MeshValidation.h"
+#include "Mesh/TetGeometry.h"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -41,16 +44,12 @@ std::vector<BoundaryFace> BoundaryFaces(const TetMesh& mesh) {
   return out;
 }
 
-// Mean-ratio quality: 12 (3 V)^(2/3) / sum of squared edge lengths (1 for a regular tetrahedron).
-double MeanRatio(const Eigen::Vector3d x[4]) {
-  const double volume = (x[1] - x[0]).cross(x[2] - x[0]).dot(x[3] - x[0]) / 6.0;
-  if (!(volume > 0.0))
-    return 0.0;
-  double edges = 0.0;
+// The mean-ratio quality (TetMeanRatio) of a positively oriented cell; 0 for any other.
+double OrientedMeanRatio(const Eigen::Vector3d x[4]) {
+  TetCorners corners;
   for (int i = 0; i < 4; ++i)
-    for (int j = i + 1; j < 4; ++j)
-      edges += (x[i] - x[j]).squaredNorm();
-  return 12.0 * std::pow(3.0 * volume, 2.0 / 3.0) / edges;
+    corners.row(i) = x[i].transpose();
+  return TetVolume(corners) > 0.0 ? TetMeanRatio(corners) : 0.0;
 }
 
 struct CellKeyHash {
@@ -135,7 +134,7 @@ Status AddLipSeal(const TetMesh& mesh, const Materials& materials, const LipSeal
                 normal[node].dot(n) > -options.opposedCosine)
               continue;
             x[3] = mesh.points.row(node);
-            if (MeanRatio(x) < options.minimumQuality)
+            if (OrientedMeanRatio(x) < options.minimumQuality)
               continue;
             best = node;
             bestDistance = distance;
