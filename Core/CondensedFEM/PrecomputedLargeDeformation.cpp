@@ -263,9 +263,6 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   return Status::Ok();
 }
 
-// A warm solve whose prescribed change is at most this fraction of the move is a drag step.
-constexpr double kDragFraction = 1.0;
-
 // Why a sub-step failed: a smaller one may mend it, or the solve falls back.
 enum class Failure { None, Smaller, Fallback, Stopped };
 
@@ -749,12 +746,12 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     return Status::Ok(); // not a converged state: nothing to refactor at or to start from
   }
   if (sys.options.backgroundRefactorization) {
-    // A drag: a warm solve whose move changed little. Its next edit is most likely the same change
-    // again, so the tangent is factored there, one step ahead, where the next solve's iterates
-    // will be (any positive definite factor serves as the initial Hessian; this one is the
-    // nearest to the next solve's).
+    // A drag: a warm solve of the same loads whose prescribed change is no larger than the move
+    // itself. Its next edit is most likely the same change again, so the tangent is factored
+    // there, one step ahead, where the next solve's iterates will be (any positive definite factor
+    // serves as the initial Hessian; this one is the nearest to the next solve's).
     const bool drag = report.warmStarted && fullLoad == warm->load &&
-                      (fullTarget - warm->target).norm() <= kDragFraction * fullTarget.norm();
+                      (fullTarget - warm->target).norm() <= fullTarget.norm();
     if (drag && sys.options.factorAhead) {
       const Eigen::VectorXd ahead = 2.0 * u - warm->u;
       sys.requestRefactorization(u, pb.prescribed, &ahead);

@@ -74,8 +74,8 @@ struct PrecomputedLargeDeformationOptions {
   int maxContactUpdates = 100;
   // After a converged solve, factor the tangent at its state on a background thread.
   bool backgroundRefactorization = true;
-  // After a drag step (a warm solve with a small change of the move), factor where the same
-  // change again would lead (2 u - u_before) rather than at u.
+  // After a drag step (a warm solve of the same loads whose prescribed change is no larger than
+  // the move), factor where the same change again would lead (2 u - u_before) rather than at u.
   bool factorAhead = true;
   // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
   // through their Schur complement, one substitution each, when there are at most this many.
