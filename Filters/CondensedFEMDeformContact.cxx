@@ -147,6 +147,26 @@ Status ContactCache::build(vtkPointSet* tissue, const std::vector<vtkIdType>& ti
   return Status::Ok();
 }
 
+ContactModelChoice ResolveContactModel(ContactModelChoice chosen, bool boneHasSliding) {
+  if (chosen != ContactModelChoice::Auto)
+    return chosen;
+  return boneHasSliding ? ContactModelChoice::ByArray : ContactModelChoice::Tied;
+}
+
+const char* ContactModelName(ContactModelChoice model) {
+  switch (model) {
+  case ContactModelChoice::Tied:
+    return "Tied";
+  case ContactModelChoice::Sliding:
+    return "Sliding";
+  case ContactModelChoice::ByArray:
+    return "ByArray";
+  case ContactModelChoice::Auto:
+    break;
+  }
+  return "Auto";
+}
+
 NodeSets MakeNodeSets(const ContactMap& map, const std::vector<vtkIdType>& tissueBoundary,
                       ContactModelChoice model, vtkDataArray* slidingFlags,
                       const std::vector<int>& segmentOfBonePoint) {

@@ -35,7 +35,12 @@ struct ContactMap {
   std::vector<char> released; // 1 when flagged Released or within ReleaseDistance of another region
 };
 
-enum class ContactModelChoice { Tied = 0, Sliding = 1, ByArray = 2 };
+enum class ContactModelChoice { Tied = 0, Sliding = 1, ByArray = 2, Auto = 3 };
+
+// The contact model an update uses: Auto is ByArray where the bone carries a Sliding array (an
+// Osteotomy operation preset marks the teeth), Tied otherwise.
+ContactModelChoice ResolveContactModel(ContactModelChoice chosen, bool boneHasSliding);
+const char* ContactModelName(ContactModelChoice model);
 
 // The contact map between one tissue and bone, kept between updates: CondensedFEMDeform rebuilds
 // it when BoneInput::contactChanged says that what it depends on changed (the tissue, the

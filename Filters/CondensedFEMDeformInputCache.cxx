@@ -37,7 +37,7 @@ Status TissueCache::update(vtkUnstructuredGrid* tissue, const Settings& settings
   DataStamp stamp = StampOf(tissue);
   const MaterialSettings materialSettings{settings.youngsModulus,    settings.poissonRatio,
                                           settings.density,          settings.lengthUnit,
-                                          settings.useCellMaterials, settings.lipSeal};
+                                          settings.useCellMaterials, settings.sealGap()};
   if (valid_ && stamp == stamp_ && materialSettings == materialSettings_)
     return Status::Ok();
 
@@ -51,9 +51,9 @@ Status TissueCache::update(vtkUnstructuredGrid* tissue, const Settings& settings
   // LipSeal: the facing surfaces within the gap tied by bridging cells, which the solvers take as
   // tissue; the output keeps the input's cells.
   LipSealInfo lipSeal;
-  if (status && settings.lipSeal > 0.0) {
+  if (status && settings.sealGap() > 0.0) {
     LipSealOptions options;
-    options.gap = settings.lipSeal;
+    options.gap = settings.sealGap();
     TetMesh sealed;
     Materials sealedMaterials;
     status = AddLipSeal(mesh, materials, options, sealed, sealedMaterials, lipSeal);

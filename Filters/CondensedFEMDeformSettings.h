@@ -2,6 +2,7 @@
 #pragma once
 // The CondensedFEMDeform properties as one value, passed to the filter's steps (validate, convert,
 // contact, solve, output) so each step sees exactly what it uses. Private to FacePlan::Filters.
+#include <string>
 
 namespace faceplan {
 namespace fem_filter {
@@ -20,7 +21,7 @@ struct Settings {
   bool useCellMaterials = true;
   double lengthUnit = 0.001; // metres per mesh unit
   double contactDistance = 1.0;
-  int contactModel = 0;         // ContactModelChoice: Tied, Sliding, ByArray
+  int contactModel = 3;         // ContactModelChoice: Tied, Sliding, ByArray, Auto
   double releaseDistance = 0.0; // mesh units; 0 releases nothing
   bool useGravity = false;
   double density = 1100.0; // kg/m^3
@@ -30,8 +31,25 @@ struct Settings {
   int model = 2;                  // ModelChoice
   int largeDeformationSolver = 0; // LargeDeformationSolverChoice
   int iterationLimit = 0;         // Precomputed: stop after this many iterations (0: none)
-  bool liftOff = false;
-  double lipSeal = 0.0; // mesh units; 0 ties no facing tissue surfaces (Core/Mesh/LipSeal.h)
+  bool liftOff = true;
+  // Mesh units; 0 ties no facing tissue surfaces (Core/Mesh/LipSeal.h); kLipSealAuto: sealGap().
+  double lipSeal = kLipSealAuto;
+  // The Operation a Bone input's Osteotomy preset names (field data Operation); empty when none.
+  std::string boneOperation;
+
+  static constexpr double kLipSealAuto = -1.0;
+  // Closed lips for an operation preset's plan: the plan puts the teeth in occlusion, where
+  // competent lips close; at rest they are at most 3 mm apart (the interlabial gap's normal range,
+  // 0-3 mm: Jacobson & Jacobson, Radiographic Cephalometry, 2006), so facing lip surfaces up to
+  // 3 mm apart are tied.
+  static constexpr double kOperationLipSealMetres = 0.003;
+  // The gap LipSeal ties, in mesh units: as set, or with Auto 3 mm for an operation preset's bone
+  // and none otherwise.
+  double sealGap() const {
+    if (lipSeal != kLipSealAuto)
+      return lipSeal;
+    return boneOperation.empty() ? 0.0 : kOperationLipSealMetres / lengthUnit;
+  }
 
   OutputMode output() const { return static_cast<OutputMode>(outputMode); }
   MethodChoice methodChoice() const { return static_cast<MethodChoice>(method); }

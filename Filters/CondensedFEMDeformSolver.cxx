@@ -164,9 +164,6 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
     request.options = options;
     return request;
   };
-  if (settings.liftOff && model == ModelChoice::LinearElastic)
-    outcome.notes.push_back("LiftOff applies to Model NeoHookean only: the linear model keeps "
-                            "sliding tissue on the bone");
 
   Status status;
   if (model == ModelChoice::NeoHookean) {
@@ -223,6 +220,8 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
         outcome.modelNote = "Auto: the small-strain check is off (StrainWarningLimit 0): linear";
       } else if (strain <= limit && outcome.result.invertedCells == 0) {
         why << "within the small-strain limit " << 100.0 * limit << " %: linear";
+        if (settings.liftOff && !given.sets.sliding.empty())
+          why << " (sliding tissue stays on the bone: lift-off needs NeoHookean)";
         outcome.modelNote = why.str();
       } else if (options.elementOrder != ElementOrder::Linear) {
         why << "beyond the small-strain limit " << 100.0 * limit
@@ -240,7 +239,12 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
         outcome.notes = notes;
       }
     } else if (status) {
+      // LiftOff is on by default: with the linear model it is the model's own limit, said in the
+      // note rather than warned about on every update.
       outcome.modelNote = "Model LinearElastic (as set)";
+      if (settings.liftOff && !given.sets.sliding.empty())
+        outcome.modelNote += "; LiftOff applies to Model NeoHookean only: the linear model keeps "
+                             "sliding tissue on the bone";
     }
   }
   if (!status)

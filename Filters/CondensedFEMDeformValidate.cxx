@@ -90,13 +90,15 @@ Status ValidateProperties(const Settings& s) {
   if (!(s.contactDistance >= 0.0) || !std::isfinite(s.contactDistance))
     return Error("ContactDistance must be zero or positive and finite (got ", s.contactDistance,
                  ")");
-  if (s.contactModel < 0 || s.contactModel > 2)
-    return Error("ContactModel must be 0 (Tied), 1 (Sliding) or 2 (ByArray), not ", s.contactModel);
+  if (s.contactModel < 0 || s.contactModel > 3)
+    return Error("ContactModel must be 0 (Tied), 1 (Sliding), 2 (ByArray) or 3 (Auto), not ",
+                 s.contactModel);
   if (!(s.releaseDistance >= 0.0) || !std::isfinite(s.releaseDistance))
     return Error("ReleaseDistance must be zero or positive and finite (got ", s.releaseDistance,
                  ")");
-  if (!(s.lipSeal >= 0.0) || !std::isfinite(s.lipSeal))
-    return Error("LipSeal must be zero or a positive, finite gap in mesh units (got ", s.lipSeal,
+  if (s.lipSeal != Settings::kLipSealAuto && (!(s.lipSeal >= 0.0) || !std::isfinite(s.lipSeal)))
+    return Error("LipSeal must be -1 (Auto), zero or a positive, finite gap in mesh units (got ",
+                 s.lipSeal,
                  ")");
   if (s.useGravity) {
     if (!(s.density >= 0.0) || !std::isfinite(s.density))

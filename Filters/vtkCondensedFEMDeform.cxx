@@ -25,6 +25,7 @@
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
 #include "vtkPolyData.h"
+#include "vtkStringArray.h"
 #include "vtkTable.h"
 #include "vtkUnstructuredGrid.h"
 
@@ -169,6 +170,15 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
       fixedBones.push_back(WithZeroDisplacement(bone));
       bone = fixedBones.back();
     }
+  // An operation preset's bone (Osteotomy's field data Operation) sets LipSeal Auto's gap; the
+  // merge keeps only the segments' field data, so it is read from the connections.
+  this->BoneOperation.clear();
+  for (vtkPointSet* bone : bones)
+    if (bone)
+      if (auto* operation =
+              vtkStringArray::SafeDownCast(bone->GetFieldData()->GetAbstractArray("Operation")))
+        if (operation->GetNumberOfValues() > 0 && this->BoneOperation.empty())
+          this->BoneOperation = operation->GetValue(0);
   // Several connections (a bimaxillary plan) become one bone, each checked first.
   for (size_t c = 0; bones.size() > 1 && c < bones.size(); ++c) {
     const faceplan::Status status = ValidateBone(bones[c]);
@@ -220,9 +230,17 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
     return false;
   }
   const TissueBoundary& boundary = cache.tissue.boundary();
-  if (settings.lipSeal > 0.0 && cache.tissue.lipSeal().bridges == 0)
-    warn("LipSeal: no facing tissue surfaces within " + std::to_string(settings.lipSeal) +
-         " mesh units, so nothing is tied");
+  // A gap set by hand that ties nothing is a mistake; Auto's 3 mm tying nothing is a face whose
+  // lips are further apart at rest (lip incompetence), which the model then leaves open.
+  if (settings.sealGap() > 0.0 && cache.tissue.lipSeal().bridges == 0) {
+    const std::string none = "LipSeal: no facing tissue surfaces within " +
+                             std::to_string(settings.sealGap()) + " mesh units, so nothing is tied";
+    if (settings.lipSeal == Settings::kLipSealAuto) {
+      vtkLog(INFO, << this->GetObjectDescription() << ": " << none << " (Auto: the lips stay open)");
+    } else {
+      warn(none);
+    }
+  }
   this->UpdateProgress(0.05);
 
   // 3. contact, rebuilt when the tissue, the distance, the release distance or the undeformed
@@ -282,9 +300,11 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   }
   // The node sets also follow the contact model, the Sliding flags and the segments (cheap to
   // rebuild; the solver reuses its precompute while the whole request is equal).
+  const ContactModelChoice contactModel =
+      ResolveContactModel(static_cast<ContactModelChoice>(settings.contactModel),
+                          bone->GetPointData()->GetArray("Sliding") != nullptr);
   cache.request.sets =
-      MakeNodeSets(contact, boundary.nodes, static_cast<ContactModelChoice>(settings.contactModel),
-                   bone->GetPointData()->GetArray("Sliding"),
+      MakeNodeSets(contact, boundary.nodes, contactModel, bone->GetPointData()->GetArray("Sliding"),
                    segments.usable ? segments.segmentOfPoint : std::vector<int>());
   const faceplan::PrecomputeRequest& request = cache.request;
   faceplan::SolveInput input;
@@ -332,6 +352,9 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
                                  static_cast<double>(ReleasedCount(contact)));
   faceplan::fielddata::AddScalar(output->GetFieldData(), "LipSealBridges",
                                  static_cast<double>(cache.tissue.lipSeal().bridges));
+  faceplan::fielddata::AddScalar(output->GetFieldData(), "LipSealGap", settings.sealGap());
+  faceplan::fielddata::AddString(output->GetFieldData(), "ContactModel",
+                                 ContactModelName(contactModel));
   BuildStageTable(outcome, table);
   this->UpdateProgress(1.0);
   return true;
@@ -359,6 +382,7 @@ Settings vtkCondensedFEMDeform::CurrentSettings() const {
   s.iterationLimit = this->QuasiNewtonIterationLimit;
   s.liftOff = this->LiftOff;
   s.lipSeal = this->LipSeal;
+  s.boneOperation = this->BoneOperation;
   s.verify = this->Verify;
   return s;
 }

@@ -49,6 +49,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <string>
 
 class vtkPointSet;
 class vtkTable;
@@ -75,7 +76,13 @@ public:
     METHOD_CACHED_FACTOR = 2,
     METHOD_FULL_REFERENCE = 3
   };
-  enum ContactModels { CONTACT_TIED = 0, CONTACT_SLIDING = 1, CONTACT_BY_ARRAY = 2 };
+  enum ContactModels {
+    CONTACT_TIED = 0,
+    CONTACT_SLIDING = 1,
+    CONTACT_BY_ARRAY = 2,
+    CONTACT_AUTO = 3
+  };
+  static constexpr double LIP_SEAL_AUTO = -1.0; // LipSeal: decided by the bone (see LipSeal)
   enum ElementOrders { LINEAR_ELEMENTS = 0, QUADRATIC_ELEMENTS = 1, QUADRATIC_NODAL_PRESSURE = 2 };
   enum Models { LINEAR_ELASTIC = 0, NEO_HOOKEAN = 1, AUTO_MODEL = 2 };
   enum LargeDeformationSolvers { PRECOMPUTED = 0, NEWTON = 1 };
@@ -172,7 +179,9 @@ public:
   ///@{
   /// Contact: CONTACT_TIED (0, every component follows the bone), CONTACT_SLIDING (1, only the
   /// component along the bone's normal follows it; the tissue slides tangentially) or
-  /// CONTACT_BY_ARRAY (2, the bone point array `Sliding` picks per node).
+  /// CONTACT_BY_ARRAY (2, the bone point array `Sliding` picks per node) or CONTACT_AUTO (3, the
+  /// default: ByArray where the bone carries `Sliding`, as an Osteotomy operation preset's output
+  /// does, Tied otherwise). Field data `ContactModel` names the one used.
   vtkSetMacro(ContactModel, int);
   vtkGetMacro(ContactModel, int);
   ///@}
@@ -180,7 +189,7 @@ public:
   ///@{
   /// When the neo-Hookean model runs: sliding tissue may lift off the bone (unilateral contact: the
   /// normal displacement only keeps the tissue out of the bone) instead of following the bone's
-  /// normal motion both ways. Off by default. The linear model keeps sliding nodes on the bone.
+  /// normal motion both ways. On by default. The linear model keeps sliding nodes on the bone.
   vtkSetMacro(LiftOff, bool);
   vtkGetMacro(LiftOff, bool);
   ///@}
@@ -189,8 +198,10 @@ public:
   /// Closed lips: the tissue's facing boundary surfaces (the upper and lower lip across the oral
   /// fissure) within this gap (mesh units) are tied to each other, each face to the nearest node
   /// facing it, by bridging cells 1000 times as stiff as the tissue (Core/Mesh/LipSeal.h). The
-  /// output keeps the input's cells; field data `LipSealBridges` counts the ties. 0 (default) ties
-  /// nothing.
+  /// output keeps the input's cells; field data `LipSealBridges` counts the ties and `LipSealGap`
+  /// gives the gap used. 0 ties nothing. LIP_SEAL_AUTO (-1, the default): 3 mm where a Bone input
+  /// comes from an Osteotomy operation preset (field data `Operation`), whose plan puts the teeth
+  /// in occlusion, where competent lips (at rest at most 3 mm apart) are closed; 0 otherwise.
   vtkSetMacro(LipSeal, double);
   vtkGetMacro(LipSeal, double);
   ///@}
@@ -232,7 +243,7 @@ protected:
   bool UseCellMaterials = true;
   double LengthUnit = 0.001;
   double ContactDistance = 1.0;
-  int ContactModel = CONTACT_TIED;
+  int ContactModel = CONTACT_AUTO;
   double ReleaseDistance = 0.0;
   bool UseGravity = false;
   double Density = 1100.0;
@@ -245,14 +256,16 @@ protected:
   int Model = AUTO_MODEL;
   int LargeDeformationSolver = PRECOMPUTED;
   int QuasiNewtonIterationLimit = 0;
-  bool LiftOff = false;
-  double LipSeal = 0.0;
+  bool LiftOff = true;
+  double LipSeal = LIP_SEAL_AUTO;
 
 private:
   vtkCondensedFEMDeform(const vtkCondensedFEMDeform&) = delete;
   void operator=(const vtkCondensedFEMDeform&) = delete;
 
   faceplan::fem_filter::Settings CurrentSettings() const;
+  // The Operation named by a Bone connection's field data (an Osteotomy preset), set per update.
+  std::string BoneOperation;
   // The serial filter on whole inputs; false (after logging the error) when it failed.
   bool Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bone, vtkUnstructuredGrid* output,
               vtkTable* table);

@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Soft:hard movement ratios of FacePlan's predictions over a sweep of plans, against the published
 clinical bands (docs/CLINICAL.md). Each operation is the model a user gets from Osteotomy's Operation
-preset (scripts/osteotomy_scenes.py: the preset's cut, Released and Sliding; ContactModel ByArray;
-LipSeal, the lips closed; Model NeoHookean with LiftOff), moved by advancements of 2-10 mm,
+preset and CondensedFEMDeform's defaults (scripts/osteotomy_scenes.py: the preset's cut, Released and
+Sliding; ContactModel, LipSeal and Model Auto, which take the preset's arrays, close the lips and
+solve for large deformations; LiftOff), moved by advancements of 2-10 mm,
 setbacks, impactions and small rotations; FacialLandmarks measures the landmarks. Writes
 <out>/sweep.csv and <out>/ratios.png (ratio against movement, the bands shaded) and prints the
 table.
@@ -24,7 +25,7 @@ parser = argparse.ArgumentParser()
 parser.add_argument("plugin")
 parser.add_argument("data")
 parser.add_argument("out")
-parser.add_argument("--linear", action="store_true", help="the linear model (fast) instead of the demos' NeoHookean")
+parser.add_argument("--linear", action="store_true", help="Model LinearElastic (fast) instead of Auto (NeoHookean on these plans)")
 parser.add_argument("--quick", action="store_true", help="advancements of 2, 6 and 10 mm only")
 args = parser.parse_args()
 simple.LoadPlugin(args.plugin)
@@ -49,9 +50,9 @@ MEASURED = {"lefort1": ["Subnasale", "Pronasale", "LabraleSuperius", "AlarBaseRi
 rows = []
 for scene, plans in PLANS.items():
     tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(args.data, scene)
-    osteotomy_scenes.configure_contact(fem)
-    if not args.linear:
-        osteotomy_scenes.configure_model(fem)
+    osteotomy_scenes.operation_model(fem)
+    if args.linear:
+        fem.Model = "LinearElastic"
     landmarks = simple.FacialLandmarks(Input=fem, Bone=skeleton, Operation=osteotomy_scenes.SCENES[scene][1])
     for label, translation, rotation in plans:
         osteotomy.Translation = translation

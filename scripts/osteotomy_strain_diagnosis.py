@@ -53,7 +53,7 @@ args = parser.parse_args()
 
 LoadPlugin(args.plugin)
 tissue_proxy, _, _, skeleton, fem = osteotomy_scenes.build(args.data, args.scene)
-contact = osteotomy_scenes.configure_contact(fem)
+contact = osteotomy_scenes.operation_model(fem)
 if args.tied:
     fem.ContactModel = "Tied"
 if args.sliding:

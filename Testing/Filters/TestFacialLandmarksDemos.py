@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """The clinical ratios of the three osteotomy demos (scripts/osteotomy_scenes.py: Le Fort I 5 mm,
 BSSO 6 mm, genioplasty 5 mm advancements, each the model a user gets from Osteotomy's Operation
-preset with the demos' contact, closed lips (LipSeal) and NeoHookean/LiftOff model) against the
+preset and CondensedFEMDeform's defaults: the preset's Sliding and Released arrays taken by
+ContactModel Auto, the lips closed by LipSeal Auto, NeoHookean chosen by Model Auto, LiftOff) against the
 published bands that FacialLandmarks reports (Core/Landmarks/ClinicalBands.cpp). Every banded ratio
 must be in its band, the BSSO's labrale inferius included (docs/CLINICAL.md, section 5: the lip seal
 brings it from 0.91 into its band). argv[1] is the plugin, argv[2] the Data folder.
@@ -24,10 +25,18 @@ EXPECTED = {"lefort1": {"Subnasale", "Pronasale", "LabraleSuperius"},
 
 for scene in osteotomy_scenes.SCENES:
     tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], scene)
-    osteotomy_scenes.configure_contact(fem)
-    osteotomy_scenes.configure_model(fem)
+    osteotomy_scenes.operation_model(fem)
     landmarks = simple.FacialLandmarks(Input=fem, Bone=skeleton)  # the bands of the bone's Operation
     rows = table(landmarks)
+    # Nothing was set on the filter: its defaults, given the preset's bone, are the operation's model.
+    for name, default in (("ContactModel", "Auto"), ("LipSeal", -1.0), ("LiftOff", 1), ("Model", "Auto")):
+        check(fem.GetPropertyValue(name) == default, "%s: %s is its default %s" % (scene, name, default))
+    fd = fem.GetClientSideObject().GetOutputDataObject(0).GetFieldData()
+    used = {name: fd.GetAbstractArray(name).GetValue(0) for name in ("Model", "ContactModel")}
+    gap, bridges = fd.GetArray("LipSealGap").GetValue(0), fd.GetArray("LipSealBridges").GetValue(0)
+    check(used == {"Model": "NeoHookean", "ContactModel": "ByArray"} and abs(gap - 3.0) < 1e-12 and bridges > 0,
+          "%s: the defaults ran NeoHookean with ByArray contact and closed lips (%s, gap %g, %d bridges)" % (
+              scene, used, gap, bridges))
     banded = {n for n, r in rows.items() if r["Band"]}
     check(banded == EXPECTED[scene], "%s: the published bands apply to %s (got %s)" % (scene, sorted(EXPECTED[scene]),
                                                                                         sorted(banded)))
