@@ -36,7 +36,7 @@ def operation_model(fem):
     return ["ContactModel=Auto (ByArray: Sliding on the teeth)", "Released where degloved",
             "LiftOff (lips may leave the teeth)",
             "LipSeal=Auto (%g mm: closed lips)" % OPERATION_LIP_SEAL,
-            "Model=Auto (NeoHookean beyond 10 %% strain)"]
+            "Model=Auto (NeoHookean beyond 10 % strain)"]
 
 
 def configure_model(fem):
