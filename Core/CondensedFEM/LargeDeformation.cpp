@@ -57,8 +57,13 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
         }
         ElementVector f;
         double cellEnergy = 0.0;
-        if (!NeoHookeanTetState(st.cells[e], st.materials[e], corner, cellEnergy, f,
-                                packed ? &tangent : nullptr)) {
+        const bool state =
+            st.smallStrain[e]
+                ? SmallStrainTetState(st.cells[e], st.materials[e], corner, cellEnergy, f,
+                                      packed ? &tangent : nullptr)
+                : NeoHookeanTetState(st.cells[e], st.materials[e], corner, cellEnergy, f,
+                                     packed ? &tangent : nullptr);
+        if (!state) {
           buffers.valid[r] = 0;
           break;
         }
@@ -170,6 +175,7 @@ Status MakeStructure(const PrecomputeRequest& request, bool liftOff, Structure& 
   st.cells.resize(static_cast<size_t>(mesh.numTets()));
   st.materials.resize(st.cells.size());
   st.cellMass.resize(st.cells.size());
+  st.smallStrain.resize(st.cells.size());
   TetCorners corners;
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
     for (int a = 0; a < 4; ++a)
@@ -177,6 +183,7 @@ Status MakeStructure(const PrecomputeRequest& request, bool liftOff, Structure& 
     st.cells[e] = MakeTetReference(corners);
     st.materials[e] = NeoHookeanFromLinear(request.materials.E(e), request.materials.nu(e));
     st.cellMass[e] = request.materials.rho(e) * st.cells[e].volume;
+    st.smallStrain[e] = request.materials.isSmallStrain(e) ? 1 : 0;
   }
   return Status::Ok();
 }

@@ -23,6 +23,7 @@ struct Structure {
   std::vector<Eigen::Matrix3d> frames; // columns: normal, two tangents
   std::vector<TetReference> cells;
   std::vector<NeoHookeanParameters> materials;
+  std::vector<char> smallStrain; // per cell: small-strain elastic (Materials::smallStrain)
   std::vector<double> cellMass; // rho * volume (gravity's dead load)
   // Prescribed DOFs before lift-off: every DOF of a constrained node (only the normal one when
   // sliding) and of a node no cell uses.

@@ -12,7 +12,8 @@ namespace {
 static_assert(sizeof(NodeSets) ==
                   5 * sizeof(std::vector<int>) + sizeof(std::vector<Eigen::Vector3d>),
               "SameRequest must compare every NodeSets field");
-static_assert(sizeof(Materials) == 3 * sizeof(Eigen::VectorXd),
+static_assert(sizeof(Materials) ==
+                  3 * sizeof(Eigen::VectorXd) + sizeof(std::vector<unsigned char>),
               "SameRequest must compare every Materials field");
 static_assert(sizeof(TetMesh) == sizeof(RowVectors3d) + sizeof(Tets),
               "SameRequest must compare every TetMesh field");
@@ -51,6 +52,7 @@ bool SameInputs(const PrecomputeRequest& a, const PrecomputeRequest& b) {
          SameMatrix(a.materials.youngsModulus, b.materials.youngsModulus) &&
          SameMatrix(a.materials.poissonRatio, b.materials.poissonRatio) &&
          SameMatrix(a.materials.density, b.materials.density) &&
+         a.materials.smallStrain == b.materials.smallStrain &&
          a.sets.constrained == b.sets.constrained && a.sets.movable == b.sets.movable &&
          a.sets.kept == b.sets.kept && a.sets.movableSegment == b.sets.movableSegment &&
          a.sets.sliding == b.sets.sliding && a.sets.slidingNormal == b.sets.slidingNormal;

@@ -129,4 +129,29 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
   return true;
 }
 
+bool SmallStrainTetState(const TetReference& reference, const NeoHookeanParameters& p,
+                         const CornerDisplacements& u, double& energy, ElementVector& force,
+                         ElementMatrix* tangent) {
+  const Eigen::Matrix<double, 4, 3>& g = reference.gradients;
+  const Eigen::Matrix3d H = u.transpose() * g; // H_ij = sum_a u_a,i dN_a/dX_j
+  const Eigen::Matrix3d eps = 0.5 * (H + H.transpose());
+  const double lambda = p.kappa - 2.0 * p.mu / 3.0, trace = eps.trace();
+  const Eigen::Matrix3d sigma = 2.0 * p.mu * eps + lambda * trace * Eigen::Matrix3d::Identity();
+  const double V = reference.volume;
+  energy = V * (p.mu * eps.cwiseProduct(eps).sum() + 0.5 * lambda * trace * trace);
+  for (int a = 0; a < 4; ++a)
+    force.segment<3>(3 * a) = V * sigma * g.row(a).transpose();
+  if (tangent) {
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        const double dot = g.row(a).dot(g.row(b));
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            (*tangent)(3 * a + i, 3 * b + j) =
+                V * (p.mu * ((i == j ? dot : 0.0) + g(a, j) * g(b, i)) + lambda * g(a, i) * g(b, j));
+      }
+  }
+  return true;
+}
+
 } // namespace faceplan

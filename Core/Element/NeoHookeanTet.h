@@ -45,4 +45,12 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
                         const CornerDisplacements& u, double& energy, ElementVector& force,
                         ElementMatrix* tangent);
 
+// The same cell with small-strain linear elasticity of the same moduli (shear mu, bulk kappa):
+// W = mu eps:eps + (kappa - 2 mu / 3) / 2 (tr eps)^2 with eps the symmetric part of F - I. Its
+// force is linear in u and its tangent constant; no det F condition. For cells that are no tissue
+// (LipSeal's bridges). Always true.
+bool SmallStrainTetState(const TetReference& reference, const NeoHookeanParameters& p,
+                         const CornerDisplacements& u, double& energy, ElementVector& force,
+                         ElementMatrix* tangent);
+
 } // namespace faceplan

@@ -166,6 +166,14 @@ Status AddLipSeal(const TetMesh& mesh, const Materials& materials, const LipSeal
   sealedMaterials.youngsModulus.head(m) = E;
   sealedMaterials.poissonRatio.head(m) = nu;
   sealedMaterials.density.head(m) = rho;
+  // The bridges are a weld, not tissue: small-strain elastic under the large-deformation model
+  // too, so their tangent does not change as the lips move and shear them (a stiff neo-Hookean
+  // bridge's does, by its stiffness times the rotation, which the precomputed factor misses).
+  sealedMaterials.smallStrain.assign(static_cast<size_t>(sealed.numTets()), 0);
+  if (materials.smallStrain.size() == static_cast<size_t>(m))
+    std::copy(materials.smallStrain.begin(), materials.smallStrain.end(),
+              sealedMaterials.smallStrain.begin());
+  std::fill(sealedMaterials.smallStrain.begin() + m, sealedMaterials.smallStrain.end(), 1);
   for (size_t b = 0; b < bridges.size(); ++b) {
     const Eigen::Index c = m + static_cast<Eigen::Index>(b);
     for (int j = 0; j < 4; ++j)

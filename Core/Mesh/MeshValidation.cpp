@@ -71,6 +71,9 @@ Status ValidateMeshAndMaterials(const TetMesh& mesh, const Materials& materials)
                    checkSize(materials.density, "density", true)})
     if (!msg.empty())
       return Status::Error(msg);
+  if (!materials.smallStrain.empty() && static_cast<Eigen::Index>(materials.smallStrain.size()) != m)
+    return Status::Error("the small-strain cell flags must have " + std::to_string(m) +
+                         " values or none, not " + std::to_string(materials.smallStrain.size()));
 
   std::vector<long long> badE, badNu;
   for (Eigen::Index e = 0; e < materials.youngsModulus.size(); ++e)

@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 
+#include <vector>
+
 namespace faceplan {
 
 using Tets = Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>;
@@ -23,6 +25,10 @@ struct Materials {
   Eigen::VectorXd youngsModulus; // E > 0, in the caller's stress unit
   Eigen::VectorXd poissonRatio;  // -1 < nu < 0.5
   Eigen::VectorXd density;       // mass per volume; only used with a gravity load; may be empty
+  // 1 for cells that the large-deformation model keeps small-strain (linear) elastic: LipSeal's
+  // bridges, a penalty weld whose constant tangent the precomputed factor then holds exactly.
+  // One entry per tetrahedron, or empty (none). The linear model is linear everywhere anyway.
+  std::vector<unsigned char> smallStrain;
 
   static Materials Uniform(double E, double nu, double rho = 0.0) {
     Materials m;
@@ -36,6 +42,9 @@ struct Materials {
   }
   double nu(Eigen::Index cell) const {
     return poissonRatio.size() == 1 ? poissonRatio[0] : poissonRatio[cell];
+  }
+  bool isSmallStrain(Eigen::Index cell) const {
+    return !smallStrain.empty() && smallStrain[static_cast<size_t>(cell)] != 0;
   }
   double rho(Eigen::Index cell) const {
     if (density.size() == 0)

@@ -22,9 +22,9 @@ from faceplan_test_util import ErrorCatcher, WarningCatcher, check, fetch, finis
 LoadPlugin(sys.argv[1])
 tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], "lefort1")
 osteotomy_scenes.operation_model(fem)
-# The solver contracts on the open lips: the scenes' LipSeal adds bridges 1000 times as stiff as the
-# tissue, with which the two solvers' converged results agree to 2e-7 rather than 1e-8 and the first
-# Precomputed iterate is still a load step (TestCondensedFEMDeformLipSeal covers the sealed scene).
+# The solver contract on the open lips: the scenes' LipSeal adds bridges 1000 times as stiff as the
+# tissue, which amplify the 1e-9 residual both solvers stop at, so that their results may differ by
+# up to 5e-7 (TestCondensedFEMDeformLipSeal covers the sealed scene).
 fem.LipSeal = 0.0
 fem.OutputMode = "Surface"
 check(int(fem.LiftOff) == 1, "LiftOff is on by default")

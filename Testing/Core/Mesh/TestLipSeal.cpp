@@ -74,6 +74,10 @@ TEST(LipSeal, BridgesJoinOnlyTheFacingSurfaces) {
   }
   EXPECT_DOUBLE_EQ(sealedMaterials.youngsModulus[0], 10.0);
   EXPECT_DOUBLE_EQ(sealedMaterials.density[0], 2.0);
+  // The bridges, and only they, are small-strain cells for the large-deformation model.
+  ASSERT_EQ(sealedMaterials.smallStrain.size(), static_cast<size_t>(sealed.numTets()));
+  for (Eigen::Index c = 0; c < sealed.numTets(); ++c)
+    EXPECT_EQ(sealedMaterials.isSmallStrain(c), c >= mesh.numTets()) << "cell " << c;
 }
 
 TEST(LipSeal, NothingBeyondTheGap) {
