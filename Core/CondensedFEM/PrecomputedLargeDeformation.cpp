@@ -210,10 +210,14 @@ private:
 
 namespace {
 
+// Two successive drag changes of the prescribed values that differ by at most this fraction make a
+// steady drag, which is extrapolated to second order.
+constexpr double kSteadyDrag = 0.1;
+
 Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
   if (!(o.tolerance > 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
       o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
-      o.maxCoupledReleases < 0)
+      o.maxCoupledReleases < 0 || o.factorAheadOrder < 1 || o.factorAheadOrder > 2)
     return Status::Error("invalid large-deformation options");
   return Status::Ok();
 }
@@ -745,15 +749,23 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     result.timings[Stage::Total].ms = total.elapsedMs();
     return Status::Ok(); // not a converged state: nothing to refactor at or to start from
   }
+  // A drag: a warm solve of the same loads whose prescribed change is no larger than the move
+  // itself. Its next edit is most likely the same change again, so the tangent is factored there,
+  // one step ahead, where the next solve's iterates will be (any positive definite factor serves
+  // as the initial Hessian; this one is the nearest to the next solve's).
+  const bool drag = report.warmStarted && fullLoad == warm->load &&
+                    (fullTarget - warm->target).norm() <= fullTarget.norm();
   if (sys.options.backgroundRefactorization) {
-    // A drag: a warm solve of the same loads whose prescribed change is no larger than the move
-    // itself. Its next edit is most likely the same change again, so the tangent is factored
-    // there, one step ahead, where the next solve's iterates will be (any positive definite factor
-    // serves as the initial Hessian; this one is the nearest to the next solve's).
-    const bool drag = report.warmStarted && fullLoad == warm->load &&
-                      (fullTarget - warm->target).norm() <= fullTarget.norm();
     if (drag && sys.options.factorAhead) {
-      const Eigen::VectorXd ahead = 2.0 * u - warm->u;
+      // Where the same change again leads. After two equal changes (a steady drag) the parabola
+      // through the last three states: its error is third order in the step where the line's is
+      // second, and the next predictor's Newton step from there lands that much nearer.
+      const Eigen::VectorXd change = fullTarget - warm->target;
+      const bool steady = sys.options.factorAheadOrder >= 2 && warm->before.size() == u.size() &&
+                          (warm->target - warm->targetBefore - change).norm() <=
+                              kSteadyDrag * change.norm();
+      const Eigen::VectorXd ahead = steady ? Eigen::VectorXd(3.0 * (u - warm->u) + warm->before)
+                                           : Eigen::VectorXd(2.0 * u - warm->u);
       sys.requestRefactorization(u, pb.prescribed, &ahead);
     } else {
       sys.requestRefactorization(u, pb.prescribed);
@@ -766,6 +778,10 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     converged->target = fullTarget;
     converged->load = fullLoad;
     converged->force = solver.lastForce();
+    if (drag) {
+      converged->before = warm->u;
+      converged->targetBefore = warm->target;
+    }
   }
   result.timings[Stage::Total].ms = total.elapsedMs();
   return Status::Ok();

@@ -15,7 +15,8 @@
 // every cell's det F > 0 (the line search here rejects such steps). Every accepted step keeps det F
 // > 0. After a converged solve the tangent is factored again on a background thread (with that
 // state's contact): at the converged state, or, after a drag step (a warm solve whose move changed
-// little), one step ahead, at 2 u - u_before, where the same change again would lead. A solve
+// little), one step ahead, where the same change again would lead: at 2 u - u_before, or after two
+// equal changes at the parabola through the last three states, 3 (u - u_before) + u_2before. A solve
 // whose targets are nearer the factor's state than its start starts there, so its predictor is
 // Newton's own step at the state the factor was made at and the drag's next step converges in a
 // couple of iterations. Within a solve, a sub-step that has not converged after `refactorAfter`
@@ -75,8 +76,12 @@ struct PrecomputedLargeDeformationOptions {
   // After a converged solve, factor the tangent at its state on a background thread.
   bool backgroundRefactorization = true;
   // After a drag step (a warm solve of the same loads whose prescribed change is no larger than
-  // the move), factor where the same change again would lead (2 u - u_before) rather than at u.
+  // the move), factor where the same change again would lead (extrapolated from the drag's last
+  // two or three states) rather than at u.
   bool factorAhead = true;
+  // How far ahead is extrapolated: 1, the line through the last two states; 2, after two equal
+  // changes (a steady drag), the parabola through the last three.
+  int factorAheadOrder = 2;
   // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
   // through their Schur complement, one substitution each, when there are at most this many.
   int maxCoupledReleases = 8;
@@ -104,6 +109,9 @@ struct LargeDeformationState {
   std::vector<char> prescribed; // per DOF (lift-off's contact included)
   Eigen::VectorXd target, load; // what it is the equilibrium for
   Eigen::VectorXd force;        // the internal force at u
+  // When this state ended a drag step: the state that step started from and its targets (the
+  // drag's previous point, for a second-order extrapolation of the next); else empty.
+  Eigen::VectorXd before, targetBefore;
   bool valid() const { return system != nullptr; }
 };
 

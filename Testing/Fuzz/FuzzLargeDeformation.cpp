@@ -154,6 +154,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const bool drag = in.flag();
   quasiNewton.singlePrecisionFactor = in.flag();
   quasiNewton.factorAhead = in.flag();
+  quasiNewton.factorAheadOrder = in.flag() ? 2 : 1;
   quasiNewton.maxCoupledReleases = in.range(0, 8);
   if (precomputed)
     PrecomputedSolve(request, input, quasiNewton, limit, drag);

@@ -326,16 +326,18 @@ TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations)
   // The same change of the move, step after step, each refactorization awaited: with the tangent
   // factored where the next step would lead (and the predictor starting there) every step equals
   // the cold solve and the steps after the first take fewer iterations than with the tangent
-  // factored at the converged state.
+  // factored at the converged state, and fewer again when a steady drag is extrapolated to second
+  // order (the parabola through the last three states) rather than along the line.
   const PrecomputeRequest request = ShellRequest(4, 2);
   PrecomputedLargeDeformationOptions coldOptions;
   coldOptions.backgroundRefactorization = false;
   auto coldSystem = Precomputed(request, coldOptions);
   ASSERT_TRUE(coldSystem);
-  int iterations[2] = {0, 0};
-  for (int ahead = 0; ahead < 2; ++ahead) {
+  int iterations[3] = {0, 0, 0};
+  for (int ahead = 0; ahead < 3; ++ahead) { // at the state; ahead, first order; second order
     PrecomputedLargeDeformationOptions options;
-    options.factorAhead = ahead == 1;
+    options.factorAhead = ahead > 0;
+    options.factorAheadOrder = ahead == 1 ? 1 : 2;
     auto system = Precomputed(request, options);
     ASSERT_TRUE(system);
     LargeDeformationState state;
@@ -343,7 +345,7 @@ TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations)
     input.recoverInterior = true;
     for (int step = 0; step < 6; ++step) {
       input.movableDisplacement = SmoothRoiField(request, 3.0 + 0.25 * step);
-      SCOPED_TRACE("step " + std::to_string(step) + (ahead ? ", factored ahead" : ""));
+      SCOPED_TRACE("step " + std::to_string(step) + ", ahead " + std::to_string(ahead));
       PrecomputedLargeDeformationReport report, coldReport;
       ASSERT_NO_FATAL_FAILURE(
           AwaitedDragStep(*system, *coldSystem, input, state, report, coldReport));
@@ -353,6 +355,8 @@ TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations)
   }
   EXPECT_LT(iterations[1], iterations[0])
       << "factored ahead: " << iterations[1] << " iterations, at the state: " << iterations[0];
+  EXPECT_LT(iterations[2], iterations[1])
+      << "second order: " << iterations[2] << " iterations, first order: " << iterations[1];
 }
 
 TEST(PrecomputedLargeDeformation, AMoveThatMustInvertCellsIsAClearError) {
