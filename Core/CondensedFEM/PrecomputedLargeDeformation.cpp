@@ -464,8 +464,12 @@ private:
       return false;
     }
     startForce_ = nullptr;
-    Eigen::VectorXd rhs = factor_->tangent.selfadjointView<Eigen::Upper>() * move;
-    rhs += ev.force - pb_.externalLoad;
+    // From a factor made where the drag leads, the prescribed values are already at their targets
+    // to round-off: the tangent's product with that move is skipped (the move itself is applied;
+    // the predictor only starts the iterations, whose residual decides convergence).
+    Eigen::VectorXd rhs = ev.force - pb_.externalLoad;
+    if (move.lpNorm<Eigen::Infinity>() > 1e-12 * pb_.target.lpNorm<Eigen::Infinity>())
+      rhs += factor_->tangent.selfadjointView<Eigen::Upper>() * move;
     rhs = -rhs;
     ZeroPrescribed(pb_.prescribed, rhs);
     Eigen::VectorXd follow = applyFactor(rhs);
