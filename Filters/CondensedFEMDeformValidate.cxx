@@ -98,8 +98,7 @@ Status ValidateProperties(const Settings& s) {
                  ")");
   if (s.lipSeal != Settings::kLipSealAuto && (!(s.lipSeal >= 0.0) || !std::isfinite(s.lipSeal)))
     return Error("LipSeal must be -1 (Auto), zero or a positive, finite gap in mesh units (got ",
-                 s.lipSeal,
-                 ")");
+                 s.lipSeal, ")");
   if (s.useGravity) {
     if (!(s.density >= 0.0) || !std::isfinite(s.density))
       return Error("Density must be zero or positive and finite with UseGravity on (got ",

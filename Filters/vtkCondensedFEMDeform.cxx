@@ -236,7 +236,8 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
     const std::string none = "LipSeal: no facing tissue surfaces within " +
                              std::to_string(settings.sealGap()) + " mesh units, so nothing is tied";
     if (settings.lipSeal == Settings::kLipSealAuto) {
-      vtkLog(INFO, << this->GetObjectDescription() << ": " << none << " (Auto: the lips stay open)");
+      vtkLog(INFO, << this->GetObjectDescription() << ": " << none
+                   << " (Auto: the lips stay open)");
     } else {
       warn(none);
     }

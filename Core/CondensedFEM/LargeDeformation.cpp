@@ -57,12 +57,11 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
         }
         ElementVector f;
         double cellEnergy = 0.0;
-        const bool state =
-            st.smallStrain[e]
-                ? SmallStrainTetState(st.cells[e], st.materials[e], corner, cellEnergy, f,
-                                      packed ? &tangent : nullptr)
-                : NeoHookeanTetState(st.cells[e], st.materials[e], corner, cellEnergy, f,
-                                     packed ? &tangent : nullptr);
+        const bool state = st.smallStrain[e]
+                               ? SmallStrainTetState(st.cells[e], st.materials[e], corner,
+                                                     cellEnergy, f, packed ? &tangent : nullptr)
+                               : NeoHookeanTetState(st.cells[e], st.materials[e], corner,
+                                                    cellEnergy, f, packed ? &tangent : nullptr);
         if (!state) {
           buffers.valid[r] = 0;
           break;

@@ -24,7 +24,7 @@ struct Structure {
   std::vector<TetReference> cells;
   std::vector<NeoHookeanParameters> materials;
   std::vector<char> smallStrain; // per cell: small-strain elastic (Materials::smallStrain)
-  std::vector<double> cellMass; // rho * volume (gravity's dead load)
+  std::vector<double> cellMass;  // rho * volume (gravity's dead load)
   // Prescribed DOFs before lift-off: every DOF of a constrained node (only the normal one when
   // sliding) and of a node no cell uses.
   std::vector<char> prescribed;

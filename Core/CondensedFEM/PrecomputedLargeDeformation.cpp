@@ -765,9 +765,9 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
       // through the last three states: its error is third order in the step where the line's is
       // second, and the next predictor's Newton step from there lands that much nearer.
       const Eigen::VectorXd change = fullTarget - warm->target;
-      const bool steady = sys.options.factorAheadOrder >= 2 && warm->before.size() == u.size() &&
-                          (warm->target - warm->targetBefore - change).norm() <=
-                              kSteadyDrag * change.norm();
+      const bool steady =
+          sys.options.factorAheadOrder >= 2 && warm->before.size() == u.size() &&
+          (warm->target - warm->targetBefore - change).norm() <= kSteadyDrag * change.norm();
       const Eigen::VectorXd ahead = steady ? Eigen::VectorXd(3.0 * (u - warm->u) + warm->before)
                                            : Eigen::VectorXd(2.0 * u - warm->u);
       sys.requestRefactorization(u, pb.prescribed, &ahead);

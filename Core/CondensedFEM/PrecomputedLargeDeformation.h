@@ -16,9 +16,9 @@
 // > 0. After a converged solve the tangent is factored again on a background thread (with that
 // state's contact): at the converged state, or, after a drag step (a warm solve whose move changed
 // little), one step ahead, where the same change again would lead: at 2 u - u_before, or after two
-// equal changes at the parabola through the last three states, 3 (u - u_before) + u_2before. A solve
-// whose targets are nearer the factor's state than its start starts there, so its predictor is
-// Newton's own step at the state the factor was made at and the drag's next step converges in a
+// equal changes at the parabola through the last three states, 3 (u - u_before) + u_2before. A
+// solve whose targets are nearer the factor's state than its start starts there, so its predictor
+// is Newton's own step at the state the factor was made at and the drag's next step converges in a
 // couple of iterations. Within a solve, a sub-step that has not converged after `refactorAfter`
 // iterations factors the current tangent (modified Newton with a refresh) and restarts the L-BFGS
 // history. The substitutions use a single-precision copy of the factor (SinglePrecisionFactor):

@@ -12,8 +12,7 @@ namespace {
 static_assert(sizeof(NodeSets) ==
                   5 * sizeof(std::vector<int>) + sizeof(std::vector<Eigen::Vector3d>),
               "SameRequest must compare every NodeSets field");
-static_assert(sizeof(Materials) ==
-                  3 * sizeof(Eigen::VectorXd) + sizeof(std::vector<unsigned char>),
+static_assert(sizeof(Materials) == 3 * sizeof(Eigen::VectorXd) + sizeof(std::vector<unsigned char>),
               "SameRequest must compare every Materials field");
 static_assert(sizeof(TetMesh) == sizeof(RowVectors3d) + sizeof(Tets),
               "SameRequest must compare every TetMesh field");

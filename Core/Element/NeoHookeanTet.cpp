@@ -134,6 +134,8 @@ bool SmallStrainTetState(const TetReference& reference, const NeoHookeanParamete
                          ElementMatrix* tangent) {
   const Eigen::Matrix<double, 4, 3>& g = reference.gradients;
   const Eigen::Matrix3d H = u.transpose() * g; // H_ij = sum_a u_a,i dN_a/dX_j
+  if (!((Eigen::Matrix3d::Identity() + H).determinant() > 0.0))
+    return false;
   const Eigen::Matrix3d eps = 0.5 * (H + H.transpose());
   const double lambda = p.kappa - 2.0 * p.mu / 3.0, trace = eps.trace();
   const Eigen::Matrix3d sigma = 2.0 * p.mu * eps + lambda * trace * Eigen::Matrix3d::Identity();
@@ -148,7 +150,8 @@ bool SmallStrainTetState(const TetReference& reference, const NeoHookeanParamete
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j)
             (*tangent)(3 * a + i, 3 * b + j) =
-                V * (p.mu * ((i == j ? dot : 0.0) + g(a, j) * g(b, i)) + lambda * g(a, i) * g(b, j));
+                V *
+                (p.mu * ((i == j ? dot : 0.0) + g(a, j) * g(b, i)) + lambda * g(a, i) * g(b, j));
       }
   }
   return true;

@@ -47,8 +47,8 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
 
 // The same cell with small-strain linear elasticity of the same moduli (shear mu, bulk kappa):
 // W = mu eps:eps + (kappa - 2 mu / 3) / 2 (tr eps)^2 with eps the symmetric part of F - I. Its
-// force is linear in u and its tangent constant; no det F condition. For cells that are no tissue
-// (LipSeal's bridges). Always true.
+// force is linear in u and its tangent constant. For cells that are no tissue (LipSeal's bridges).
+// False, with nothing written, when det F <= 0: the solvers keep every cell uninverted, these too.
 bool SmallStrainTetState(const TetReference& reference, const NeoHookeanParameters& p,
                          const CornerDisplacements& u, double& energy, ElementVector& force,
                          ElementMatrix* tangent);

@@ -9,8 +9,9 @@
 // face and that node) whose material is `stiffnessFactor` times as stiff as the tissue behind the
 // face, a penalty weld that both the linear and the large-deformation solvers take as ordinary
 // cells; the bridges are flagged small-strain (Materials::smallStrain), so the large-deformation
-// model keeps them linear elastic and their tangent constant. No node is added or moved, so results map to the input's nodes one to one; the input's
-// cells keep their numbers and the bridges follow them.
+// model keeps them linear elastic and their tangent constant. No node is added or moved, so results
+// map to the input's nodes one to one; the input's cells keep their numbers and the bridges follow
+// them.
 #include "Common/Status.h"
 #include "Mesh/TetMesh.h"
 

@@ -71,7 +71,8 @@ Status ValidateMeshAndMaterials(const TetMesh& mesh, const Materials& materials)
                    checkSize(materials.density, "density", true)})
     if (!msg.empty())
       return Status::Error(msg);
-  if (!materials.smallStrain.empty() && static_cast<Eigen::Index>(materials.smallStrain.size()) != m)
+  if (!materials.smallStrain.empty() &&
+      static_cast<Eigen::Index>(materials.smallStrain.size()) != m)
     return Status::Error("the small-strain cell flags must have " + std::to_string(m) +
                          " values or none, not " + std::to_string(materials.smallStrain.size()));
 

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The large-deformation solve on small random meshes: a block of 1 or 2 cubes (six tetrahedra
 // each) whose nodes move at random, random node classes (sliding ones with random normals),
-// materials, moves from 1e-7 to 10 cube sizes, lift-off and solver options. Promises checked: no
-// crash or hang; an error has a message; a success is finite, converged to the requested
-// tolerance and has no inverted cell; for tiny moves without lift-off (tiny also against the
-// material's kappa / mu) it agrees with the linear model when that system is reasonably
-// conditioned. The precomputed solve (PrecomputedLargeDeformation.h) runs on the same scene with
-// random options, an iteration limit and a warm-started second move: the same promises, except
-// that an iterate stopped at the limit is flagged instead of converged.
+// materials (some cells small-strain elastic), moves from 1e-7 to 10 cube sizes, lift-off and
+// solver options. Promises checked: no crash or hang; an error has a message; a success is finite,
+// converged to the requested tolerance and has no inverted cell; for tiny moves without lift-off
+// (tiny also against the material's kappa / mu) it agrees with the linear model when that system is
+// reasonably conditioned. The precomputed solve (PrecomputedLargeDeformation.h) runs on the same
+// scene with random options, an iteration limit and a warm-started second move: the same promises,
+// except that an iterate stopped at the limit is flagged instead of converged.
 #include "FuzzBytes.h"
 #include "FuzzPrecompute.h"
 
@@ -156,6 +156,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   quasiNewton.factorAhead = in.flag();
   quasiNewton.factorAheadOrder = in.flag() ? 2 : 1;
   quasiNewton.maxCoupledReleases = in.range(0, 8);
+  if (in.flag()) { // some cells small-strain elastic (as LipSeal's bridges), for both solvers
+    request.materials.smallStrain.resize(static_cast<size_t>(request.mesh.numTets()));
+    for (auto& flag : request.materials.smallStrain)
+      flag = in.flag() ? 1 : 0;
+  }
   if (precomputed)
     PrecomputedSolve(request, input, quasiNewton, limit, drag);
 
