@@ -81,7 +81,6 @@ def timed_update(fem, bone_filters):
 
 def osteotomy_scene(name):
     tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(args.data, name)
-    osteotomy_scenes.operation_model(fem)
     if args.lip_seal is not None:
         fem.LipSeal = args.lip_seal
     fem.Model = "NeoHookean"

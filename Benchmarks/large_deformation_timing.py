@@ -45,7 +45,6 @@ def stages(out_table):
 results = {}
 for scene in osteotomy_scenes.SCENES:
     tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(data_dir, scene)
-    osteotomy_scenes.operation_model(fem)
     fem.UpdatePipeline()  # inputs and the contact map, outside the timings
     linear_first, linear_edit = [], []
     for k in range(repeats):

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <memory>
 #include <sstream>
+#include <string>
 #include <thread>
 
 namespace faceplan {
@@ -164,6 +165,11 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
     request.options = options;
     return request;
   };
+  // LiftOff is on by default: where the linear model runs with sliding tissue it is that model's
+  // own limit, said in its note rather than warned about on every update.
+  const bool linearIgnoresLiftOff = settings.liftOff && !given.sets.sliding.empty();
+  const char* liftOffNote =
+      "LiftOff applies to Model NeoHookean only: the linear model keeps sliding tissue on the bone";
 
   Status status;
   if (model == ModelChoice::NeoHookean) {
@@ -220,8 +226,8 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
         outcome.modelNote = "Auto: the small-strain check is off (StrainWarningLimit 0): linear";
       } else if (strain <= limit && outcome.result.invertedCells == 0) {
         why << "within the small-strain limit " << 100.0 * limit << " %: linear";
-        if (settings.liftOff && !given.sets.sliding.empty())
-          why << " (sliding tissue stays on the bone: lift-off needs NeoHookean)";
+        if (linearIgnoresLiftOff)
+          why << " (" << liftOffNote << ")";
         outcome.modelNote = why.str();
       } else if (options.elementOrder != ElementOrder::Linear) {
         why << "beyond the small-strain limit " << 100.0 * limit
@@ -239,12 +245,9 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
         outcome.notes = notes;
       }
     } else if (status) {
-      // LiftOff is on by default: with the linear model it is the model's own limit, said in the
-      // note rather than warned about on every update.
       outcome.modelNote = "Model LinearElastic (as set)";
-      if (settings.liftOff && !given.sets.sliding.empty())
-        outcome.modelNote += "; LiftOff applies to Model NeoHookean only: the linear model keeps "
-                             "sliding tissue on the bone";
+      if (linearIgnoresLiftOff)
+        outcome.modelNote += std::string("; ") + liftOffNote;
     }
   }
   if (!status)

@@ -152,6 +152,12 @@ int vtkCondensedFEMDeform::FillOutputPortInformation(int port, vtkInformation* i
   return 1;
 }
 
+// The property's Auto value is the one the settings resolve (Settings::sealGap).
+static_assert(vtkCondensedFEMDeform::LIP_SEAL_AUTO == Settings::kLipSealAuto,
+              "LipSeal's Auto value must be the settings' own");
+static_assert(vtkCondensedFEMDeform::CONTACT_AUTO == static_cast<int>(ContactModelChoice::Auto),
+              "ContactModel's Auto value must be the contact step's own");
+
 int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** inputVector,
                                        vtkInformationVector* outputVector) {
   vtkUnstructuredGrid* tissue = vtkUnstructuredGrid::GetData(inputVector[0], 0);

@@ -50,7 +50,6 @@ MEASURED = {"lefort1": ["Subnasale", "Pronasale", "LabraleSuperius", "AlarBaseRi
 rows = []
 for scene, plans in PLANS.items():
     tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(args.data, scene)
-    osteotomy_scenes.operation_model(fem)
     if args.linear:
         fem.Model = "LinearElastic"
     landmarks = simple.FacialLandmarks(Input=fem, Bone=skeleton, Operation=osteotomy_scenes.SCENES[scene][1])

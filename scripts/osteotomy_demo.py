@@ -28,7 +28,7 @@ out_dir = os.path.join(out_root, scene)
 os.makedirs(out_dir, exist_ok=True)
 LoadPlugin(plugin)
 tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(data_dir, scene)
-contact = osteotomy_scenes.operation_model(fem)
+contact = osteotomy_scenes.OPERATION_MODEL
 
 start = time.time()
 fem.UpdatePipeline()

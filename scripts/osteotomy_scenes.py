@@ -26,17 +26,15 @@ SCENES = {
 OPERATION_LIP_SEAL = 3.0
 
 
-def operation_model(fem):
-    """The model a user gets for an operation: CondensedFEMDeform's defaults with an Osteotomy
-    preset's bone. ContactModel Auto takes the preset's Sliding array (the teeth), the preset's
-    Released array frees the degloved bone's tissue, LiftOff (on) lets the lips leave the teeth,
-    LipSeal Auto closes the lips, and Model Auto solves for large deformations where the linear
-    result strains beyond 10 %. Sets nothing; returns what the defaults give, for the printed
-    summary."""
-    return ["ContactModel=Auto (ByArray: Sliding on the teeth)", "Released where degloved",
-            "LiftOff (lips may leave the teeth)",
-            "LipSeal=Auto (%g mm: closed lips)" % OPERATION_LIP_SEAL,
-            "Model=Auto (NeoHookean beyond 10 % strain)"]
+# The model a user gets for an operation is CondensedFEMDeform's defaults with an Osteotomy preset's
+# bone, so the scenes set nothing on the filter: ContactModel Auto takes the preset's Sliding array
+# (the teeth), the preset's Released array frees the degloved bone's tissue, LiftOff (on) lets the
+# lips leave the teeth, LipSeal Auto closes the lips, and Model Auto solves for large deformations
+# where the linear result strains beyond 10 %. What the defaults give, for printed summaries:
+OPERATION_MODEL = ["ContactModel=Auto (ByArray: Sliding on the teeth)", "Released where degloved",
+                   "LiftOff (lips may leave the teeth)",
+                   "LipSeal=Auto (%g mm: closed lips)" % OPERATION_LIP_SEAL,
+                   "Model=Auto (NeoHookean beyond 10 % strain)"]
 
 
 def configure_model(fem):

@@ -53,7 +53,6 @@ args = parser.parse_args()
 
 LoadPlugin(args.plugin)
 tissue_proxy, _, _, skeleton, fem = osteotomy_scenes.build(args.data, args.scene)
-contact = osteotomy_scenes.operation_model(fem)
 if args.tied:
     fem.ContactModel = "Tied"
 if args.sliding:
@@ -193,8 +192,8 @@ for node in boundary:
 
 worst = np.argsort(-strain)[:args.top]
 fd = out.GetFieldData()
-print("scene %s, contact %s, ContactModel %s, ReleaseDistance %g mm" % (
-    args.scene, ", ".join(contact), fem.ContactModel, release))
+print("scene %s, ContactModel %s, LiftOff %d, LipSeal %g mm, ReleaseDistance %g mm" % (
+    args.scene, fem.ContactModel, fem.LiftOff, fem.LipSeal, release))
 print("filter's largest strain %.1f %% (numpy over all cells %.1f %%), Method %s" % (
     100 * fd.GetArray("LargestStrain").GetValue(0), 100 * strain.max(),
     fd.GetAbstractArray("Method").GetValue(0)))

@@ -21,7 +21,6 @@ from faceplan_test_util import ErrorCatcher, WarningCatcher, check, fetch, finis
 
 LoadPlugin(sys.argv[1])
 tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], "lefort1")
-osteotomy_scenes.operation_model(fem)
 # The solver contract on the open lips: the scenes' LipSeal adds bridges 1000 times as stiff as the
 # tissue, which amplify the 1e-9 residual both solvers stop at, so that their results may differ by
 # up to 5e-7 (TestCondensedFEMDeformLipSeal covers the sealed scene).

@@ -25,7 +25,6 @@ from faceplan_test_util import ErrorCatcher, WarningCatcher, check, fetch, finis
 
 simple.LoadPlugin(sys.argv[1])
 tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], "bsso")
-osteotomy_scenes.operation_model(fem)
 osteotomy_scenes.configure_model(fem)
 landmarks = simple.FacialLandmarks(Input=fem, Bone=skeleton)
 seen_shapes = []  # the output's (cells, points), the same with and without the seal

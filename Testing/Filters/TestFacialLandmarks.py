@@ -26,7 +26,6 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import osteotomy_scenes  # noqa: E402
 
 tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], "bsso")
-osteotomy_scenes.operation_model(fem)
 landmarks = simple.FacialLandmarks(Input=fem, Bone=skeleton, Operation="BSSO")
 rows = table(landmarks)
 check(len(rows) == 19, "one row per landmark (%d)" % len(rows))

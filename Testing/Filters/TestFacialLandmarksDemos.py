@@ -25,7 +25,6 @@ EXPECTED = {"lefort1": {"Subnasale", "Pronasale", "LabraleSuperius"},
 
 for scene in osteotomy_scenes.SCENES:
     tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], scene)
-    osteotomy_scenes.operation_model(fem)
     landmarks = simple.FacialLandmarks(Input=fem, Bone=skeleton)  # the bands of the bone's Operation
     rows = table(landmarks)
     # Nothing was set on the filter: its defaults, given the preset's bone, are the operation's model.

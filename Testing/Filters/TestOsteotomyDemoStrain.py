@@ -34,7 +34,7 @@ def field(out, name):
 
 for scene in osteotomy_scenes.SCENES:
     tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(data_dir, scene)
-    settings = osteotomy_scenes.operation_model(fem) + osteotomy_scenes.configure_model(fem)
+    settings = osteotomy_scenes.OPERATION_MODEL + osteotomy_scenes.configure_model(fem)
     errors, warnings = ErrorCatcher(fem), WarningCatcher(fem)
     fem.UpdatePipeline()
     out = fetch(fem)

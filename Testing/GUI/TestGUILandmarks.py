@@ -34,7 +34,6 @@ try:
 
     simple.LoadPlugin(os.environ["FACEPLAN_GUI_PLUGIN"])
     tissue, mandible, osteotomy, skeleton, fem = osteotomy_scenes.build(os.environ["FACEPLAN_GUI_DATA"], "bsso")
-    osteotomy_scenes.operation_model(fem)
     landmarks = simple.FacialLandmarks(registrationName="FacialLandmarks", Input=fem, Bone=skeleton)
 
     view = simple.GetActiveViewOrCreate("RenderView")
