@@ -62,6 +62,7 @@ if args.release is not None:
 fem.Model = "NeoHookean" if args.neo_hookean else "LinearElastic"
 fem.LiftOff = int(args.lift_off)
 fem.LipSeal = 0.0  # docs/OSTEOTOMY-STRAIN.md's figures are for open lips
+fem.OutputMode = "Volume"  # every node: the strains are recomputed per cell below
 if args.detach > 0:
     # The fixed bone's triangles within `detach` of the moving segment dropped: tissue there is
     # tied to nothing (an experiment: how far the tissue would have to be detached).
