@@ -5,6 +5,7 @@
 #include "Common/StageTimings.h"
 #include "CudaCheck.h"
 #include "CudaDenseResponse.h"
+#include "CudaLargeDeformation.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
 #include "Element/ElementStiffness.h"
@@ -118,6 +119,17 @@ public:
       return Status::Error(error);
     op = std::move(device);
     return Status::Ok();
+  }
+
+  // The large-deformation solve's steps (CudaLargeDeformation.h): objects of their own, with their
+  // own streams, not under mutex_.
+  Status makeHyperelasticForces(const HyperelasticCells& cells,
+                                std::unique_ptr<HyperelasticForces>& forces) override {
+    return detail::MakeCudaHyperelasticForces(cells, forces);
+  }
+  Status makeFactorOnDevice(const CholmodFactor& factor, const SparseMatrix& upper,
+                            std::unique_ptr<FactorOnDevice>& device) override {
+    return detail::MakeCudaFactorOnDevice(factor, upper, device);
   }
 
   // Numeric factorization and dense response on the GPU (CudaDenseResponse.h). Not under mutex_:

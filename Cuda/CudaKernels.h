@@ -65,6 +65,52 @@ cudaError_t LaunchAssembleSupernodal(const int* colStart, const int* rowIndex, c
 cudaError_t LaunchScatterUpdate(const double* C, int count, const int* rows, SupernodalStructure st,
                                 double* Lx, cudaStream_t stream);
 
+// ---- Large deformation (CudaHyperelasticKernels.cu) ----
+// HyperelasticCells (Core/Backend/ComputeBackend.h) on the device.
+struct HyperelasticCellArrays {
+  std::int64_t cells = 0;
+  const int* corners = nullptr;      // 4 per cell
+  const double* gradients = nullptr; // 12 per cell
+  const double* volume = nullptr;
+  const double* mu = nullptr;
+  const double* kappa = nullptr;
+  const char* smallStrain = nullptr;
+  const int* frameOf = nullptr;
+  const double* frames = nullptr; // 9 per frame, column-major
+};
+// force (zeroed first, nodes' frames) += each cell's internal force at u (nodes' frames); *energy
+// (zeroed first) += the cells' energy; *inadmissible = 1 when a cell has det F <= 0.
+cudaError_t LaunchHyperelasticForces(const HyperelasticCellArrays& cells, const double* u,
+                                     double* force, double* energy, int* inadmissible,
+                                     cudaStream_t stream);
+// out (zeroed first) += M v for the symmetric M whose upper triangle is given as (row, column,
+// value) triplets.
+cudaError_t LaunchSymmetricUpperProduct(const int* rows, const int* cols, const double* values,
+                                        std::int64_t nnz, const double* v, double* out,
+                                        cudaStream_t stream);
+// y[k] = b[perm[k]] * inverseScale (as float); x[perm[k]] = y[k] * scale.
+cudaError_t LaunchGatherScaled(const double* b, const int* perm, int n, double inverseScale,
+                               float* y, cudaStream_t stream);
+cudaError_t LaunchScatterScaled(const float* y, const int* perm, int n, double scale, double* x,
+                                cudaStream_t stream);
+// A single-precision supernodal factor in CHOLMOD's layout, on the device.
+struct SupernodalSweepArrays {
+  const int* super = nullptr;
+  const int* pi = nullptr;
+  const std::int64_t* px = nullptr;
+  const int* s = nullptr;
+  const float* values = nullptr;
+};
+// One level of the forward (L y = b) or backward (L^T x = y) sweep of one right-hand side y (in
+// elimination order): the `supernodes` supernodes listed at `order`, independent of each other,
+// whose every child is in an earlier level (forward) or whose parent is (backward). maxRows: the
+// most rows of those supernodes (the dynamic shared memory, in floats).
+cudaError_t LaunchSupernodalSweep(const SupernodalSweepArrays& factor, const int* order,
+                                  int supernodes, int maxRows, bool forward, float* y,
+                                  cudaStream_t stream);
+// Lets the sweeps use `bytes` of dynamic shared memory (above the default 48 KB).
+cudaError_t AllowSweepSharedMemory(int bytes);
+
 // Whether the kernels in this library can run on the current device (an sm_90 build on an
 // older GPU cannot). cudaSuccess when they can.
 cudaError_t CheckKernelImage();

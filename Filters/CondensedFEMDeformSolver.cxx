@@ -62,11 +62,15 @@ void Solver::chooseBackend(const Settings& settings, PrecomputeOptions& options,
     notes.push_back("Backend CUDA is not available (" + cudaUnavailable_ + "); using the CPU");
 }
 
-void Solver::startLargeDeformation(const PrecomputeRequest& given, const Settings& settings) {
-  if (haveLarge_ && largeLiftOff_ == settings.liftOff && SameInputs(given, largeRequest_))
+void Solver::startLargeDeformation(const PrecomputeRequest& given, const Settings& settings,
+                                   const std::shared_ptr<ComputeBackend>& backend) {
+  if (haveLarge_ && largeLiftOff_ == settings.liftOff && largeRequest_.options.backend == backend &&
+      SameInputs(given, largeRequest_))
     return;
   largeRequest_ = given;
-  largeRequest_.options = PrecomputeOptions(); // linear cells, CPU
+  largeRequest_.options = PrecomputeOptions(); // linear cells
+  // The backend runs the forces, substitutions and tangent products it can.
+  largeRequest_.options.backend = backend;
   PrecomputedLargeDeformationOptions options;
   options.slidingLiftOff = settings.liftOff;
   background_.startLargeDeformation(largeRequest_, options);
@@ -93,7 +97,7 @@ Status Solver::runLargeDeformation(const PrecomputeRequest& given, const Precomp
     return SolveLargeDeformation(request, input, largeOptions, outcome.result,
                                  outcome.largeDeformationReport);
   }
-  startLargeDeformation(given, settings);
+  startLargeDeformation(given, settings, options.backend);
   while (!background_.largeDeformationReady()) {
     if (progress)
       progress(0.5);
@@ -126,6 +130,9 @@ Status Solver::runLargeDeformation(const PrecomputeRequest& given, const Precomp
     outcome.solverNote = note.str();
     outcome.notes.push_back(outcome.solverNote);
   }
+  if (!outcome.precomputedReport.deviceNote.empty())
+    outcome.notes.push_back("the large-deformation solve's backend: " +
+                            outcome.precomputedReport.deviceNote);
   outcome.precomputeMs = precompute[Stage::Total].ms;
   outcome.freshPrecompute = outcome.freshPrecompute || fresh;
   if (outcome.precomputedReport.fellBack) {
@@ -149,13 +156,7 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
     options.elementOrder = ElementOrder::Linear;
   }
   const ModelChoice model = settings.modelChoice();
-  if (model == ModelChoice::NeoHookean) {
-    if (static_cast<BackendChoice>(settings.backend) == BackendChoice::CUDA)
-      outcome.notes.push_back("Model NeoHookean runs on the CPU: Backend CUDA applies to the "
-                              "linear model");
-  } else {
-    chooseBackend(settings, options, outcome.notes);
-  }
+  chooseBackend(settings, options, outcome.notes);
   // The request as solved: the given inputs with these options. Made only where a path keeps it or
   // is slow anyway (a new precompute, the reference and large-deformation solves, Verify): an edit
   // that reuses the precompute compares, and copies nothing (at ~100k cells the mesh and materials
@@ -191,7 +192,7 @@ Status Solver::run(const PrecomputeRequest& given, const SolveInput& input,
       // Auto may need the large-deformation model: its precompute runs beside the linear one.
       if (model == ModelChoice::Auto && !settings.newtonSolver() &&
           options.elementOrder == ElementOrder::Linear)
-        startLargeDeformation(given, settings);
+        startLargeDeformation(given, settings, options.backend);
       // The worker's progress is reported from this (the pipeline's) thread.
       while (!background_.ready()) {
         if (progress)

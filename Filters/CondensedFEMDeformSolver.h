@@ -45,7 +45,8 @@ private:
   void chooseBackend(const Settings& settings, PrecomputeOptions& options,
                      std::vector<std::string>& notes);
   // Starts the large-deformation precompute for these inputs unless the one kept is for them.
-  void startLargeDeformation(const PrecomputeRequest& given, const Settings& settings);
+  void startLargeDeformation(const PrecomputeRequest& given, const Settings& settings,
+                             const std::shared_ptr<ComputeBackend>& backend);
   Status runLargeDeformation(const PrecomputeRequest& given, const PrecomputeOptions& options,
                              const SolveInput& input, const Settings& settings,
                              const std::function<void(double)>& progress, SolveOutcome& outcome);

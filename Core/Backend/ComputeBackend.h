@@ -15,6 +15,21 @@ namespace faceplan {
 
 class CholmodFactor;
 class ResponseOperator;
+class HyperelasticForces;
+class FactorOnDevice;
+
+// The cells of a large-deformation solve (PrecomputedLargeDeformation.h) in plain arrays, for a
+// backend that evaluates their forces: each cell's corners, shape-function gradients, volume and
+// moduli, and each node's frame (the solve's DOFs are in the nodes' frames).
+struct HyperelasticCells {
+  int nodes = 0;
+  std::vector<int> corners;      // 4 per cell
+  std::vector<double> gradients; // 12 per cell: grad N_a of corner a at [3 a, 3 a + 3)
+  std::vector<double> volume, mu, kappa;
+  std::vector<char> smallStrain; // per cell: small-strain elastic instead of neo-Hookean
+  std::vector<int> frameOf;      // per node: index into frames, -1 for the identity
+  std::vector<double> frames;    // 9 per frame, column-major (columns: normal, two tangents)
+};
 
 class ComputeBackend {
 public:
@@ -61,6 +76,46 @@ public:
     (void)kffUpper, (void)kfr, (void)keptDofs, (void)factor, (void)response, (void)op, (void)report;
     return Status::Error("unsupported");
   }
+
+  // Optional: the large-deformation solve's steps (the CUDA backend). The cells' energy and
+  // internal force at a state (NeoHookeanTetState and SmallStrainTetState, summed per node and
+  // turned into the nodes' frames), made once per precompute. Fails when the backend has none.
+  virtual Status makeHyperelasticForces(const HyperelasticCells& cells,
+                                        std::unique_ptr<HyperelasticForces>& forces) {
+    (void)cells, (void)forces;
+    return Status::Error("this backend has no large-deformation steps");
+  }
+  // Optional: a copy of a numeric supernodal factor (its values in single precision, as
+  // SinglePrecisionFactor's) and of the symmetric matrix `upper` (its upper triangle; the
+  // factored matrix before pinning), for the solve's substitutions and tangent products. Called
+  // on the background refactorization's thread. Fails when the backend has none or it does not
+  // fit.
+  virtual Status makeFactorOnDevice(const CholmodFactor& factor, const SparseMatrix& upper,
+                                    std::unique_ptr<FactorOnDevice>& device) {
+    (void)factor, (void)upper, (void)device;
+    return Status::Error("this backend has no large-deformation steps");
+  }
+};
+
+// The energy and internal force of HyperelasticCells at a state. Not for concurrent calls.
+class HyperelasticForces {
+public:
+  virtual ~HyperelasticForces() = default;
+  // u and force: 3 per node in the nodes' frames. `admissible` is false (energy and force then
+  // undefined) when a cell would be inverted (det F <= 0) or a value is not finite.
+  virtual Status evaluate(const Eigen::VectorXd& u, double& energy, Eigen::VectorXd& force,
+                          bool& admissible) = 0;
+};
+
+// A factor and a matrix held by a backend. Not for concurrent calls.
+class FactorOnDevice {
+public:
+  virtual ~FactorOnDevice() = default;
+  // x = A^-1 b (A = L L^T, the factored matrix, original numbering) in single precision after
+  // scaling b to unit largest entry, as SinglePrecisionFactor::solve.
+  virtual Status solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) = 0;
+  // out = M v, M the symmetric matrix whose upper triangle was given, in double precision.
+  virtual Status multiply(const Eigen::VectorXd& v, Eigen::VectorXd& out) = 0;
 };
 
 // kept = response * roi. Safe to call from several threads.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "CondensedFEM/PrecomputedLargeDeformation.h"
 
+#include "Backend/ComputeBackend.h"
 #include "Common/BlasThreads.h"
 #include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/LargeDeformationProblem.h"
@@ -44,6 +45,10 @@ struct TangentFactor {
   CholmodFactor factor;
   SinglePrecisionFactor single; // empty unless options.singlePrecisionFactor
   SparseMatrix tangent;
+  // The backend's copy of `single` and `tangent` (null: the CPU's), and why there is none when a
+  // backend was asked.
+  std::shared_ptr<FactorOnDevice> device;
+  std::string deviceError;
   // The state it was made at, its contact and its internal force: a predictor may start there.
   Eigen::VectorXd state, force;
   std::vector<char> prescribed;
@@ -54,7 +59,8 @@ struct TangentFactor {
 Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
                      AssemblyPattern& pattern, const Eigen::VectorXd& u,
                      const std::vector<char>& prescribed, bool singlePrecision,
-                     std::shared_ptr<TangentFactor>& out, StageTimings* timings) {
+                     ComputeBackend* backend, std::shared_ptr<TangentFactor>& out,
+                     StageTimings* timings) {
   StageClock clock;
   Evaluation ev;
   std::vector<double> packed;
@@ -87,6 +93,14 @@ Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
     (*timings)[Stage::Factorization].ms += clock.lapMs();
   if (!status)
     return status;
+  if (backend && singlePrecision) {
+    std::unique_ptr<FactorOnDevice> device;
+    const Status copied = backend->makeFactorOnDevice(made->factor, made->tangent, device);
+    if (copied)
+      made->device = std::move(device);
+    else
+      made->deviceError = copied.message;
+  }
   out = std::move(made);
   return Status::Ok();
 }
@@ -114,6 +128,11 @@ public:
   PrecomputeRequest request;
   PrecomputedLargeDeformationOptions options;
   std::shared_ptr<Structure> structure;
+  // The backend that runs the steps it can (options.useBackend), and its forces (null: the CPU's,
+  // with why in forcesError when a backend was asked).
+  std::shared_ptr<ComputeBackend> backend;
+  std::unique_ptr<HyperelasticForces> forces;
+  std::string forcesError;
   FillReducingOrdering ordering;
   SparseMatrix restTangent; // upper, unpinned
   // The rest state's factor, kept for solves that start from rest (a move back towards zero is
@@ -182,10 +201,10 @@ private:
       Status status = Status::Error("no state ahead");
       if (ahead.size() == u.size())
         status = FactorTangent(*structure, ordering, pattern, ahead, prescribed,
-                               options.singlePrecisionFactor, made, nullptr);
+                               options.singlePrecisionFactor, backend.get(), made, nullptr);
       if (!status)
         status = FactorTangent(*structure, ordering, pattern, u, prescribed,
-                               options.singlePrecisionFactor, made, nullptr);
+                               options.singlePrecisionFactor, backend.get(), made, nullptr);
       lock.lock();
       if (status) {
         factor_ = std::move(made);
@@ -222,6 +241,35 @@ Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
   return Status::Ok();
 }
 
+// The structure's cells in the backend's plain arrays.
+HyperelasticCells CellsOf(const Structure& st) {
+  HyperelasticCells c;
+  const TetMesh& mesh = *st.mesh;
+  const size_t m = static_cast<size_t>(mesh.numTets());
+  c.nodes = static_cast<int>(st.n);
+  c.corners.resize(4 * m);
+  c.gradients.resize(12 * m);
+  c.volume.resize(m);
+  c.mu.resize(m);
+  c.kappa.resize(m);
+  c.smallStrain = st.smallStrain;
+  for (size_t e = 0; e < m; ++e) {
+    for (int a = 0; a < 4; ++a) {
+      c.corners[4 * e + a] = mesh.tets(static_cast<Eigen::Index>(e), a);
+      for (int j = 0; j < 3; ++j)
+        c.gradients[12 * e + 3 * a + j] = st.cells[e].gradients(a, j);
+    }
+    c.volume[e] = st.cells[e].volume;
+    c.mu[e] = st.materials[e].mu;
+    c.kappa[e] = st.materials[e].kappa;
+  }
+  c.frameOf = st.frameOf;
+  c.frames.reserve(9 * st.frames.size());
+  for (const Eigen::Matrix3d& q : st.frames)
+    c.frames.insert(c.frames.end(), q.data(), q.data() + 9);
+  return c;
+}
+
 Status PrecomputeImpl(const PrecomputeRequest& request,
                       const PrecomputedLargeDeformationOptions& options,
                       std::shared_ptr<LargeDeformationSystem>& out) {
@@ -238,6 +286,8 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   auto sys = std::make_shared<LargeDeformationSystem>();
   sys->request = request;
   sys->request.options.backend.reset();
+  if (options.useBackend && options.singlePrecisionFactor && request.options.backend)
+    sys->backend = request.options.backend;
   sys->options = options;
   sys->structure = std::make_shared<Structure>();
   Structure& st = *sys->structure;
@@ -246,6 +296,13 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     status = MakePattern(st, sys->solvePattern);
   if (!status)
     return status;
+  if (sys->backend) {
+    const Status made = sys->backend->makeHyperelasticForces(CellsOf(st), sys->forces);
+    if (!made) {
+      sys->forces.reset();
+      sys->forcesError = made.message;
+    }
+  }
   sys->timings[Stage::Separation].ms = clock.lapMs();
   status = OrderNodesWithTrailing(sys->solvePattern.upper, 3, {}, sys->ordering);
   if (!status)
@@ -254,7 +311,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   const Eigen::VectorXd rest = Eigen::VectorXd::Zero(3 * st.n);
   std::shared_ptr<TangentFactor> factor;
   status = FactorTangent(st, sys->ordering, sys->solvePattern, rest, st.prescribed,
-                         options.singlePrecisionFactor, factor, &sys->timings);
+                         options.singlePrecisionFactor, sys->backend.get(), factor, &sys->timings);
   if (!status)
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
@@ -334,7 +391,19 @@ private:
   bool evaluate(const Eigen::VectorXd& u, Evaluation& ev) {
     StageClock clock;
     ++report_.evaluations;
-    const bool ok = Evaluate(st_, u, ev, nullptr, &scratch_);
+    bool ok = false, onDevice = false;
+    if (sys_.forces && !forcesFailed_) {
+      const Status s = sys_.forces->evaluate(u, ev.energy, ev.force, ok);
+      if (s) {
+        onDevice = true;
+        ++report_.deviceEvaluations;
+      } else {
+        forcesFailed_ = true; // the CPU's from here on in this solve
+        noteDevice("the forces: " + s.message);
+      }
+    }
+    if (!onDevice)
+      ok = Evaluate(st_, u, ev, nullptr, &scratch_);
     timings_[Stage::ElementStiffness].ms += clock.lapMs();
     return ok;
   }
@@ -416,10 +485,19 @@ private:
   Eigen::VectorXd substitute(const Eigen::VectorXd& r) {
     StageClock clock;
     Eigen::VectorXd out;
-    Status solved;
-    if (sys_.options.singlePrecisionFactor) {
+    Status solved = Status::Error("no device");
+    if (factor_->device) {
+      solved = factor_->device->solve(r, out);
+      if (solved)
+        ++report_.deviceSubstitutions;
+      else
+        noteDevice("a substitution: " + solved.message);
+    } else if (sys_.backend) {
+      noteDevice("the substitutions: " + factor_->deviceError);
+    }
+    if (!solved && sys_.options.singlePrecisionFactor) {
       solved = factor_->single.solve(r, out);
-    } else {
+    } else if (!solved) {
       Eigen::MatrixXd x;
       // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
       // whose thread hand-offs cost more than they save (most of all on a loaded machine).
@@ -468,8 +546,16 @@ private:
     // to round-off: the tangent's product with that move is skipped (the move itself is applied;
     // the predictor only starts the iterations, whose residual decides convergence).
     Eigen::VectorXd rhs = ev.force - pb_.externalLoad;
-    if (move.lpNorm<Eigen::Infinity>() > 1e-12 * pb_.target.lpNorm<Eigen::Infinity>())
-      rhs += factor_->tangent.selfadjointView<Eigen::Upper>() * move;
+    if (move.lpNorm<Eigen::Infinity>() > 1e-12 * pb_.target.lpNorm<Eigen::Infinity>()) {
+      Eigen::VectorXd product;
+      Status multiplied = Status::Error("no device");
+      if (factor_->device && !(multiplied = factor_->device->multiply(move, product)))
+        noteDevice("a tangent product: " + multiplied.message);
+      if (multiplied)
+        rhs += product;
+      else
+        rhs += factor_->tangent.selfadjointView<Eigen::Upper>() * move;
+    }
     rhs = -rhs;
     ZeroPrescribed(pb_.prescribed, rhs);
     Eigen::VectorXd follow = applyFactor(rhs);
@@ -515,7 +601,7 @@ private:
       return false;
     std::shared_ptr<TangentFactor> made;
     if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed,
-                       sys_.options.singlePrecisionFactor, made, &timings_))
+                       sys_.options.singlePrecisionFactor, sys_.backend.get(), made, &timings_))
       return false;
     factor_ = std::move(made);
     ++report_.refactorizations;
@@ -602,6 +688,12 @@ private:
     }
   }
 
+  // A step the backend was asked for and did not take, once per solve.
+  void noteDevice(const std::string& what) {
+    if (report_.deviceNote.empty())
+      report_.deviceNote = "the CPU ran " + what;
+  }
+
   LargeDeformationSystem& sys_;
   const Structure& st_;
   Problem& pb_;
@@ -619,6 +711,7 @@ private:
     Eigen::MatrixXd schurInverse; // S^-1 (k x k, k small)
   } released_;
   int sinceFactor_ = 0;
+  bool forcesFailed_ = false;
   double lastResidual_ = 0.0;
   Evaluation cached_; // the predictor's accepted state
   bool haveCached_ = false;
@@ -675,6 +768,8 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
 
   if (iterationLimit < 0)
     return Status::Error("the quasi-Newton iteration limit must be 0 (none) or positive");
+  if (sys.backend && !sys.forces)
+    report.deviceNote = "the CPU ran the forces: " + sys.forcesError;
   QuasiNewton solver(sys, pb, report, result.timings,
                      report.warmStarted ? sys.factor() : sys.restFactor);
   solver.iterationLimit = iterationLimit;
@@ -741,6 +836,9 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     return status;
   }
 
+  if (sys.backend && report.deviceNote.empty())
+    report.device = sys.backend->name();
+  result.backend = report.device;
   FinalState finalState;
   status = FinishSolve(request, input, pb, u, solver.lastResidual(), result, finalState);
   report.smallestVolumeRatio = finalState.measures.smallestVolumeRatio;

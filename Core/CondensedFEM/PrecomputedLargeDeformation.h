@@ -90,6 +90,12 @@ struct PrecomputedLargeDeformationOptions {
   bool singlePrecisionFactor = true;
   // When the solve does not converge: Newton (true) or an error (false, for tests).
   bool fallBackToNewton = true;
+  // With a request whose backend has the large-deformation steps (the CUDA backend): the cells'
+  // forces, the factor's substitutions and the tangent's products run there, the rest of the
+  // iteration (L-BFGS's vectors, the line search, the contact) on the CPU. Needs
+  // singlePrecisionFactor. Where the backend cannot (no device, a factor that does not fit), the
+  // CPU does that step and the report says so.
+  bool useBackend = true;
   LargeDeformationOptions newton; // the fallback's (slidingLiftOff and tolerance are set from here)
 };
 
@@ -135,6 +141,11 @@ struct PrecomputedLargeDeformationReport {
   // iterate, not the equilibrium (for studies of error against iterations).
   bool stoppedAtLimit = false;
   LargeDeformationReport newton;
+  // Where the forces and substitutions ran: the backend's name, or "CPU"; and, when a backend was
+  // asked for and did not take a step, why.
+  std::string device = "CPU";
+  std::string deviceNote;
+  int deviceEvaluations = 0, deviceSubstitutions = 0;
   // Per iteration: time since the solve started (ms) and the relative residual.
   std::vector<std::pair<double, double>> convergence;
 };

@@ -14,7 +14,7 @@
 # It builds the working tree as it is and fails when that does not build (no stale fallback).
 # FACEPLAN_CUDA_ARCHITECTURES sets CMAKE_CUDA_ARCHITECTURES (Cuda/CMakeLists.txt's default: 90).
 # Usage: OUT=<results dir> [BUILD=<dir>] [SKIP_BENCHMARK=1] [FACEPLAN_DEPS=<dir>]
-#        Cuda/tools/gpu_machine_run.sh [gpu_benchmark arguments...]
+#        [BENCHMARK=large_deformation_gpu] Cuda/tools/gpu_machine_run.sh [the benchmark's arguments...]
 set -uo pipefail
 [ -n "${FACEPLAN_DEPS:-}" ] && FACEPLAN_DEPS=$(realpath "$FACEPLAN_DEPS")
 cd "$(dirname "$0")/../.."
@@ -54,7 +54,7 @@ configure() { # $1 source dir, $2 build dir
 }
 # BUILD: the build folder (two trees side by side use two); SKIP_BENCHMARK=1 builds and tests only.
 BUILD=${BUILD:-/tmp/build}
-TARGETS="TestCudaBackend TestCudaFallback gpu_benchmark"
+TARGETS="TestCudaBackend TestCudaLargeDeformation TestCudaFallback gpu_benchmark large_deformation_gpu"
 ok=0
 if configure "$ROOT" "$BUILD" > "$OUT/configure.log" 2>&1 && \
    cmake --build "$BUILD" -j "$(nproc)" --target $TARGETS > "$OUT/build.log" 2>&1; then
@@ -81,6 +81,10 @@ grep -E "tests passed|Passed|Failed|Skipped|relative|residual" "$OUT/ctest-gpu.l
 # says the tests failed.
 bench_ok=1
 if [ "${SKIP_BENCHMARK:-0}" != 1 ]; then
-  "$BUILD/bin/gpu_benchmark" --out "$OUT/gpu_benchmark.json" "$@" 2>&1 | tee "$OUT/gpu_benchmark.txt" || bench_ok=0
+  if [ "${BENCHMARK:-gpu_benchmark}" = large_deformation_gpu ]; then
+    "$BUILD/bin/large_deformation_gpu" --json "$OUT/large_deformation_gpu.json" "$@" 2>&1 | tee "$OUT/large_deformation_gpu.txt" || bench_ok=0
+  else
+    "$BUILD/bin/gpu_benchmark" --out "$OUT/gpu_benchmark.json" "$@" 2>&1 | tee "$OUT/gpu_benchmark.txt" || bench_ok=0
+  fi
 fi
 [ "$tests_ok" = 1 ] && [ "$bench_ok" = 1 ]

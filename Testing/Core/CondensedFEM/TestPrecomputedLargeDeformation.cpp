@@ -482,6 +482,38 @@ TEST(PrecomputedLargeDeformation, AnIterationLimitReturnsTheIterateAndSaysSo) {
   EXPECT_NE(s.message.find("iteration limit"), std::string::npos) << s.message;
 }
 
+TEST(PrecomputedLargeDeformation, ABackendWithoutItsStepsLeavesThemToTheCpuAndSaysSo) {
+  // The CPU backend has no large-deformation steps: the solve runs them on the CPU, gives the same
+  // answer bit for bit, and says why the backend ran none. Without a backend nothing is said.
+  PrecomputeRequest request = ShellRequest(4, 2);
+  SolveInput input;
+  input.movableDisplacement = SmoothRoiField(request, 3.0);
+  auto plain = Precomputed(request);
+  request.options.backend = MakeCpuBackend();
+  auto withBackend = Precomputed(request);
+  ASSERT_TRUE(plain && withBackend);
+  SolveResult a, b;
+  PrecomputedLargeDeformationReport ra, rb;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*plain, input, nullptr, a, ra).ok);
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*withBackend, input, nullptr, b, rb).ok);
+  EXPECT_EQ(ra.device, "CPU");
+  EXPECT_EQ(ra.deviceNote, "");
+  EXPECT_EQ(rb.device, "CPU");
+  EXPECT_EQ(b.backend, "CPU");
+  EXPECT_NE(rb.deviceNote.find("the CPU ran the forces"), std::string::npos) << rb.deviceNote;
+  EXPECT_EQ(rb.deviceEvaluations, 0);
+  EXPECT_EQ(rb.deviceSubstitutions, 0);
+  EXPECT_EQ(RelativeMaxNodeDifference(a.keptDisplacement, b.keptDisplacement), 0.0);
+  // With useBackend off the backend is not asked.
+  PrecomputedLargeDeformationOptions off;
+  off.useBackend = false;
+  auto unused = Precomputed(request, off);
+  ASSERT_TRUE(unused);
+  PrecomputedLargeDeformationReport rc;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*unused, input, nullptr, b, rc).ok);
+  EXPECT_EQ(rc.deviceNote, "");
+}
+
 TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
   const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
   std::shared_ptr<LargeDeformationSystem> system;

@@ -1,0 +1,373 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "CudaLargeDeformation.h"
+
+#include "CudaInternal.h"
+#include "CudaKernels.h"
+#include "SparseSolver/CholmodFactor.h"
+
+#include <cholmod.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <vector>
+
+namespace faceplan::cuda::detail {
+
+namespace {
+
+template <class T>
+bool Upload(DeviceArray& dst, const std::vector<T>& src, cudaStream_t stream, std::string& error) {
+  if (!dst.ensure(sizeof(T) * std::max<size_t>(src.size(), 1), error))
+    return false;
+  if (!src.empty())
+    FP_CUDA_TRY(cudaMemcpyAsync(dst.as<void>(), src.data(), sizeof(T) * src.size(),
+                                cudaMemcpyHostToDevice, stream));
+  return true;
+}
+
+// A stream of one object's own.
+class OwnStream {
+public:
+  ~OwnStream() {
+    if (stream_)
+      cudaStreamDestroy(stream_);
+  }
+  bool create(std::string& error) {
+    FP_CUDA_TRY(cudaSetDevice(0));
+    FP_CUDA_TRY(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
+    return true;
+  }
+  cudaStream_t get() const { return stream_; }
+
+private:
+  cudaStream_t stream_ = nullptr;
+};
+
+class CudaForces final : public HyperelasticForces {
+public:
+  bool init(const HyperelasticCells& c, std::string& error) {
+    const size_t m = c.volume.size();
+    if (c.corners.size() != 4 * m || c.gradients.size() != 12 * m || c.mu.size() != m ||
+        c.kappa.size() != m || c.smallStrain.size() != m ||
+        c.frameOf.size() != static_cast<size_t>(c.nodes) || c.frames.size() % 9 != 0) {
+      error = "internal: inconsistent large-deformation cells";
+      return false;
+    }
+    for (int node : c.corners)
+      if (node < 0 || node >= c.nodes) {
+        error = "internal: a cell's corner is not a node";
+        return false;
+      }
+    for (int f : c.frameOf)
+      if (f >= static_cast<int>(c.frames.size() / 9)) {
+        error = "internal: a node's frame does not exist";
+        return false;
+      }
+    if (!InitDevice(error) || !stream_.create(error))
+      return false;
+    nodes_ = c.nodes;
+    cudaStream_t s = stream_.get();
+    if (!Upload(corners_, c.corners, s, error) || !Upload(gradients_, c.gradients, s, error) ||
+        !Upload(volume_, c.volume, s, error) || !Upload(mu_, c.mu, s, error) ||
+        !Upload(kappa_, c.kappa, s, error) || !Upload(smallStrain_, c.smallStrain, s, error) ||
+        !Upload(frameOf_, c.frameOf, s, error) || !Upload(frames_, c.frames, s, error))
+      return false;
+    const size_t dofs = 3 * static_cast<size_t>(nodes_);
+    if (!u_.ensure(sizeof(double) * std::max<size_t>(dofs, 1), error) ||
+        !force_.ensure(sizeof(double) * (dofs + 2), error) ||
+        !hostU_.ensure(sizeof(double) * std::max<size_t>(dofs, 1), error) ||
+        !hostForce_.ensure(sizeof(double) * (dofs + 2), error))
+      return false;
+    arrays_.cells = static_cast<std::int64_t>(m);
+    arrays_.corners = corners_.as<int>();
+    arrays_.gradients = gradients_.as<double>();
+    arrays_.volume = volume_.as<double>();
+    arrays_.mu = mu_.as<double>();
+    arrays_.kappa = kappa_.as<double>();
+    arrays_.smallStrain = smallStrain_.as<char>();
+    arrays_.frameOf = frameOf_.as<int>();
+    arrays_.frames = frames_.as<double>();
+    FP_CUDA_TRY(cudaStreamSynchronize(s));
+    return true;
+  }
+
+  Status evaluate(const Eigen::VectorXd& u, double& energy, Eigen::VectorXd& force,
+                  bool& admissible) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::string error;
+    if (u.size() != 3 * static_cast<Eigen::Index>(nodes_))
+      return Status::Error("internal: a state of the wrong size");
+    return run(u, energy, force, admissible, error) ? Status::Ok() : Status::Error(error);
+  }
+
+private:
+  // The force and, after it, the energy and the inadmissible flag (as a double's bits) in one
+  // buffer: one copy back.
+  bool run(const Eigen::VectorXd& u, double& energy, Eigen::VectorXd& force, bool& admissible,
+           std::string& error) {
+    const size_t dofs = 3 * static_cast<size_t>(nodes_);
+    cudaStream_t s = stream_.get();
+    FP_CUDA_TRY(cudaSetDevice(0));
+    std::memcpy(hostU_.as<double>(), u.data(), sizeof(double) * dofs);
+    FP_CUDA_TRY(cudaMemcpyAsync(u_.as<double>(), hostU_.as<double>(), sizeof(double) * dofs,
+                                cudaMemcpyHostToDevice, s));
+    FP_CUDA_TRY(cudaMemsetAsync(force_.as<double>(), 0, sizeof(double) * (dofs + 2), s));
+    double* out = force_.as<double>();
+    FP_CUDA_TRY(LaunchHyperelasticForces(arrays_, u_.as<double>(), out, out + dofs,
+                                         reinterpret_cast<int*>(out + dofs + 1), s));
+    FP_CUDA_TRY(cudaMemcpyAsync(hostForce_.as<double>(), out, sizeof(double) * (dofs + 2),
+                                cudaMemcpyDeviceToHost, s));
+    FP_CUDA_TRY(cudaStreamSynchronize(s));
+    const double* host = hostForce_.as<double>();
+    int flag = 0;
+    std::memcpy(&flag, host + dofs + 1, sizeof(int));
+    energy = host[dofs];
+    force = Eigen::Map<const Eigen::VectorXd>(host, static_cast<Eigen::Index>(dofs));
+    admissible = flag == 0 && std::isfinite(energy) && force.allFinite();
+    return true;
+  }
+
+  std::mutex mutex_;
+  OwnStream stream_;
+  int nodes_ = 0;
+  DeviceArray corners_, gradients_, volume_, mu_, kappa_, smallStrain_, frameOf_, frames_;
+  DeviceArray u_, force_;
+  PinnedArray hostU_, hostForce_;
+  HyperelasticCellArrays arrays_;
+};
+
+class CudaFactor final : public FactorOnDevice {
+public:
+  bool init(const CholmodFactor& factor, const SparseMatrix& upper, std::string& error) {
+    const cholmod_factor* L = factor.numericFactor();
+    if (!L || !L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_INT) {
+      error = "the factor is not a numeric supernodal LL^T factor with 32-bit indices";
+      return false;
+    }
+    n_ = static_cast<int>(L->n);
+    if (upper.rows() != n_ || upper.cols() != n_) {
+      error = "internal: the matrix does not match the factor";
+      return false;
+    }
+    const int nsuper = static_cast<int>(L->nsuper);
+    const int* super = static_cast<const int*>(L->super);
+    const int* pi = static_cast<const int*>(L->pi);
+    const int* px = static_cast<const int*>(L->px);
+    const int* s = static_cast<const int*>(L->s);
+    const double* x = static_cast<const double*>(L->x);
+    std::vector<int> superV(super, super + nsuper + 1), piV(pi, pi + nsuper + 1),
+        sV(s, s + pi[nsuper]), perm(n_);
+    std::vector<std::int64_t> pxV(px, px + nsuper + 1);
+    const int* p = static_cast<const int*>(L->Perm);
+    for (int k = 0; k < n_; ++k)
+      perm[k] = p ? p[k] : k;
+    std::vector<float> values(static_cast<size_t>(pxV.back()));
+    for (size_t k = 0; k < values.size(); ++k) {
+      values[k] = static_cast<float>(x[k]);
+      if (!std::isfinite(values[k])) {
+        error = "the factor does not fit single precision";
+        return false;
+      }
+    }
+    // Levels: a supernode's parent is the supernode of its first off-diagonal row, always later
+    // in CHOLMOD's order, so one ascending pass gives each its height above the leaves.
+    std::vector<int> supernodeOf(n_), level(nsuper, 0);
+    for (int k = 0; k < nsuper; ++k)
+      for (int c = super[k]; c < super[k + 1]; ++c)
+        supernodeOf[c] = k;
+    int levels = 0;
+    for (int k = 0; k < nsuper; ++k) {
+      const int nc = super[k + 1] - super[k], nr = pi[k + 1] - pi[k];
+      levels = std::max(levels, level[k] + 1);
+      if (nr > nc) {
+        const int parent = supernodeOf[s[pi[k] + nc]];
+        level[parent] = std::max(level[parent], level[k] + 1);
+      }
+    }
+    levelStart_.assign(levels + 1, 0);
+    levelRows_.assign(levels, 0);
+    for (int k = 0; k < nsuper; ++k) {
+      ++levelStart_[level[k] + 1];
+      levelRows_[level[k]] = std::max(levelRows_[level[k]], pi[k + 1] - pi[k]);
+    }
+    for (int l = 0; l < levels; ++l)
+      levelStart_[l + 1] += levelStart_[l];
+    std::vector<int> order(nsuper), next(levelStart_.begin(), levelStart_.end() - 1);
+    for (int k = 0; k < nsuper; ++k)
+      order[next[level[k]]++] = k;
+    maxRows_ = levels > 0 ? *std::max_element(levelRows_.begin(), levelRows_.end()) : 0;
+    // Upper triangle as triplets.
+    std::vector<int> rows, cols;
+    std::vector<double> entries;
+    rows.reserve(upper.nonZeros());
+    cols.reserve(upper.nonZeros());
+    entries.reserve(upper.nonZeros());
+    for (int col = 0; col < upper.outerSize(); ++col)
+      for (SparseMatrix::InnerIterator it(upper, col); it; ++it)
+        if (it.row() <= col) {
+          rows.push_back(static_cast<int>(it.row()));
+          cols.push_back(col);
+          entries.push_back(it.value());
+        }
+    nnz_ = static_cast<std::int64_t>(entries.size());
+
+    if (!InitDevice(error) || !stream_.create(error))
+      return false;
+    cudaDeviceProp prop{};
+    FP_CUDA_TRY(cudaGetDeviceProperties(&prop, 0));
+    const size_t shared = sizeof(float) * static_cast<size_t>(maxRows_);
+    if (shared > prop.sharedMemPerBlockOptin) {
+      error = "a supernode of " + std::to_string(maxRows_) +
+              " rows does not fit the GPU's shared memory";
+      return false;
+    }
+    if (shared > 48 * 1024)
+      FP_CUDA_TRY(AllowSweepSharedMemory(static_cast<int>(shared)));
+    cudaStream_t st = stream_.get();
+    if (!Upload(super_, superV, st, error) || !Upload(pi_, piV, st, error) ||
+        !Upload(px_, pxV, st, error) || !Upload(s_, sV, st, error) ||
+        !Upload(values_, values, st, error) || !Upload(perm_, perm, st, error) ||
+        !Upload(order_, order, st, error) || !Upload(rows_, rows, st, error) ||
+        !Upload(cols_, cols, st, error) || !Upload(entries_, entries, st, error))
+      return false;
+    const size_t bytes = sizeof(double) * std::max(n_, 1);
+    if (!b_.ensure(bytes, error) || !x_.ensure(bytes, error) ||
+        !y_.ensure(sizeof(float) * std::max(n_, 1), error) || !hostIn_.ensure(bytes, error) ||
+        !hostOut_.ensure(bytes, error))
+      return false;
+    arrays_.super = super_.as<int>();
+    arrays_.pi = pi_.as<int>();
+    arrays_.px = px_.as<std::int64_t>();
+    arrays_.s = s_.as<int>();
+    arrays_.values = values_.as<float>();
+    valueBytes_ = 4.0 * double(values.size());
+    supernodes_ = nsuper;
+    FP_CUDA_TRY(cudaStreamSynchronize(st));
+    return true;
+  }
+
+  Status solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (b.size() != n_)
+      return Status::Error("internal: a right-hand side of the wrong size");
+    const double scale = n_ > 0 ? b.cwiseAbs().maxCoeff() : 0.0;
+    x.setZero(n_);
+    if (!(scale > 0.0))
+      return std::isfinite(scale) ? Status::Ok()
+                                  : Status::Error("the right-hand side is not finite");
+    std::string error;
+    if (!substitute(b, scale, x, error))
+      return Status::Error(error);
+    if (!x.allFinite())
+      return Status::Error("the single-precision substitution overflowed");
+    return Status::Ok();
+  }
+
+  Status multiply(const Eigen::VectorXd& v, Eigen::VectorXd& out) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (v.size() != n_)
+      return Status::Error("internal: a vector of the wrong size");
+    std::string error;
+    return product(v, out, error) ? Status::Ok() : Status::Error(error);
+  }
+
+  SweepShape shape() const {
+    SweepShape s;
+    s.supernodes = supernodes_;
+    s.levels = static_cast<int>(levelRows_.size());
+    s.maxRows = maxRows_;
+    s.valueBytes = valueBytes_;
+    return s;
+  }
+
+private:
+  bool upload(const Eigen::VectorXd& v, std::string& error) {
+    std::memcpy(hostIn_.as<double>(), v.data(), sizeof(double) * n_);
+    FP_CUDA_TRY(cudaMemcpyAsync(b_.as<double>(), hostIn_.as<double>(), sizeof(double) * n_,
+                                cudaMemcpyHostToDevice, stream_.get()));
+    return true;
+  }
+  bool download(Eigen::VectorXd& out, std::string& error) {
+    FP_CUDA_TRY(cudaMemcpyAsync(hostOut_.as<double>(), x_.as<double>(), sizeof(double) * n_,
+                                cudaMemcpyDeviceToHost, stream_.get()));
+    FP_CUDA_TRY(cudaStreamSynchronize(stream_.get()));
+    out = Eigen::Map<const Eigen::VectorXd>(hostOut_.as<double>(), n_);
+    return true;
+  }
+
+  bool substitute(const Eigen::VectorXd& b, double scale, Eigen::VectorXd& x, std::string& error) {
+    cudaStream_t st = stream_.get();
+    FP_CUDA_TRY(cudaSetDevice(0));
+    if (!upload(b, error))
+      return false;
+    float* y = y_.as<float>();
+    FP_CUDA_TRY(LaunchGatherScaled(b_.as<double>(), perm_.as<int>(), n_, 1.0 / scale, y, st));
+    const int levels = static_cast<int>(levelRows_.size());
+    const int* order = order_.as<int>();
+    for (int l = 0; l < levels; ++l)
+      FP_CUDA_TRY(LaunchSupernodalSweep(arrays_, order + levelStart_[l],
+                                        levelStart_[l + 1] - levelStart_[l], levelRows_[l], true, y,
+                                        st));
+    for (int l = levels - 1; l >= 0; --l)
+      FP_CUDA_TRY(LaunchSupernodalSweep(arrays_, order + levelStart_[l],
+                                        levelStart_[l + 1] - levelStart_[l], levelRows_[l], false,
+                                        y, st));
+    FP_CUDA_TRY(LaunchScatterScaled(y, perm_.as<int>(), n_, scale, x_.as<double>(), st));
+    return download(x, error);
+  }
+
+  bool product(const Eigen::VectorXd& v, Eigen::VectorXd& out, std::string& error) {
+    cudaStream_t st = stream_.get();
+    FP_CUDA_TRY(cudaSetDevice(0));
+    if (!upload(v, error))
+      return false;
+    FP_CUDA_TRY(cudaMemsetAsync(x_.as<double>(), 0, sizeof(double) * n_, st));
+    FP_CUDA_TRY(LaunchSymmetricUpperProduct(rows_.as<int>(), cols_.as<int>(), entries_.as<double>(),
+                                            nnz_, b_.as<double>(), x_.as<double>(), st));
+    return download(out, error);
+  }
+
+  std::mutex mutex_;
+  OwnStream stream_;
+  int n_ = 0, supernodes_ = 0, maxRows_ = 0;
+  std::int64_t nnz_ = 0;
+  double valueBytes_ = 0.0;
+  std::vector<int> levelStart_, levelRows_;
+  DeviceArray super_, pi_, px_, s_, values_, perm_, order_, rows_, cols_, entries_;
+  DeviceArray b_, x_, y_;
+  PinnedArray hostIn_, hostOut_;
+  SupernodalSweepArrays arrays_;
+};
+
+} // namespace
+
+Status MakeCudaHyperelasticForces(const HyperelasticCells& cells,
+                                  std::unique_ptr<HyperelasticForces>& forces) {
+  auto made = std::make_unique<CudaForces>();
+  std::string error;
+  if (!made->init(cells, error))
+    return Status::Error(error);
+  forces = std::move(made);
+  return Status::Ok();
+}
+
+Status MakeCudaFactorOnDevice(const CholmodFactor& factor, const SparseMatrix& upper,
+                              std::unique_ptr<FactorOnDevice>& device) {
+  auto made = std::make_unique<CudaFactor>();
+  std::string error;
+  if (!made->init(factor, upper, error))
+    return Status::Error(error);
+  device = std::move(made);
+  return Status::Ok();
+}
+
+bool ShapeOfFactorOnDevice(const FactorOnDevice& device, SweepShape& shape) {
+  const auto* made = dynamic_cast<const CudaFactor*>(&device);
+  if (!made)
+    return false;
+  shape = made->shape();
+  return true;
+}
+
+} // namespace faceplan::cuda::detail
