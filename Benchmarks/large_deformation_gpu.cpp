@@ -8,7 +8,7 @@
 // other and against a cold solve of the final move.
 //
 // build/bin/large_deformation_gpu [--subdivisions S] [--layers L] [--amplitude A] [--step D]
-//                                 [--steps N] [--json FILE]
+//                                 [--steps N] [--single-precision-factor 0|1] [--json FILE]
 #include "Common/RelativeDifference.h"
 #include "Common/StageTimings.h"
 #include "CondensedFEM/PrecomputedLargeDeformation.h"
@@ -79,17 +79,20 @@ SolveInput Move(const PrecomputeRequest& request, double amplitude) {
 }
 
 Run Measure(PrecomputeRequest request, std::shared_ptr<ComputeBackend> backend, double amplitude,
-            double step, int steps) {
+            double step, int steps, const PrecomputedLargeDeformationOptions& options) {
   Run run;
   request.options.backend = backend;
   std::shared_ptr<LargeDeformationSystem> system;
   double t0 = NowMs();
-  Status s = PrecomputeLargeDeformation(request, {}, system);
+  Status s = PrecomputeLargeDeformation(request, options, system);
   run.precomputeMs = NowMs() - t0;
   if (!s) {
     run.note = s.message;
     return run;
   }
+  if (backend)
+    std::printf("%s: factor on the device: %s\n", backend->name().c_str(),
+                DescribeFactorOnDevice(*system).c_str());
   SolveResult result;
   PrecomputedLargeDeformationReport report;
   LargeDeformationState state, next;
@@ -118,6 +121,13 @@ Run Measure(PrecomputeRequest request, std::shared_ptr<ComputeBackend> backend, 
       run.note = report.deviceNote;
     state = next;
     run.steps.push_back(StepOf(ms, result, report));
+    if (std::getenv("FACEPLAN_PRINT_CONVERGENCE")) {
+      std::printf("    background factors so far %d; residuals:",
+                  BackgroundRefactorizations(*system));
+      for (const auto& [at, residual] : report.convergence)
+        std::printf(" %.1e", residual);
+      std::printf("\n");
+    }
   }
   StopRefactorization(*system);
   run.last = result;
@@ -172,9 +182,12 @@ int main(int argc, char** argv) {
   int subdivisions = 18, layers = 5, steps = 8;
   double amplitude = 2.5, step = 0.25;
   std::string json;
+  PrecomputedLargeDeformationOptions options;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--subdivisions")
+    if (a == "--single-precision-factor")
+      options.singlePrecisionFactor = std::atoi(argv[i + 1]) != 0;
+    else if (a == "--subdivisions")
       subdivisions = std::atoi(argv[i + 1]);
     else if (a == "--layers")
       layers = std::atoi(argv[i + 1]);
@@ -200,13 +213,13 @@ int main(int argc, char** argv) {
               static_cast<long long>(request.mesh.numPoints()), request.sets.movable.size(),
               a.rowwise().norm().maxCoeff(), (b - a).rowwise().norm().maxCoeff());
   std::vector<Run> runs;
-  runs.push_back(Measure(request, nullptr, amplitude, step, steps));
+  runs.push_back(Measure(request, nullptr, amplitude, step, steps, options));
   Print(runs.back());
 #if FACEPLAN_HAS_CUDA
   std::shared_ptr<ComputeBackend> gpu;
   const Status made = cuda::MakeCudaBackend(gpu);
   if (made) {
-    runs.push_back(Measure(request, gpu, amplitude, step, steps));
+    runs.push_back(Measure(request, gpu, amplitude, step, steps, options));
     Print(runs.back());
     if (runs[0].ok && runs[1].ok) {
       std::printf(

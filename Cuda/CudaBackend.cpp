@@ -5,9 +5,9 @@
 #include "Common/StageTimings.h"
 #include "CudaCheck.h"
 #include "CudaDenseResponse.h"
-#include "CudaLargeDeformation.h"
 #include "CudaInternal.h"
 #include "CudaKernels.h"
+#include "CudaLargeDeformation.h"
 #include "Element/ElementStiffness.h"
 
 #include <algorithm>

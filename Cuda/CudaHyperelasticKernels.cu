@@ -9,7 +9,8 @@ namespace faceplan::cuda::detail {
 namespace {
 
 constexpr int kCellsPerBlock = 128;
-constexpr int kSweepThreads = 256;
+constexpr int kSweepThreads = 256;      // a level of many supernodes
+constexpr int kWideSweepThreads = 1024; // a level of few (the top of the tree): large supernodes
 constexpr int kPanel = 32; // columns a warp solves at a time in a supernode's diagonal block
 constexpr unsigned kFullWarp = 0xffffffffu;
 
@@ -147,23 +148,24 @@ __global__ void SymmetricUpperProductKernel(const int* __restrict__ rows,
 }
 
 __global__ void GatherScaledKernel(const double* __restrict__ b, const int* __restrict__ perm,
-                                   int n, double inverseScale, float* __restrict__ y) {
+                                   int n, const double* __restrict__ scale, float* __restrict__ y) {
   const int k = blockIdx.x * blockDim.x + threadIdx.x;
   if (k < n)
-    y[k] = static_cast<float>(b[perm[k]] * inverseScale);
+    y[k] = static_cast<float>(b[perm[k]] / *scale);
 }
 
 __global__ void ScatterScaledKernel(const float* __restrict__ y, const int* __restrict__ perm,
-                                    int n, double scale, double* __restrict__ x) {
+                                    int n, const double* __restrict__ scale,
+                                    double* __restrict__ x) {
   const int k = blockIdx.x * blockDim.x + threadIdx.x;
   if (k < n)
-    x[perm[k]] = static_cast<double>(y[k]) * scale;
+    x[perm[k]] = static_cast<double>(y[k]) * *scale;
 }
 
 // One block per supernode of a level: y[its columns] = L11^-1 y[...] (a warp solves 32 columns at
 // a time, the block updates the rows below), then its off-diagonal rows' updates are added to the
 // ancestors' entries (atomically: supernodes of one level may share an ancestor row).
-__global__ void __launch_bounds__(kSweepThreads)
+__global__ void __launch_bounds__(kWideSweepThreads)
     SupernodalForwardKernel(SupernodalSweepArrays f, const int* __restrict__ order,
                             float* __restrict__ y) {
   extern __shared__ float z[];
@@ -178,14 +180,23 @@ __global__ void __launch_bounds__(kSweepThreads)
   for (int j0 = 0; j0 < nc; j0 += kPanel) {
     const int w = min(kPanel, nc - j0);
     if (warp == 0) {
+      // Lane r holds row r of the panel's triangle, loaded before the dependent steps, which then
+      // wait on no memory.
+      float row[kPanel];
+#pragma unroll
+      for (int jj = 0; jj < kPanel; ++jj)
+        row[jj] = (jj <= lane && lane < w) ? L[static_cast<std::int64_t>(j0 + jj) * nr + j0 + lane]
+                                           : 1.0f;
       float v = lane < w ? z[j0 + lane] : 0.0f;
-      for (int jj = 0; jj < w; ++jj) {
-        const float* column = L + static_cast<std::int64_t>(j0 + jj) * nr + j0;
-        const float xj = __shfl_sync(kFullWarp, v, jj) / column[jj];
-        if (lane == jj)
-          v = xj;
-        else if (lane > jj && lane < w)
-          v -= column[lane] * xj;
+#pragma unroll
+      for (int jj = 0; jj < kPanel; ++jj) {
+        if (jj < w) { // the same for the whole warp
+          const float xj = __shfl_sync(kFullWarp, v, jj) / __shfl_sync(kFullWarp, row[jj], jj);
+          if (lane == jj)
+            v = xj;
+          else if (lane > jj)
+            v -= row[jj] * xj;
+        }
       }
       if (lane < w)
         z[j0 + lane] = v;
@@ -209,7 +220,7 @@ __global__ void __launch_bounds__(kSweepThreads)
 
 // One block per supernode of a level: y[its columns] -= L21^T y[rows below] (a warp per column),
 // then L11^-T, 32 columns at a time from the last.
-__global__ void __launch_bounds__(kSweepThreads)
+__global__ void __launch_bounds__(kWideSweepThreads)
     SupernodalBackwardKernel(SupernodalSweepArrays f, const int* __restrict__ order,
                              float* __restrict__ y) {
   extern __shared__ float z[];
@@ -234,14 +245,22 @@ __global__ void __launch_bounds__(kSweepThreads)
     }
     __syncthreads();
     if (warp == 0) {
+      // Lane r holds column r of the panel's triangle (row r of L^T), loaded first.
+      float column[kPanel];
+#pragma unroll
+      for (int jj = 0; jj < kPanel; ++jj)
+        column[jj] =
+            (jj >= lane && jj < w) ? L[static_cast<std::int64_t>(j0 + lane) * nr + j0 + jj] : 1.0f;
       float v = lane < w ? z[j0 + lane] : 0.0f;
-      for (int jj = w - 1; jj >= 0; --jj) {
-        const float xj =
-            __shfl_sync(kFullWarp, v, jj) / L[static_cast<std::int64_t>(j0 + jj) * nr + j0 + jj];
-        if (lane == jj)
-          v = xj;
-        else if (lane < jj)
-          v -= L[static_cast<std::int64_t>(j0 + lane) * nr + j0 + jj] * xj;
+#pragma unroll
+      for (int jj = kPanel - 1; jj >= 0; --jj) {
+        if (jj < w) {
+          const float xj = __shfl_sync(kFullWarp, v, jj) / __shfl_sync(kFullWarp, column[jj], jj);
+          if (lane == jj)
+            v = xj;
+          else if (lane < jj)
+            v -= column[jj] * xj;
+        }
       }
       if (lane < w)
         z[j0 + lane] = v;
@@ -276,15 +295,15 @@ cudaError_t LaunchSymmetricUpperProduct(const int* rows, const int* cols, const 
   return cudaGetLastError();
 }
 
-cudaError_t LaunchGatherScaled(const double* b, const int* perm, int n, double inverseScale,
+cudaError_t LaunchGatherScaled(const double* b, const int* perm, int n, const double* scale,
                                float* y, cudaStream_t stream) {
   if (n > 0)
-    GatherScaledKernel<<<Blocks(n, 256), 256, 0, stream>>>(b, perm, n, inverseScale, y);
+    GatherScaledKernel<<<Blocks(n, 256), 256, 0, stream>>>(b, perm, n, scale, y);
   return cudaGetLastError();
 }
 
-cudaError_t LaunchScatterScaled(const float* y, const int* perm, int n, double scale, double* x,
-                                cudaStream_t stream) {
+cudaError_t LaunchScatterScaled(const float* y, const int* perm, int n, const double* scale,
+                                double* x, cudaStream_t stream) {
   if (n > 0)
     ScatterScaledKernel<<<Blocks(n, 256), 256, 0, stream>>>(y, perm, n, scale, x);
   return cudaGetLastError();
@@ -305,10 +324,13 @@ cudaError_t LaunchSupernodalSweep(const SupernodalSweepArrays& factor, const int
   if (supernodes <= 0)
     return cudaSuccess;
   const size_t shared = sizeof(float) * static_cast<size_t>(maxRows);
+  // A level of fewer supernodes than the GPU has multiprocessors leaves most of them idle: its
+  // blocks get more threads, which read their large blocks' rows in parallel.
+  const int threads = supernodes < 128 && maxRows > 256 ? kWideSweepThreads : kSweepThreads;
   if (forward)
-    SupernodalForwardKernel<<<supernodes, kSweepThreads, shared, stream>>>(factor, order, y);
+    SupernodalForwardKernel<<<supernodes, threads, shared, stream>>>(factor, order, y);
   else
-    SupernodalBackwardKernel<<<supernodes, kSweepThreads, shared, stream>>>(factor, order, y);
+    SupernodalBackwardKernel<<<supernodes, threads, shared, stream>>>(factor, order, y);
   return cudaGetLastError();
 }
 

@@ -88,11 +88,12 @@ cudaError_t LaunchHyperelasticForces(const HyperelasticCellArrays& cells, const 
 cudaError_t LaunchSymmetricUpperProduct(const int* rows, const int* cols, const double* values,
                                         std::int64_t nnz, const double* v, double* out,
                                         cudaStream_t stream);
-// y[k] = b[perm[k]] * inverseScale (as float); x[perm[k]] = y[k] * scale.
-cudaError_t LaunchGatherScaled(const double* b, const int* perm, int n, double inverseScale,
+// y[k] = b[perm[k]] / *scale (as float); x[perm[k]] = y[k] * *scale (scale in device memory, so
+// that a captured graph reads each call's).
+cudaError_t LaunchGatherScaled(const double* b, const int* perm, int n, const double* scale,
                                float* y, cudaStream_t stream);
-cudaError_t LaunchScatterScaled(const float* y, const int* perm, int n, double scale, double* x,
-                                cudaStream_t stream);
+cudaError_t LaunchScatterScaled(const float* y, const int* perm, int n, const double* scale,
+                                double* x, cudaStream_t stream);
 // A single-precision supernodal factor in CHOLMOD's layout, on the device.
 struct SupernodalSweepArrays {
   const int* super = nullptr;

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <mutex>
 #include <vector>
 
@@ -139,6 +140,11 @@ private:
 
 class CudaFactor final : public FactorOnDevice {
 public:
+  ~CudaFactor() override {
+    if (graph_)
+      cudaGraphExecDestroy(graph_);
+  }
+
   bool init(const CholmodFactor& factor, const SparseMatrix& upper, std::string& error) {
     const cholmod_factor* L = factor.numericFactor();
     if (!L || !L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_INT) {
@@ -231,7 +237,7 @@ public:
         !Upload(order_, order, st, error) || !Upload(rows_, rows, st, error) ||
         !Upload(cols_, cols, st, error) || !Upload(entries_, entries, st, error))
       return false;
-    const size_t bytes = sizeof(double) * std::max(n_, 1);
+    const size_t bytes = sizeof(double) * (n_ + 1); // a right-hand side and its scale
     if (!b_.ensure(bytes, error) || !x_.ensure(bytes, error) ||
         !y_.ensure(sizeof(float) * std::max(n_, 1), error) || !hostIn_.ensure(bytes, error) ||
         !hostOut_.ensure(bytes, error))
@@ -244,6 +250,8 @@ public:
     valueBytes_ = 4.0 * double(values.size());
     supernodes_ = nsuper;
     FP_CUDA_TRY(cudaStreamSynchronize(st));
+    if (!std::getenv("FACEPLAN_CUDA_NO_GRAPH"))
+      captureSubstitution();
     return true;
   }
 
@@ -272,6 +280,14 @@ public:
     return product(v, out, error) ? Status::Ok() : Status::Error(error);
   }
 
+  std::string describe() const override {
+    std::ostringstream line;
+    line << supernodes_ << " supernodes in " << levelRows_.size() << " levels, the largest of "
+         << maxRows_ << " rows, " << valueBytes_ / 1e6 << " MB of single-precision values, "
+         << (graph_ ? "one CUDA graph" : "separate launches") << " per substitution";
+    return line.str();
+  }
+
   SweepShape shape() const {
     SweepShape s;
     s.supernodes = supernodes_;
@@ -296,13 +312,14 @@ private:
     return true;
   }
 
-  bool substitute(const Eigen::VectorXd& b, double scale, Eigen::VectorXd& x, std::string& error) {
-    cudaStream_t st = stream_.get();
-    FP_CUDA_TRY(cudaSetDevice(0));
-    if (!upload(b, error))
-      return false;
+  // The substitution's copies and kernels, in order on `st`: b and its scale (hostIn_[n]) up,
+  // the permuted scaled copy, both sweeps level by level, back to the original order, x down.
+  bool enqueueSubstitution(cudaStream_t st, std::string& error) {
+    FP_CUDA_TRY(cudaMemcpyAsync(b_.as<double>(), hostIn_.as<double>(), sizeof(double) * (n_ + 1),
+                                cudaMemcpyHostToDevice, st));
+    const double* scale = b_.as<double>() + n_;
     float* y = y_.as<float>();
-    FP_CUDA_TRY(LaunchGatherScaled(b_.as<double>(), perm_.as<int>(), n_, 1.0 / scale, y, st));
+    FP_CUDA_TRY(LaunchGatherScaled(b_.as<double>(), perm_.as<int>(), n_, scale, y, st));
     const int levels = static_cast<int>(levelRows_.size());
     const int* order = order_.as<int>();
     for (int l = 0; l < levels; ++l)
@@ -314,7 +331,42 @@ private:
                                         levelStart_[l + 1] - levelStart_[l], levelRows_[l], false,
                                         y, st));
     FP_CUDA_TRY(LaunchScatterScaled(y, perm_.as<int>(), n_, scale, x_.as<double>(), st));
-    return download(x, error);
+    FP_CUDA_TRY(cudaMemcpyAsync(hostOut_.as<double>(), x_.as<double>(), sizeof(double) * n_,
+                                cudaMemcpyDeviceToHost, st));
+    return true;
+  }
+
+  // The substitution as one CUDA graph: a sweep is as many kernels as the tree has levels, and a
+  // graph launches them for a fraction of their separate launches' cost. Without one (its capture
+  // failed), the kernels are launched one by one.
+  void captureSubstitution() {
+    std::string error;
+    cudaStream_t st = stream_.get();
+    cudaGraph_t graph = nullptr;
+    if (cudaStreamBeginCapture(st, cudaStreamCaptureModeThreadLocal) != cudaSuccess)
+      return;
+    const bool enqueued = enqueueSubstitution(st, error);
+    const bool ended = cudaStreamEndCapture(st, &graph) == cudaSuccess;
+    if (enqueued && ended && graph && cudaGraphInstantiate(&graph_, graph, 0) != cudaSuccess)
+      graph_ = nullptr;
+    if (graph)
+      cudaGraphDestroy(graph);
+    cudaGetLastError(); // a failed capture leaves no error behind for the next call
+  }
+
+  bool substitute(const Eigen::VectorXd& b, double scale, Eigen::VectorXd& x, std::string& error) {
+    cudaStream_t st = stream_.get();
+    FP_CUDA_TRY(cudaSetDevice(0));
+    std::memcpy(hostIn_.as<double>(), b.data(), sizeof(double) * n_);
+    hostIn_.as<double>()[n_] = scale;
+    if (graph_) {
+      FP_CUDA_TRY(cudaGraphLaunch(graph_, st));
+    } else if (!enqueueSubstitution(st, error)) {
+      return false;
+    }
+    FP_CUDA_TRY(cudaStreamSynchronize(st));
+    x = Eigen::Map<const Eigen::VectorXd>(hostOut_.as<double>(), n_);
+    return true;
   }
 
   bool product(const Eigen::VectorXd& v, Eigen::VectorXd& out, std::string& error) {
@@ -330,6 +382,7 @@ private:
 
   std::mutex mutex_;
   OwnStream stream_;
+  cudaGraphExec_t graph_ = nullptr;
   int n_ = 0, supernodes_ = 0, maxRows_ = 0;
   std::int64_t nnz_ = 0;
   double valueBytes_ = 0.0;

@@ -116,6 +116,8 @@ public:
   virtual Status solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) = 0;
   // out = M v, M the symmetric matrix whose upper triangle was given, in double precision.
   virtual Status multiply(const Eigen::VectorXd& v, Eigen::VectorXd& out) = 0;
+  // One line on how the copy is laid out (for benchmarks and logs).
+  virtual std::string describe() const { return {}; }
 };
 
 // kept = response * roi. Safe to call from several threads.

@@ -920,6 +920,15 @@ StageTimings PrecomputeTimings(const LargeDeformationSystem& system) {
   return system.timings;
 }
 
+std::string DescribeFactorOnDevice(const LargeDeformationSystem& system) {
+  const std::shared_ptr<const TangentFactor> factor = system.factor();
+  if (!system.backend)
+    return "no backend";
+  if (!factor || !factor->device)
+    return factor ? factor->deviceError : "no factor";
+  return factor->device->describe();
+}
+
 int BackgroundRefactorizations(const LargeDeformationSystem& system) {
   return system.backgroundCount();
 }

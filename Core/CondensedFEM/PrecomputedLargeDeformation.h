@@ -170,6 +170,9 @@ void WaitForRefactorization(LargeDeformationSystem& system);
 void StopRefactorization(LargeDeformationSystem& system);
 // The precompute's stage times (Reordering, ElementStiffness, Assembly, Factorization, Total).
 StageTimings PrecomputeTimings(const LargeDeformationSystem& system);
+// The backend's copy of the latest factor described (FactorOnDevice::describe), or why there is
+// none.
+std::string DescribeFactorOnDevice(const LargeDeformationSystem& system);
 // Refactorizations completed in the background so far.
 int BackgroundRefactorizations(const LargeDeformationSystem& system);
 

@@ -260,8 +260,9 @@ TEST(CudaLargeDeformation, SolvesAndDragsAsTheCpu) {
     SolveResult onGpu, onCpu, coldResult;
     PrecomputedLargeDeformationReport gpuReport, cpuReport, coldReport;
     LargeDeformationState next;
-    ASSERT_TRUE(SolvePrecomputedLargeDeformation(*gpu, input, step ? &state : nullptr, onGpu,
-                                                 gpuReport, &next));
+    const Status solved = SolvePrecomputedLargeDeformation(*gpu, input, step ? &state : nullptr,
+                                                           onGpu, gpuReport, &next);
+    ASSERT_TRUE(solved) << "step " << step << ": " << solved.message;
     EXPECT_FALSE(gpuReport.fellBack) << gpuReport.fallbackReason;
     EXPECT_EQ(gpuReport.deviceNote, "");
     EXPECT_EQ(gpuReport.device, backend->name());
@@ -273,7 +274,9 @@ TEST(CudaLargeDeformation, SolvesAndDragsAsTheCpu) {
     EXPECT_EQ(gpuReport.warmStarted, step > 0);
     state = next;
     WaitForRefactorization(*gpu);
-    ASSERT_TRUE(SolvePrecomputedLargeDeformation(*cpu, input, nullptr, onCpu, cpuReport));
+    const Status onCpuSolved =
+        SolvePrecomputedLargeDeformation(*cpu, input, nullptr, onCpu, cpuReport);
+    ASSERT_TRUE(onCpuSolved) << "step " << step << ": " << onCpuSolved.message;
     EXPECT_EQ(cpuReport.device, "CPU");
     EXPECT_EQ(cpuReport.deviceEvaluations, 0);
     EXPECT_LT(RelativeMaxNodeDifference(onGpu.allDisplacement, onCpu.allDisplacement), 1e-8)
