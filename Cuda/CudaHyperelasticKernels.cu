@@ -271,6 +271,26 @@ __global__ void __launch_bounds__(kWideSweepThreads)
     y[c0 + i] = z[i];
 }
 
+__global__ void SubtractAtRowsKernel(const float* __restrict__ t, const int* __restrict__ rows,
+                                     int count, float* __restrict__ y) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < count)
+    y[rows[i]] -= t[i];
+}
+
+__global__ void GatherAtRowsKernel(const float* __restrict__ y, const int* __restrict__ rows,
+                                   int count, float* __restrict__ t) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < count)
+    t[i] = y[rows[i]];
+}
+
+__global__ void SetDiagonalKernel(float* __restrict__ a, int n, float value) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < n)
+    a[static_cast<std::int64_t>(i) * n + i] = value;
+}
+
 unsigned Blocks(std::int64_t count, int perBlock) {
   return static_cast<unsigned>((count + perBlock - 1) / perBlock);
 }
@@ -306,6 +326,26 @@ cudaError_t LaunchScatterScaled(const float* y, const int* perm, int n, const do
                                 double* x, cudaStream_t stream) {
   if (n > 0)
     ScatterScaledKernel<<<Blocks(n, 256), 256, 0, stream>>>(y, perm, n, scale, x);
+  return cudaGetLastError();
+}
+
+cudaError_t LaunchSubtractAtRows(const float* t, const int* rows, int count, float* y,
+                                 cudaStream_t stream) {
+  if (count > 0)
+    SubtractAtRowsKernel<<<Blocks(count, 256), 256, 0, stream>>>(t, rows, count, y);
+  return cudaGetLastError();
+}
+
+cudaError_t LaunchGatherAtRows(const float* y, const int* rows, int count, float* t,
+                               cudaStream_t stream) {
+  if (count > 0)
+    GatherAtRowsKernel<<<Blocks(count, 256), 256, 0, stream>>>(y, rows, count, t);
+  return cudaGetLastError();
+}
+
+cudaError_t LaunchSetDiagonal(float* a, int n, float value, cudaStream_t stream) {
+  if (n > 0)
+    SetDiagonalKernel<<<Blocks(n, 256), 256, 0, stream>>>(a, n, value);
   return cudaGetLastError();
 }
 

@@ -109,6 +109,13 @@ struct SupernodalSweepArrays {
 cudaError_t LaunchSupernodalSweep(const SupernodalSweepArrays& factor, const int* order,
                                   int supernodes, int maxRows, bool forward, float* y,
                                   cudaStream_t stream);
+// y[rows[i]] -= t[i] and t[i] = y[rows[i]] for i < count (rows distinct).
+cudaError_t LaunchSubtractAtRows(const float* t, const int* rows, int count, float* y,
+                                 cudaStream_t stream);
+cudaError_t LaunchGatherAtRows(const float* y, const int* rows, int count, float* t,
+                               cudaStream_t stream);
+// a[i + i n] = value for i < n (a: n x n, column-major).
+cudaError_t LaunchSetDiagonal(float* a, int n, float value, cudaStream_t stream);
 // Lets the sweeps use `bytes` of dynamic shared memory (above the default 48 KB).
 cudaError_t AllowSweepSharedMemory(int bytes);
 

@@ -143,6 +143,8 @@ public:
   ~CudaFactor() override {
     if (graph_)
       cudaGraphExecDestroy(graph_);
+    if (blas_)
+      cublasDestroy(blas_);
   }
 
   bool init(const CholmodFactor& factor, const SparseMatrix& upper, std::string& error) {
@@ -191,17 +193,36 @@ public:
         level[parent] = std::max(level[parent], level[k] + 1);
       }
     }
+    // Small supernodes go to the level kernels; large ones (the top of the tree, where a level has
+    // few supernodes and one thread block each would leave the GPU idle) to cuBLAS products with
+    // their diagonal block's inverse and their off-diagonal block, each spread over the GPU.
     levelStart_.assign(levels + 1, 0);
     levelRows_.assign(levels, 0);
+    big_.assign(levels, {});
+    std::int64_t inverseEntries = 0;
+    int bigColumns = 0, bigRows = 0;
     for (int k = 0; k < nsuper; ++k) {
+      const int nc = super[k + 1] - super[k], nr = pi[k + 1] - pi[k];
+      if (nc >= kLargeColumns || nr > kLargeRows) {
+        big_[level[k]].push_back({super[k], nc, nr - nc, pxV[k], inverseEntries, pi[k] + nc});
+        inverseEntries += std::int64_t(nc) * nc;
+        bigColumns = std::max(bigColumns, nc);
+        bigRows = std::max(bigRows, nr - nc);
+        ++largeCount_;
+        continue;
+      }
       ++levelStart_[level[k] + 1];
-      levelRows_[level[k]] = std::max(levelRows_[level[k]], pi[k + 1] - pi[k]);
+      levelRows_[level[k]] = std::max(levelRows_[level[k]], nr);
     }
     for (int l = 0; l < levels; ++l)
       levelStart_[l + 1] += levelStart_[l];
-    std::vector<int> order(nsuper), next(levelStart_.begin(), levelStart_.end() - 1);
-    for (int k = 0; k < nsuper; ++k)
-      order[next[level[k]]++] = k;
+    std::vector<int> order(std::max(levelStart_.back(), 1)),
+        next(levelStart_.begin(), levelStart_.end() - 1);
+    for (int k = 0; k < nsuper; ++k) {
+      const int nc = super[k + 1] - super[k], nr = pi[k + 1] - pi[k];
+      if (!(nc >= kLargeColumns || nr > kLargeRows))
+        order[next[level[k]]++] = k;
+    }
     maxRows_ = levels > 0 ? *std::max_element(levelRows_.begin(), levelRows_.end()) : 0;
     // Upper triangle as triplets.
     std::vector<int> rows, cols;
@@ -248,6 +269,25 @@ public:
     arrays_.s = s_.as<int>();
     arrays_.values = values_.as<float>();
     valueBytes_ = 4.0 * double(values.size());
+    FP_CUBLAS_TRY(cublasCreate(&blas_));
+    FP_CUBLAS_TRY(cublasSetStream(blas_, st));
+    FP_CUBLAS_TRY(cublasSetPointerMode(blas_, CUBLAS_POINTER_MODE_HOST));
+    if (!inverses_.ensure(sizeof(float) * std::max<std::int64_t>(inverseEntries, 1), error) ||
+        !work_.ensure(sizeof(float) * std::max(bigColumns, 1), error) ||
+        !rowWork_.ensure(sizeof(float) * std::max(bigRows, 1), error))
+      return false;
+    if (inverseEntries > 0)
+      FP_CUDA_TRY(cudaMemsetAsync(inverses_.as<float>(), 0, sizeof(float) * inverseEntries, st));
+    const float one = 1.0f;
+    for (const std::vector<Large>& level : big_)
+      for (const Large& b : level) {
+        float* inverse = inverses_.as<float>() + b.inverse;
+        FP_CUDA_TRY(LaunchSetDiagonal(inverse, b.columns, 1.0f, st));
+        FP_CUBLAS_TRY(cublasStrsm(blas_, CUBLAS_SIDE_LEFT, CUBLAS_FILL_MODE_LOWER, CUBLAS_OP_N,
+                                  CUBLAS_DIAG_NON_UNIT, b.columns, b.columns, &one,
+                                  values_.as<float>() + b.px, b.columns + b.rows, inverse,
+                                  b.columns));
+      }
     supernodes_ = nsuper;
     FP_CUDA_TRY(cudaStreamSynchronize(st));
     if (!std::getenv("FACEPLAN_CUDA_NO_GRAPH"))
@@ -282,9 +322,10 @@ public:
 
   std::string describe() const override {
     std::ostringstream line;
-    line << supernodes_ << " supernodes in " << levelRows_.size() << " levels, the largest of "
-         << maxRows_ << " rows, " << valueBytes_ / 1e6 << " MB of single-precision values, "
-         << (graph_ ? "one CUDA graph" : "separate launches") << " per substitution";
+    line << supernodes_ << " supernodes (" << largeCount_ << " large) in " << levelRows_.size()
+         << " levels, the largest small one of " << maxRows_ << " rows, " << valueBytes_ / 1e6
+         << " MB of single-precision values, " << (graph_ ? "one CUDA graph" : "separate launches")
+         << " per substitution";
     return line.str();
   }
 
@@ -293,6 +334,7 @@ public:
     s.supernodes = supernodes_;
     s.levels = static_cast<int>(levelRows_.size());
     s.maxRows = maxRows_;
+    s.large = largeCount_;
     s.valueBytes = valueBytes_;
     return s;
   }
@@ -322,17 +364,64 @@ private:
     FP_CUDA_TRY(LaunchGatherScaled(b_.as<double>(), perm_.as<int>(), n_, scale, y, st));
     const int levels = static_cast<int>(levelRows_.size());
     const int* order = order_.as<int>();
-    for (int l = 0; l < levels; ++l)
+    for (int l = 0; l < levels; ++l) {
       FP_CUDA_TRY(LaunchSupernodalSweep(arrays_, order + levelStart_[l],
                                         levelStart_[l + 1] - levelStart_[l], levelRows_[l], true, y,
                                         st));
-    for (int l = levels - 1; l >= 0; --l)
+      for (const Large& b : big_[l])
+        if (!forwardLarge(b, y, st, error))
+          return false;
+    }
+    for (int l = levels - 1; l >= 0; --l) {
       FP_CUDA_TRY(LaunchSupernodalSweep(arrays_, order + levelStart_[l],
                                         levelStart_[l + 1] - levelStart_[l], levelRows_[l], false,
                                         y, st));
+      for (const Large& b : big_[l])
+        if (!backwardLarge(b, y, st, error))
+          return false;
+    }
     FP_CUDA_TRY(LaunchScatterScaled(y, perm_.as<int>(), n_, scale, x_.as<double>(), st));
     FP_CUDA_TRY(cudaMemcpyAsync(hostOut_.as<double>(), x_.as<double>(), sizeof(double) * n_,
                                 cudaMemcpyDeviceToHost, st));
+    return true;
+  }
+
+  // A large supernode's forward step: x1 = L11^-1 y1 (a product with the inverse), the rows below
+  // get L21 x1 subtracted.
+  bool forwardLarge(const Large& b, float* y, cudaStream_t st, std::string& error) {
+    const float one = 1.0f, zero = 0.0f;
+    const float* L = values_.as<float>() + b.px;
+    float* x1 = work_.as<float>();
+    FP_CUBLAS_TRY(cublasSgemv(blas_, CUBLAS_OP_N, b.columns, b.columns, &one,
+                              inverses_.as<float>() + b.inverse, b.columns, y + b.first, 1, &zero,
+                              x1, 1));
+    if (b.rows > 0) {
+      FP_CUBLAS_TRY(cublasSgemv(blas_, CUBLAS_OP_N, b.rows, b.columns, &one, L + b.columns,
+                                b.columns + b.rows, x1, 1, &zero, rowWork_.as<float>(), 1));
+      FP_CUDA_TRY(
+          LaunchSubtractAtRows(rowWork_.as<float>(), s_.as<int>() + b.rowList, b.rows, y, st));
+    }
+    FP_CUDA_TRY(
+        cudaMemcpyAsync(y + b.first, x1, sizeof(float) * b.columns, cudaMemcpyDeviceToDevice, st));
+    return true;
+  }
+
+  // A large supernode's backward step: y1 -= L21^T y[rows below], then x1 = L11^-T y1.
+  bool backwardLarge(const Large& b, float* y, cudaStream_t st, std::string& error) {
+    const float one = 1.0f, minusOne = -1.0f, zero = 0.0f;
+    const float* L = values_.as<float>() + b.px;
+    if (b.rows > 0) {
+      FP_CUDA_TRY(
+          LaunchGatherAtRows(y, s_.as<int>() + b.rowList, b.rows, rowWork_.as<float>(), st));
+      FP_CUBLAS_TRY(cublasSgemv(blas_, CUBLAS_OP_T, b.rows, b.columns, &minusOne, L + b.columns,
+                                b.columns + b.rows, rowWork_.as<float>(), 1, &one, y + b.first, 1));
+    }
+    float* x1 = work_.as<float>();
+    FP_CUBLAS_TRY(cublasSgemv(blas_, CUBLAS_OP_T, b.columns, b.columns, &one,
+                              inverses_.as<float>() + b.inverse, b.columns, y + b.first, 1, &zero,
+                              x1, 1));
+    FP_CUDA_TRY(
+        cudaMemcpyAsync(y + b.first, x1, sizeof(float) * b.columns, cudaMemcpyDeviceToDevice, st));
     return true;
   }
 
@@ -380,9 +469,24 @@ private:
     return download(out, error);
   }
 
+  // A large supernode: its first column, columns, rows below the diagonal block, the offsets of
+  // its values, of its diagonal block's inverse and of its rows below in s.
+  struct Large {
+    int first = 0, columns = 0, rows = 0;
+    std::int64_t px = 0, inverse = 0;
+    int rowList = 0;
+  };
+  // From this many columns (or with more rows than a block's shared memory holds comfortably) a
+  // supernode is large.
+  static constexpr int kLargeColumns = 128, kLargeRows = 8192;
+
   std::mutex mutex_;
   OwnStream stream_;
   cudaGraphExec_t graph_ = nullptr;
+  cublasHandle_t blas_ = nullptr;
+  std::vector<std::vector<Large>> big_; // per level
+  DeviceArray inverses_, work_, rowWork_;
+  int largeCount_ = 0;
   int n_ = 0, supernodes_ = 0, maxRows_ = 0;
   std::int64_t nnz_ = 0;
   double valueBytes_ = 0.0;

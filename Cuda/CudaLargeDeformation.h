@@ -8,10 +8,14 @@
 //   call), the energy summed per block;
 // - a substitution with a single-precision copy of a CHOLMOD supernodal factor: the supernodes
 //   grouped by their height in the supernodal elimination tree, one kernel per level and sweep,
-//   one thread block per supernode (a warp solves its diagonal block 32 columns at a time, the
-//   block updates the rows below), the forward sweep's updates added to the ancestors
+//   one thread block per small supernode (a warp solves its diagonal block 32 columns at a time,
+//   the block updates the rows below), the forward sweep's updates added to the ancestors
 //   atomically. A level's supernodes are independent, so a sweep costs as many launches as the
-//   tree is high, not as it has supernodes;
+//   tree is high, not as it has supernodes. The large supernodes at the top of the tree (from 128
+//   columns), where a level holds too few to fill the GPU one block each, are cuBLAS products
+//   spread over the whole GPU: with their diagonal block's inverse (made once per factor with
+//   cuBLAS STRSM on the identity) and their off-diagonal block. The whole substitution is one
+//   CUDA graph (FACEPLAN_CUDA_NO_GRAPH=1: separate launches, for measuring);
 // - the tangent's product, one thread per stored entry of its upper triangle.
 //
 // Each object has its own stream and page-locked buffers for the vectors it moves (3 doubles per
@@ -29,7 +33,8 @@ Status MakeCudaFactorOnDevice(const CholmodFactor& factor, const SparseMatrix& u
 
 // The levels of a factor's supernodal tree as the sweeps use them (for tests and benchmarks).
 struct SweepShape {
-  int supernodes = 0, levels = 0, maxRows = 0;
+  int supernodes = 0, levels = 0, maxRows = 0; // maxRows: of the small supernodes
+  int large = 0; // supernodes done with cuBLAS products (their diagonal block inverted)
   double valueBytes = 0.0;
 };
 bool ShapeOfFactorOnDevice(const FactorOnDevice& device, SweepShape& shape);

@@ -192,7 +192,9 @@ TEST(CudaLargeDeformation, SubstitutionAndProductMatchTheCpu) {
   ASSERT_TRUE(cuda::detail::ShapeOfFactorOnDevice(*device, shape));
   EXPECT_GT(shape.levels, 3);
   EXPECT_LT(shape.levels, shape.supernodes); // levels group independent supernodes
-  EXPECT_GT(shape.maxRows, 100);             // a supernode larger than one panel of 32 columns
+  EXPECT_GT(shape.maxRows, 32); // a small supernode of more than one panel of 32 columns
+  EXPECT_GT(shape.large, 0);    // and large ones, done with cuBLAS
+  EXPECT_LT(shape.large, shape.supernodes);
   std::mt19937 rng(11);
   std::normal_distribution<double> normal;
   const SparseMatrix full = upper.selfadjointView<Eigen::Upper>();
@@ -255,7 +257,7 @@ TEST(CudaLargeDeformation, SolvesAndDragsAsTheCpu) {
   LargeDeformationState state;
   for (int step = 0; step <= 4; ++step) {
     SolveInput input;
-    input.movableDisplacement = testing::SmoothRoiField(cpuRequest, 5.0 + 0.5 * step);
+    input.movableDisplacement = testing::SmoothRoiField(cpuRequest, 2.5 + 0.25 * step);
     input.recoverInterior = true;
     SolveResult onGpu, onCpu, coldResult;
     PrecomputedLargeDeformationReport gpuReport, cpuReport, coldReport;
