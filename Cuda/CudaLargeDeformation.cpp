@@ -139,6 +139,17 @@ private:
 };
 
 class CudaFactor final : public FactorOnDevice {
+  // A large supernode: its first column, columns, rows below the diagonal block, the offsets of
+  // its values, of its diagonal block's inverse and of its rows below in s.
+  struct Large {
+    int first = 0, columns = 0, rows = 0;
+    std::int64_t px = 0, inverse = 0;
+    int rowList = 0;
+  };
+  // From this many columns (or with more rows than a block's shared memory holds comfortably) a
+  // supernode is large.
+  static constexpr int kLargeColumns = 128, kLargeRows = 8192;
+
 public:
   ~CudaFactor() override {
     if (graph_)
@@ -468,17 +479,6 @@ private:
                                             nnz_, b_.as<double>(), x_.as<double>(), st));
     return download(out, error);
   }
-
-  // A large supernode: its first column, columns, rows below the diagonal block, the offsets of
-  // its values, of its diagonal block's inverse and of its rows below in s.
-  struct Large {
-    int first = 0, columns = 0, rows = 0;
-    std::int64_t px = 0, inverse = 0;
-    int rowList = 0;
-  };
-  // From this many columns (or with more rows than a block's shared memory holds comfortably) a
-  // supernode is large.
-  static constexpr int kLargeColumns = 128, kLargeRows = 8192;
 
   std::mutex mutex_;
   OwnStream stream_;
