@@ -4,11 +4,13 @@
 // precompute, the whole move from rest, then a paused drag (each step's background refactorization
 // awaited before the next, as a surgeon's pauses between edits allow) of --steps steps that change
 // the ROI field's amplitude by --step. Per step: wall time, iterations, force evaluations and
-// substitutions and their times; medians per backend; and the two backends' results against each
-// other and against a cold solve of the final move.
+// substitutions and their times, the set-up and finish around the iterations; medians per
+// backend; and the two backends' final results against each other.
 //
+// FACEPLAN_PRINT_CONVERGENCE=1 prints each step's residuals and their times.
 // build/bin/large_deformation_gpu [--subdivisions S] [--layers L] [--amplitude A] [--step D]
-//                                 [--steps N] [--single-precision-factor 0|1] [--json FILE]
+//                                 [--steps N] [--single-precision-factor 0|1]
+//                                 [--factor-ahead 0|1|2] [--cpu 0|1] [--json FILE]
 #include "Common/RelativeDifference.h"
 #include "Common/StageTimings.h"
 #include "CondensedFEM/PrecomputedLargeDeformation.h"
@@ -46,7 +48,7 @@ double NowMs() {
 }
 
 struct Step {
-  double wallMs = 0.0, forcesMs = 0.0, substitutionsMs = 0.0;
+  double wallMs = 0.0, forcesMs = 0.0, substitutionsMs = 0.0, setupMs = 0.0, finishMs = 0.0;
   int iterations = 0, evaluations = 0, substitutions = 0;
 };
 
@@ -65,6 +67,8 @@ Step StepOf(double wallMs, const SolveResult& r, const PrecomputedLargeDeformati
   s.wallMs = wallMs;
   s.forcesMs = r.timings[Stage::ElementStiffness].ms;
   s.substitutionsMs = r.timings[Stage::Solve].ms;
+  s.setupMs = rep.setupMs;
+  s.finishMs = rep.finishMs;
   s.iterations = rep.iterations;
   s.evaluations = rep.evaluations;
   s.substitutions = rep.factorSolves;
@@ -125,8 +129,8 @@ Run Measure(PrecomputeRequest request, std::shared_ptr<ComputeBackend> backend, 
       std::printf("    background factors so far %d; residuals:",
                   BackgroundRefactorizations(*system));
       for (const auto& [at, residual] : report.convergence)
-        std::printf(" %.1e", residual);
-      std::printf("\n");
+        std::printf(" %.1e (%.1f ms)", residual, at);
+      std::printf("; solve total %.1f ms\n", result.timings[Stage::Total].ms);
     }
   }
   StopRefactorization(*system);
@@ -144,9 +148,10 @@ void Print(const Run& r) {
   for (size_t k = 0; k < r.steps.size(); ++k) {
     const Step& s = r.steps[k];
     std::printf("  step %zu: %.2f ms, %d iterations, %d evaluations (%.2f ms), %d substitutions "
-                "(%.2f ms)\n",
+                "(%.2f ms), set-up %.2f ms, finish %.2f ms, the rest %.2f ms\n",
                 k + 1, s.wallMs, s.iterations, s.evaluations, s.forcesMs, s.substitutions,
-                s.substitutionsMs);
+                s.substitutionsMs, s.setupMs, s.finishMs,
+                s.wallMs - s.forcesMs - s.substitutionsMs - s.setupMs - s.finishMs);
     wall.push_back(s.wallMs);
     if (s.evaluations)
       forces.push_back(s.forcesMs / s.evaluations);
@@ -183,10 +188,16 @@ int main(int argc, char** argv) {
   double amplitude = 2.5, step = 0.25;
   std::string json;
   PrecomputedLargeDeformationOptions options;
+  bool skipCpu = false;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--single-precision-factor")
       options.singlePrecisionFactor = std::atoi(argv[i + 1]) != 0;
+    else if (a == "--factor-ahead") { // 0: at the converged state; 1 or 2: the order ahead
+      options.factorAhead = std::atoi(argv[i + 1]) > 0;
+      options.factorAheadOrder = std::max(1, std::min(2, std::atoi(argv[i + 1])));
+    } else if (a == "--cpu" && std::atoi(argv[i + 1]) == 0)
+      skipCpu = true;
     else if (a == "--subdivisions")
       subdivisions = std::atoi(argv[i + 1]);
     else if (a == "--layers")
@@ -213,15 +224,17 @@ int main(int argc, char** argv) {
               static_cast<long long>(request.mesh.numPoints()), request.sets.movable.size(),
               a.rowwise().norm().maxCoeff(), (b - a).rowwise().norm().maxCoeff());
   std::vector<Run> runs;
-  runs.push_back(Measure(request, nullptr, amplitude, step, steps, options));
-  Print(runs.back());
+  if (!skipCpu) {
+    runs.push_back(Measure(request, nullptr, amplitude, step, steps, options));
+    Print(runs.back());
+  }
 #if FACEPLAN_HAS_CUDA
   std::shared_ptr<ComputeBackend> gpu;
   const Status made = cuda::MakeCudaBackend(gpu);
   if (made) {
     runs.push_back(Measure(request, gpu, amplitude, step, steps, options));
     Print(runs.back());
-    if (runs[0].ok && runs[1].ok) {
+    if (runs.size() == 2 && runs[0].ok && runs[1].ok) {
       std::printf(
           "CPU against CUDA, final state: relative max node difference %.2e; CPU ÷ CUDA "
           "drag step %.1fx\n",

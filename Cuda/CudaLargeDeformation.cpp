@@ -148,7 +148,12 @@ class CudaFactor final : public FactorOnDevice {
   };
   // From this many columns (or with more rows than a block's shared memory holds comfortably) a
   // supernode is large.
+  // FACEPLAN_CUDA_LARGE_COLUMNS overrides the columns, for measuring.
   static constexpr int kLargeColumns = 128, kLargeRows = 8192;
+  static int LargeColumns() {
+    const char* given = std::getenv("FACEPLAN_CUDA_LARGE_COLUMNS");
+    return given && std::atoi(given) > 0 ? std::atoi(given) : kLargeColumns;
+  }
 
 public:
   ~CudaFactor() override {
@@ -207,6 +212,7 @@ public:
     // Small supernodes go to the level kernels; large ones (the top of the tree, where a level has
     // few supernodes and one thread block each would leave the GPU idle) to cuBLAS products with
     // their diagonal block's inverse and their off-diagonal block, each spread over the GPU.
+    const int largeColumns = LargeColumns();
     levelStart_.assign(levels + 1, 0);
     levelRows_.assign(levels, 0);
     big_.assign(levels, {});
@@ -214,7 +220,7 @@ public:
     int bigColumns = 0, bigRows = 0;
     for (int k = 0; k < nsuper; ++k) {
       const int nc = super[k + 1] - super[k], nr = pi[k + 1] - pi[k];
-      if (nc >= kLargeColumns || nr > kLargeRows) {
+      if (nc >= largeColumns || nr > kLargeRows) {
         big_[level[k]].push_back({super[k], nc, nr - nc, pxV[k], inverseEntries, pi[k] + nc});
         inverseEntries += std::int64_t(nc) * nc;
         bigColumns = std::max(bigColumns, nc);
@@ -231,7 +237,7 @@ public:
         next(levelStart_.begin(), levelStart_.end() - 1);
     for (int k = 0; k < nsuper; ++k) {
       const int nc = super[k + 1] - super[k], nr = pi[k + 1] - pi[k];
-      if (!(nc >= kLargeColumns || nr > kLargeRows))
+      if (!(nc >= largeColumns || nr > kLargeRows))
         order[next[level[k]]++] = k;
     }
     maxRows_ = levels > 0 ? *std::max_element(levelRows_.begin(), levelRows_.end()) : 0;

@@ -146,6 +146,9 @@ struct PrecomputedLargeDeformationReport {
   std::string device = "CPU";
   std::string deviceNote;
   int deviceEvaluations = 0, deviceSubstitutions = 0;
+  // Wall time of the solve's parts outside its iterations: the values and the yardstick before
+  // them, the measures and the result's rows after.
+  double setupMs = 0.0, finishMs = 0.0;
   // Per iteration: time since the solve started (ms) and the relative residual.
   std::vector<std::pair<double, double>> convergence;
 };
