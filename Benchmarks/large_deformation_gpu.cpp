@@ -10,7 +10,7 @@
 // FACEPLAN_PRINT_CONVERGENCE=1 prints each step's residuals and their times.
 // build/bin/large_deformation_gpu [--subdivisions S] [--layers L] [--amplitude A] [--step D]
 //                                 [--steps N] [--single-precision-factor 0|1]
-//                                 [--factor-ahead 0|1|2] [--cpu 0|1] [--json FILE]
+//                                 [--factor-ahead 0|1|2] [--rigid 0|1] [--cpu 0|1] [--json FILE]
 #include "Common/RelativeDifference.h"
 #include "Common/StageTimings.h"
 #include "CondensedFEM/PrecomputedLargeDeformation.h"
@@ -75,9 +75,18 @@ Step StepOf(double wallMs, const SolveResult& r, const PrecomputedLargeDeformati
   return s;
 }
 
+// The ROI's move: the smooth field (a bending of the cap, with shear inside it), or with --rigid 1
+// a translation of the whole cap by `amplitude` along (0.3, 0.2, -1), as a bone segment moves.
+bool rigidMove = false;
+
 SolveInput Move(const PrecomputeRequest& request, double amplitude) {
   SolveInput in;
-  in.movableDisplacement = testing::SmoothRoiField(request, amplitude);
+  if (rigidMove) {
+    in.movableDisplacement.resize(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+    in.movableDisplacement.rowwise() = amplitude * Eigen::RowVector3d(0.3, 0.2, -1.0).normalized();
+  } else {
+    in.movableDisplacement = testing::SmoothRoiField(request, amplitude);
+  }
   in.recoverInterior = true;
   return in;
 }
@@ -196,7 +205,9 @@ int main(int argc, char** argv) {
     else if (a == "--factor-ahead") { // 0: at the converged state; 1 or 2: the order ahead
       options.factorAhead = std::atoi(argv[i + 1]) > 0;
       options.factorAheadOrder = std::max(1, std::min(2, std::atoi(argv[i + 1])));
-    } else if (a == "--cpu" && std::atoi(argv[i + 1]) == 0)
+    } else if (a == "--rigid")
+      rigidMove = std::atoi(argv[i + 1]) != 0;
+    else if (a == "--cpu" && std::atoi(argv[i + 1]) == 0)
       skipCpu = true;
     else if (a == "--subdivisions")
       subdivisions = std::atoi(argv[i + 1]);
@@ -216,8 +227,8 @@ int main(int argc, char** argv) {
     }
   }
   const PrecomputeRequest request = testing::ShellRequest(subdivisions, layers);
-  const Eigen::MatrixXd a = testing::SmoothRoiField(request, amplitude),
-                        b = testing::SmoothRoiField(request, amplitude + step);
+  const Eigen::MatrixXd a = Move(request, amplitude).movableDisplacement,
+                        b = Move(request, amplitude + step).movableDisplacement;
   std::printf("shell: %lld tetrahedra, %lld nodes, %zu ROI nodes; move: largest ROI displacement "
               "%.2f mm, a drag step changes it by up to %.2f mm\n",
               static_cast<long long>(request.mesh.numTets()),

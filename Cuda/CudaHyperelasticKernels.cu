@@ -4,6 +4,8 @@
 // sweeps of one right-hand side in single precision.
 #include "CudaKernels.h"
 
+#include <math_constants.h>
+
 namespace faceplan::cuda::detail {
 
 namespace {
@@ -129,6 +131,85 @@ __global__ void __launch_bounds__(kCellsPerBlock)
     for (int w = 0; w < kCellsPerBlock / 32; ++w)
       sum += partial[w];
     atomicAdd(energy, sum);
+  }
+}
+
+// Per block of cells: the smallest det F, the largest absolute principal Green strain and the
+// first cell of the block that has it (-1 where every strain is 0), as MeasureDeformation's
+// serial scan; the host merges the blocks in order.
+__global__ void __launch_bounds__(kCellsPerBlock)
+    DeformationMeasureKernel(HyperelasticCellArrays c, const double* __restrict__ u,
+                             double* __restrict__ smallestDet, double* __restrict__ largestStrain,
+                             long long* __restrict__ largestCell) {
+  __shared__ double dets[kCellsPerBlock], strains[kCellsPerBlock];
+  __shared__ long long cells[kCellsPerBlock];
+  const std::int64_t e = static_cast<std::int64_t>(blockIdx.x) * kCellsPerBlock + threadIdx.x;
+  double det = CUDART_INF, largest = 0.0;
+  long long cell = -1;
+  if (e < c.cells) {
+    double d[4][3], g[4][3];
+    for (int a = 0; a < 4; ++a) {
+      const int node = c.corners[4 * e + a];
+      const double* local = u + 3 * static_cast<std::int64_t>(node);
+      const int frame = c.frameOf[node];
+      for (int i = 0; i < 3; ++i)
+        d[a][i] = frame < 0 ? local[i]
+                            : c.frames[9 * frame + i] * local[0] +
+                                  c.frames[9 * frame + i + 3] * local[1] +
+                                  c.frames[9 * frame + i + 6] * local[2];
+      for (int j = 0; j < 3; ++j)
+        g[a][j] = c.gradients[12 * e + 3 * a + j];
+    }
+    double F[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        F[i][j] = (i == j ? 1.0 : 0.0) + d[0][i] * g[0][j] + d[1][i] * g[1][j] + d[2][i] * g[2][j] +
+                  d[3][i] * g[3][j];
+    det = F[0][0] * (F[1][1] * F[2][2] - F[1][2] * F[2][1]) -
+          F[0][1] * (F[1][0] * F[2][2] - F[1][2] * F[2][0]) +
+          F[0][2] * (F[1][0] * F[2][1] - F[1][1] * F[2][0]);
+    double E[3][3]; // Green strain (F^T F - I) / 2
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        E[i][j] = 0.5 * (F[0][i] * F[0][j] + F[1][i] * F[1][j] + F[2][i] * F[2][j] -
+                         (i == j ? 1.0 : 0.0));
+    // Eigenvalues of the symmetric 3 x 3 in closed form (trigonometric, on E - tr(E)/3 I).
+    const double m = (E[0][0] + E[1][1] + E[2][2]) / 3.0;
+    const double k00 = E[0][0] - m, k11 = E[1][1] - m, k22 = E[2][2] - m;
+    const double p = (k00 * k00 + k11 * k11 + k22 * k22 +
+                      2.0 * (E[0][1] * E[0][1] + E[0][2] * E[0][2] + E[1][2] * E[1][2])) /
+                     6.0;
+    double l1 = m, l2 = m, l3 = m;
+    if (p > 0.0) {
+      const double q = 0.5 * (k00 * (k11 * k22 - E[1][2] * E[1][2]) -
+                              E[0][1] * (E[0][1] * k22 - E[1][2] * E[0][2]) +
+                              E[0][2] * (E[0][1] * E[1][2] - k11 * E[0][2]));
+      const double r = fmin(1.0, fmax(-1.0, q / (p * sqrt(p))));
+      const double phi = acos(r) / 3.0, s = 2.0 * sqrt(p);
+      l1 = m + s * cos(phi);
+      l3 = m + s * cos(phi + 2.0943951023931957); // 2 pi / 3
+      l2 = 3.0 * m - l1 - l3;
+    }
+    largest = fmax(fabs(l1), fmax(fabs(l2), fabs(l3)));
+    cell = largest > 0.0 ? e : -1;
+  }
+  dets[threadIdx.x] = det;
+  strains[threadIdx.x] = largest;
+  cells[threadIdx.x] = cell;
+  __syncthreads();
+  if (threadIdx.x == 0) {
+    double bestDet = CUDART_INF, best = 0.0;
+    long long bestCell = -1;
+    for (int t = 0; t < kCellsPerBlock; ++t) {
+      bestDet = fmin(bestDet, dets[t]);
+      if (strains[t] > best) {
+        best = strains[t];
+        bestCell = cells[t];
+      }
+    }
+    smallestDet[blockIdx.x] = bestDet;
+    largestStrain[blockIdx.x] = best;
+    largestCell[blockIdx.x] = bestCell;
   }
 }
 
@@ -303,6 +384,19 @@ cudaError_t LaunchHyperelasticForces(const HyperelasticCellArrays& cells, const 
   if (cells.cells > 0)
     HyperelasticForceKernel<<<Blocks(cells.cells, kCellsPerBlock), kCellsPerBlock, 0, stream>>>(
         cells, u, force, energy, inadmissible);
+  return cudaGetLastError();
+}
+
+int DeformationMeasureBlocks(std::int64_t cells) {
+  return static_cast<int>(Blocks(cells, kCellsPerBlock));
+}
+
+cudaError_t LaunchDeformationMeasures(const HyperelasticCellArrays& cells, const double* u,
+                                      double* smallestDet, double* largestStrain,
+                                      long long* largestCell, cudaStream_t stream) {
+  if (cells.cells > 0)
+    DeformationMeasureKernel<<<Blocks(cells.cells, kCellsPerBlock), kCellsPerBlock, 0, stream>>>(
+        cells, u, smallestDet, largestStrain, largestCell);
   return cudaGetLastError();
 }
 

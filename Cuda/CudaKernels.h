@@ -83,6 +83,12 @@ struct HyperelasticCellArrays {
 cudaError_t LaunchHyperelasticForces(const HyperelasticCellArrays& cells, const double* u,
                                      double* force, double* energy, int* inadmissible,
                                      cudaStream_t stream);
+// Per block of DeformationMeasureBlocks(cells): the smallest det F, the largest absolute principal
+// Green strain and the first cell with it (-1 where all are 0), to be merged in block order.
+int DeformationMeasureBlocks(std::int64_t cells);
+cudaError_t LaunchDeformationMeasures(const HyperelasticCellArrays& cells, const double* u,
+                                      double* smallestDet, double* largestStrain,
+                                      long long* largestCell, cudaStream_t stream);
 // out (zeroed first) += M v for the symmetric M whose upper triangle is given as (row, column,
 // value) triplets.
 cudaError_t LaunchSymmetricUpperProduct(const int* rows, const int* cols, const double* values,

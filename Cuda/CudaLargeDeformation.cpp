@@ -102,6 +102,17 @@ public:
     return run(u, energy, force, admissible, error) ? Status::Ok() : Status::Error(error);
   }
 
+  Status measure(const Eigen::VectorXd& u, double& smallestVolumeRatio, double& largestGreenStrain,
+                 long long& largestStrainCell) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::string error;
+    if (u.size() != 3 * static_cast<Eigen::Index>(nodes_))
+      return Status::Error("internal: a state of the wrong size");
+    return measureOnDevice(u, smallestVolumeRatio, largestGreenStrain, largestStrainCell, error)
+               ? Status::Ok()
+               : Status::Error(error);
+  }
+
 private:
   // The force and, after it, the energy and the inadmissible flag (as a double's bits) in one
   // buffer: one copy back.
@@ -129,12 +140,45 @@ private:
     return true;
   }
 
+  bool measureOnDevice(const Eigen::VectorXd& u, double& smallestVolumeRatio,
+                       double& largestGreenStrain, long long& largestStrainCell,
+                       std::string& error) {
+    const size_t dofs = 3 * static_cast<size_t>(nodes_);
+    const int blocks = DeformationMeasureBlocks(arrays_.cells);
+    const size_t bytes = 3 * sizeof(double) * static_cast<size_t>(std::max(blocks, 1));
+    if (!measures_.ensure(bytes, error) || !hostMeasures_.ensure(bytes, error))
+      return false;
+    cudaStream_t s = stream_.get();
+    FP_CUDA_TRY(cudaSetDevice(0));
+    std::memcpy(hostU_.as<double>(), u.data(), sizeof(double) * dofs);
+    FP_CUDA_TRY(cudaMemcpyAsync(u_.as<double>(), hostU_.as<double>(), sizeof(double) * dofs,
+                                cudaMemcpyHostToDevice, s));
+    double* out = measures_.as<double>();
+    FP_CUDA_TRY(LaunchDeformationMeasures(arrays_, u_.as<double>(), out, out + blocks,
+                                          reinterpret_cast<long long*>(out + 2 * blocks), s));
+    FP_CUDA_TRY(cudaMemcpyAsync(hostMeasures_.as<double>(), out, bytes, cudaMemcpyDeviceToHost, s));
+    FP_CUDA_TRY(cudaStreamSynchronize(s));
+    const double* host = hostMeasures_.as<double>();
+    const long long* cells = reinterpret_cast<const long long*>(host + 2 * blocks);
+    smallestVolumeRatio = std::numeric_limits<double>::infinity();
+    largestGreenStrain = 0.0;
+    largestStrainCell = -1;
+    for (int b = 0; b < blocks; ++b) {
+      smallestVolumeRatio = std::min(smallestVolumeRatio, host[b]);
+      if (host[blocks + b] > largestGreenStrain) {
+        largestGreenStrain = host[blocks + b];
+        largestStrainCell = cells[b];
+      }
+    }
+    return true;
+  }
+
   std::mutex mutex_;
   OwnStream stream_;
   int nodes_ = 0;
   DeviceArray corners_, gradients_, volume_, mu_, kappa_, smallStrain_, frameOf_, frames_;
-  DeviceArray u_, force_;
-  PinnedArray hostU_, hostForce_;
+  DeviceArray u_, force_, measures_;
+  PinnedArray hostU_, hostForce_, hostMeasures_;
   HyperelasticCellArrays arrays_;
 };
 
@@ -149,7 +193,7 @@ class CudaFactor final : public FactorOnDevice {
   // From this many columns (or with more rows than a block's shared memory holds comfortably) a
   // supernode is large.
   // FACEPLAN_CUDA_LARGE_COLUMNS overrides the columns, for measuring.
-  static constexpr int kLargeColumns = 128, kLargeRows = 8192;
+  static constexpr int kLargeColumns = 256, kLargeRows = 8192;
   static int LargeColumns() {
     const char* given = std::getenv("FACEPLAN_CUDA_LARGE_COLUMNS");
     return given && std::atoi(given) > 0 ? std::atoi(given) : kLargeColumns;

@@ -11,7 +11,7 @@
 //   one thread block per small supernode (a warp solves its diagonal block 32 columns at a time,
 //   the block updates the rows below), the forward sweep's updates added to the ancestors
 //   atomically. A level's supernodes are independent, so a sweep costs as many launches as the
-//   tree is high, not as it has supernodes. The large supernodes at the top of the tree (from 128
+//   tree is high, not as it has supernodes. The large supernodes at the top of the tree (from 256
 //   columns), where a level holds too few to fill the GPU one block each, are cuBLAS products
 //   spread over the whole GPU: with their diagonal block's inverse (made once per factor with
 //   cuBLAS STRSM on the identity) and their off-diagonal block. The whole substitution is one

@@ -105,6 +105,13 @@ public:
   // undefined) when a cell would be inverted (det F <= 0) or a value is not finite.
   virtual Status evaluate(const Eigen::VectorXd& u, double& energy, Eigen::VectorXd& force,
                           bool& admissible) = 0;
+  // The smallest det F over the cells, the largest absolute principal Green strain and the first
+  // cell that has it (as the CPU's MeasureDeformation, to round-off).
+  virtual Status measure(const Eigen::VectorXd& u, double& smallestVolumeRatio,
+                         double& largestGreenStrain, long long& largestStrainCell) {
+    (void)u, (void)smallestVolumeRatio, (void)largestGreenStrain, (void)largestStrainCell;
+    return Status::Error("unsupported");
+  }
 };
 
 // A factor and a matrix held by a backend. Not for concurrent calls.

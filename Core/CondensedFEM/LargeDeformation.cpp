@@ -314,9 +314,9 @@ Eigen::VectorXd LocalPositions(const Structure& st) {
 
 Status FinishSolve(const PrecomputeRequest& request, const SolveInput& input, const Problem& pb,
                    const Eigen::VectorXd& u, double relativeResidual, SolveResult& result,
-                   FinalState& finalState) {
+                   FinalState& finalState, const DeformationMeasures* measured) {
   const Structure& st = *pb.st;
-  finalState.measures = MeasureDeformation(st, u);
+  finalState.measures = measured ? *measured : MeasureDeformation(st, u);
   finalState.liftedNodes = 0;
   for (int dof : st.liftOffDofs)
     finalState.liftedNodes += pb.prescribed[dof] ? 0 : 1;

@@ -125,9 +125,10 @@ struct FinalState {
   DeformationMeasures measures;
   int liftedNodes = 0; // lift-off DOFs not pinned at u
 };
+// `measured`: the measures of u when the caller has them (else they are computed here).
 Status FinishSolve(const PrecomputeRequest& request, const SolveInput& input, const Problem& pb,
                    const Eigen::VectorXd& u, double relativeResidual, SolveResult& result,
-                   FinalState& finalState);
+                   FinalState& finalState, const DeformationMeasures* measured = nullptr);
 
 } // namespace large_deformation
 } // namespace faceplan

@@ -850,7 +850,16 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   result.backend = report.device;
   StageClock finish;
   FinalState finalState;
-  status = FinishSolve(request, input, pb, u, solver.lastResidual(), result, finalState);
+  // The measures read every cell: on the backend where it has the cells.
+  DeformationMeasures onDevice;
+  bool measured = false;
+  if (sys.forces) {
+    const Status s = sys.forces->measure(u, onDevice.smallestVolumeRatio,
+                                         onDevice.largestGreenStrain, onDevice.largestStrainCell);
+    measured = s.ok;
+  }
+  status = FinishSolve(request, input, pb, u, solver.lastResidual(), result, finalState,
+                       measured ? &onDevice : nullptr);
   report.smallestVolumeRatio = finalState.measures.smallestVolumeRatio;
   report.largestGreenStrain = finalState.measures.largestGreenStrain;
   report.largestStrainCell = finalState.measures.largestStrainCell;

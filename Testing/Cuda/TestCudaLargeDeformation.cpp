@@ -14,9 +14,11 @@
 #include "SparseSolver/CholmodFactor.h"
 #include "Support/FEMTestScenes.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 namespace faceplan {
@@ -134,8 +136,32 @@ TEST(CudaLargeDeformation, ForcesMatchCoreElements) {
     const double scale = std::max(expected.cwiseAbs().maxCoeff(), 1e-300);
     EXPECT_LE((force - expected).cwiseAbs().maxCoeff(), 1e-12 * scale) << amplitude;
     EXPECT_NEAR(energy, expectedEnergy, 1e-12 * std::max(std::abs(expectedEnergy), 1e-300));
-    if (amplitude > 0.0) {
-      EXPECT_GT(scale, 0.0);
+    // The measures: the smallest det F, the largest absolute principal Green strain and its cell.
+    double smallestDet = std::numeric_limits<double>::infinity(), largest = 0.0;
+    for (Eigen::Index e = 0; e < c.mesh.numTets(); ++e) {
+      CornerDisplacements corner;
+      for (int a = 0; a < 4; ++a)
+        corner.row(a) =
+            c.toGlobal(c.mesh.tets(e, a), u.segment<3>(3 * c.mesh.tets(e, a))).transpose();
+      const Eigen::Matrix3d F = DeformationGradient(c.references[e], corner);
+      smallestDet = std::min(smallestDet, F.determinant());
+      const Eigen::Matrix3d green = 0.5 * (F.transpose() * F - Eigen::Matrix3d::Identity());
+      largest = std::max(largest, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(green)
+                                      .eigenvalues()
+                                      .cwiseAbs()
+                                      .maxCoeff());
+    }
+    double det = 0.0, strain = -1.0;
+    long long cell = -2;
+    ASSERT_TRUE(forces->measure(u, det, strain, cell));
+    EXPECT_NEAR(det, smallestDet, 1e-12);
+    EXPECT_NEAR(strain, largest, 1e-12 * std::max(1.0, largest)) << amplitude;
+    if (amplitude == 0.0) {
+      EXPECT_EQ(cell, -1);
+    } else {
+      ASSERT_GE(cell, 0);
+      ASSERT_LT(cell, c.mesh.numTets());
+      EXPECT_GT(strain, 1e-3);
     }
   }
   // One node pushed through its cells' opposite faces: an inverted cell is inadmissible.
@@ -283,6 +309,9 @@ TEST(CudaLargeDeformation, SolvesAndDragsAsTheCpu) {
     EXPECT_EQ(cpuReport.deviceEvaluations, 0);
     EXPECT_LT(RelativeMaxNodeDifference(onGpu.allDisplacement, onCpu.allDisplacement), 1e-8)
         << step;
+    EXPECT_NEAR(gpuReport.largestGreenStrain, cpuReport.largestGreenStrain,
+                1e-8 * cpuReport.largestGreenStrain);
+    EXPECT_NEAR(gpuReport.smallestVolumeRatio, cpuReport.smallestVolumeRatio, 1e-8);
     ASSERT_TRUE(SolvePrecomputedLargeDeformation(*cold, input, nullptr, coldResult, coldReport));
     EXPECT_LT(RelativeMaxNodeDifference(onGpu.allDisplacement, coldResult.allDisplacement), 1e-8)
         << step;
