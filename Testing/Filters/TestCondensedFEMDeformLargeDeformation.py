@@ -138,10 +138,15 @@ check(not warnings.contains("LiftOff") and "LiftOff applies to Model NeoHookean 
           f.get("ModelNote"), warnings.messages))
 check(rel(u_lin_lift, u_linear_large) == 0.0, "and its result is unchanged")
 fem.LiftOff = 0
-u_cuda, _, errors, warnings = run(Model="NeoHookean", Backend="CUDA")
-check(not errors.messages and warnings.contains("Model NeoHookean runs on the CPU"),
-      "Backend CUDA with NeoHookean: solved on the CPU, with a note")
-check(rel(u_cuda, u_large) <= 1e-12, "and the same result (%.1e)" % rel(u_cuda, u_large))
+# Backend CUDA runs the large-deformation solve's steps on the GPU; without one, on the CPU with a
+# warning saying why. The answer is the CPU's: to round-off on the CPU, to the solvers' agreement on
+# the GPU (its force sums run in another order).
+u_cuda, f_cuda, errors, warnings = run(Model="NeoHookean", Backend="CUDA")
+on_gpu = str(f_cuda.get("Backend", "")).startswith("CUDA")
+check(not errors.messages and (on_gpu or warnings.contains("Backend CUDA is not available")),
+      "Backend CUDA with NeoHookean: on the GPU, or on the CPU with a warning saying why (%s; %s)" % (
+          f_cuda.get("Backend"), warnings.messages))
+check(rel(u_cuda, u_large) <= (1e-8 if on_gpu else 1e-12), "and the same result (%.1e)" % rel(u_cuda, u_large))
 fem.Backend = "Auto"
 
 # 5. Bad values and combinations: an error naming the property, and an empty output.
