@@ -177,6 +177,10 @@ public:
     std::lock_guard<std::mutex> lock(mutex_);
     return backgroundCount_;
   }
+  int aheadFailures() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return aheadFailures_;
+  }
 
   // The pattern a synchronous refactorization assembles into (the solve's thread only).
   AssemblyPattern solvePattern;
@@ -202,10 +206,13 @@ private:
       if (ahead.size() == u.size())
         status = FactorTangent(*structure, ordering, pattern, ahead, prescribed,
                                options.singlePrecisionFactor, backend.get(), made, nullptr);
+      const bool refusedAhead = ahead.size() == u.size() && !status.ok;
       if (!status)
         status = FactorTangent(*structure, ordering, pattern, u, prescribed,
                                options.singlePrecisionFactor, backend.get(), made, nullptr);
       lock.lock();
+      if (refusedAhead)
+        ++aheadFailures_;
       if (status) {
         factor_ = std::move(made);
         ++backgroundCount_;
@@ -225,6 +232,7 @@ private:
   std::vector<char> pendingPrescribed_;
   bool pending_ = false, busy_ = false, stop_ = false;
   int backgroundCount_ = 0;
+  int aheadFailures_ = 0; // states ahead that could not be factored (the converged one was)
 };
 
 namespace {
@@ -951,6 +959,10 @@ std::string DescribeFactorOnDevice(const LargeDeformationSystem& system) {
 
 int BackgroundRefactorizations(const LargeDeformationSystem& system) {
   return system.backgroundCount();
+}
+
+int FactorsAheadRefused(const LargeDeformationSystem& system) {
+  return system.aheadFailures();
 }
 
 } // namespace faceplan

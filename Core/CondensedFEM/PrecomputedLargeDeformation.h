@@ -178,5 +178,8 @@ StageTimings PrecomputeTimings(const LargeDeformationSystem& system);
 std::string DescribeFactorOnDevice(const LargeDeformationSystem& system);
 // Refactorizations completed in the background so far.
 int BackgroundRefactorizations(const LargeDeformationSystem& system);
+// States ahead of a drag whose tangent could not be factored (a cell inverted there, or the
+// tangent not positive definite), so that the converged state's was factored instead.
+int FactorsAheadRefused(const LargeDeformationSystem& system);
 
 } // namespace faceplan
