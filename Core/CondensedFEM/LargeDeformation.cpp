@@ -223,13 +223,18 @@ Status SetValues(const PrecomputeRequest& request, const SolveInput& input, Prob
   return Status::Ok();
 }
 
-Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd& u, double s) {
-  Balance b;
+void BalanceInto(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd& u, double s,
+                 Balance& b) {
   b.potential = ev.energy - s * pb.externalLoad.dot(u);
   b.residual = ev.force - s * pb.externalLoad;
   ZeroPrescribed(pb.prescribed, b.residual);
   b.scale = std::max({ev.force.norm(), s * pb.externalLoad.norm(), pb.linearForce,
                       kRoundOffStrain * pb.st->unitStrainForce});
+}
+
+Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd& u, double s) {
+  Balance b;
+  BalanceInto(pb, ev, u, s, b);
   return b;
 }
 

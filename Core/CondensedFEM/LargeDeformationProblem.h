@@ -96,6 +96,9 @@ struct Balance {
   double scale = 0.0;       // what the residual is measured against
 };
 Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd& u, double s);
+// The same into `b`, reusing its residual's memory (an iteration's hot path).
+void BalanceInto(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd& u, double s,
+                 Balance& b);
 
 // Unilateral contact at a converged state u for the load fraction s: a node in contact whose
 // contact force pulls it onto the bone (a negative normal residual) lifts off, a lifted node that

@@ -587,7 +587,8 @@ private:
   }
 
   Eigen::VectorXd direction(const Eigen::VectorXd& r) {
-    Eigen::VectorXd q = r;
+    Eigen::VectorXd& q = directionScratch_; // kept: a fresh vector per iteration costs page faults
+    q = r;
     const int k = static_cast<int>(s_.size());
     std::vector<double> a(static_cast<size_t>(k));
     for (int i = k - 1; i >= 0; --i) {
@@ -601,7 +602,8 @@ private:
       const double b = rho_[i] * y_[i].dot(z);
       z += (a[i] - b) * s_[i];
     }
-    return -z;
+    z = -z;
+    return z;
   }
 
   bool refactor(const Eigen::VectorXd& u) {
@@ -626,6 +628,11 @@ private:
       return Failure::Smaller;
     }
     Balance b = BalanceOf(pb_, ev, u, 1.0);
+    // The trial state, its evaluation and balance, and the new L-BFGS pair: their memory is kept
+    // from iteration to iteration (swapped with the accepted state's, the oldest pair's reused).
+    Eigen::VectorXd trial, sk, yk;
+    Evaluation tev;
+    Balance tb;
     while (true) {
       lastResidual_ = b.scale > 0.0 ? b.residual.norm() / b.scale : 0.0;
       report_.convergence.emplace_back(clock_.elapsedMs(), lastResidual_);
@@ -660,17 +667,20 @@ private:
           continue;
         }
         for (double alpha = 1.0; alpha >= 1.0 / 1024.0; alpha *= 0.5) {
-          const Eigen::VectorXd trial = u + alpha * d;
-          Evaluation tev;
+          trial = u + alpha * d;
           if (!evaluate(trial, tev))
             continue; // a cell would invert: a shorter step
-          Balance tb = BalanceOf(pb_, tev, trial, 1.0);
+          BalanceInto(pb_, tev, trial, 1.0, tb);
           if (tb.potential <= b.potential + 1e-4 * alpha * slope ||
               tb.residual.norm() < b.residual.norm()) {
-            Eigen::VectorXd sk = trial - u, yk = tb.residual - b.residual;
+            sk = trial - u;
+            yk = tb.residual - b.residual;
             const double sy = sk.dot(yk);
             if (sys_.options.historySize > 0 && sy > 1e-14 * sk.norm() * yk.norm()) {
+              Eigen::VectorXd oldS, oldY;
               if (static_cast<int>(s_.size()) == sys_.options.historySize) {
+                oldS = std::move(s_.front());
+                oldY = std::move(y_.front());
                 s_.pop_front();
                 y_.pop_front();
                 rho_.pop_front();
@@ -678,10 +688,12 @@ private:
               s_.push_back(std::move(sk));
               y_.push_back(std::move(yk));
               rho_.push_back(1.0 / sy);
+              sk = std::move(oldS);
+              yk = std::move(oldY);
             }
-            u = trial;
-            b = std::move(tb);
-            ev = std::move(tev);
+            u.swap(trial);
+            std::swap(b, tb);
+            std::swap(ev, tev);
             accepted = true;
             break;
           }
@@ -709,6 +721,7 @@ private:
   StageTimings& timings_;
   std::shared_ptr<const TangentFactor> factor_;
   EvaluationScratch scratch_;
+  Eigen::VectorXd directionScratch_;
   std::deque<Eigen::VectorXd> s_, y_;
   std::deque<double> rho_;
   struct ReleasedDofs {
