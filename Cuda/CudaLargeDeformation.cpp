@@ -502,10 +502,9 @@ private:
     if (graph)
       cudaGraphDestroy(graph);
     cudaGetLastError(); // a failed capture leaves no error behind for the next call
-    // A graph's first launch uploads it to the device (about a millisecond for this one), and the
-    // first substitution with a fresh factor is the drag step's predictor, which the user waits
-    // for: here, on the background thread that made the factor, it is uploaded and run once on a
-    // zero right-hand side.
+    // A graph's first launch uploads it to the device, and the first substitution with a fresh
+    // factor is the drag step's predictor, which the user waits for: here, on the background
+    // thread that made the factor, it is uploaded and run once on a zero right-hand side.
     if (graph_) {
       std::fill(hostIn_.as<double>(), hostIn_.as<double>() + n_, 0.0);
       hostIn_.as<double>()[n_] = 1.0;
