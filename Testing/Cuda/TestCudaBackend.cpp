@@ -2,6 +2,7 @@
 // GPU-against-CPU agreement of the CUDA backend. CTest label `gpu`.
 // Without a usable GPU every case is skipped (GTEST_SKIP), never passed.
 #include "CudaBackend.h"
+#include "CudaTestGpu.h"
 #include "CudaTestMesh.h"
 
 #include "Backend/ComputeBackend.h"
@@ -25,19 +26,7 @@
 namespace faceplan {
 namespace {
 
-#define REQUIRE_GPU_OR_SKIP()                                                                      \
-  do {                                                                                             \
-    std::string why_;                                                                              \
-    if (!cuda::DeviceAvailable(&why_))                                                             \
-      GTEST_SKIP() << "no usable GPU: " << why_;                                                   \
-  } while (0)
-
-std::shared_ptr<ComputeBackend> Gpu() {
-  std::shared_ptr<ComputeBackend> backend;
-  const Status made = cuda::MakeCudaBackend(backend);
-  EXPECT_TRUE(made && backend) << made.message;
-  return backend;
-}
+using faceplan::testing::Gpu;
 
 Materials RandomMaterials(Eigen::Index cells, unsigned seed) {
   std::mt19937 rng(seed);

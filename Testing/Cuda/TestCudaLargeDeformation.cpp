@@ -5,6 +5,7 @@
 // GPU every case is skipped (GTEST_SKIP), never passed.
 #include "CudaBackend.h"
 #include "CudaLargeDeformation.h"
+#include "CudaTestGpu.h"
 #include "CudaTestMesh.h"
 
 #include "Common/RelativeDifference.h"
@@ -24,19 +25,7 @@
 namespace faceplan {
 namespace {
 
-#define REQUIRE_GPU_OR_SKIP()                                                                      \
-  do {                                                                                             \
-    std::string why_;                                                                              \
-    if (!cuda::DeviceAvailable(&why_))                                                             \
-      GTEST_SKIP() << "no usable GPU: " << why_;                                                   \
-  } while (0)
-
-std::shared_ptr<ComputeBackend> Gpu() {
-  std::shared_ptr<ComputeBackend> backend;
-  const Status made = cuda::MakeCudaBackend(backend);
-  EXPECT_TRUE(made && backend) << made.message;
-  return backend;
-}
+using faceplan::testing::Gpu;
 
 // A perturbed box's cells with random moduli, a third of the nodes in random frames and every
 // fifth cell small-strain, and its reference energy and force at u from Core's element routines.
