@@ -127,7 +127,7 @@ public:
                                 std::unique_ptr<HyperelasticForces>& forces) override {
     return detail::MakeCudaHyperelasticForces(cells, forces);
   }
-  Status makeFactorOnDevice(const CholmodFactor& factor, const SparseMatrix& upper,
+  Status makeFactorOnDevice(const SinglePrecisionFactor& factor, const SparseMatrix& upper,
                             std::unique_ptr<FactorOnDevice>& device) override {
     return detail::MakeCudaFactorOnDevice(factor, upper, device);
   }

@@ -36,6 +36,7 @@ namespace faceplan::cuda {
 
 using detail::CudaResponse;
 using detail::DeviceArray;
+using detail::Upload;
 
 namespace {
 
@@ -51,15 +52,6 @@ SupernodalFactorView ViewOfFactor(const cholmod_factor* L) {
   v.x = static_cast<const double*>(L->x);
   v.perm = static_cast<const int*>(L->Perm);
   return v;
-}
-template <class T>
-bool Upload(DeviceArray& dst, const T* src, size_t count, cudaStream_t stream, std::string& error) {
-  if (!dst.ensure(sizeof(T) * std::max<size_t>(count, 1), error))
-    return false;
-  if (count > 0)
-    FP_CUDA_TRY(
-        cudaMemcpyAsync(dst.as<T>(), src, sizeof(T) * count, cudaMemcpyHostToDevice, stream));
-  return true;
 }
 } // namespace
 

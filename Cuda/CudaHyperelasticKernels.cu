@@ -28,6 +28,37 @@ __device__ float WarpSum(float v) {
   return v;
 }
 
+// Cell e's corners' nodes and shape-function gradients, and its deformation gradient
+// F = I + sum_a d_a grad N_a at u, the corners' displacements d_a turned out of their nodes'
+// frames.
+__device__ __forceinline__ void CellDeformationGradient(const HyperelasticCellArrays& c,
+                                                        const double* __restrict__ u,
+                                                        std::int64_t e, int node[4], double g[4][3],
+                                                        double F[3][3]) {
+  double d[4][3];
+  for (int a = 0; a < 4; ++a) {
+    node[a] = c.corners[4 * e + a];
+    const double* local = u + 3 * static_cast<std::int64_t>(node[a]);
+    const double l0 = local[0], l1 = local[1], l2 = local[2];
+    const int frame = c.frameOf[node[a]];
+    if (frame < 0) {
+      d[a][0] = l0;
+      d[a][1] = l1;
+      d[a][2] = l2;
+    } else {
+      const double* q = c.frames + 9 * static_cast<std::int64_t>(frame); // column-major
+      for (int i = 0; i < 3; ++i)
+        d[a][i] = q[i] * l0 + q[i + 3] * l1 + q[i + 6] * l2;
+    }
+    for (int j = 0; j < 3; ++j)
+      g[a][j] = c.gradients[12 * e + 3 * a + j];
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      F[i][j] = (i == j ? 1.0 : 0.0) + d[0][i] * g[0][j] + d[1][i] * g[1][j] + d[2][i] * g[2][j] +
+                d[3][i] * g[3][j];
+}
+
 // One thread per cell: NeoHookeanTetState / SmallStrainTetState (Core/Element/NeoHookeanTet.cpp)
 // with the corners' displacements turned out of and the forces into the nodes' frames, the forces
 // added to their nodes, the energies summed per block and then into `energy`.
@@ -40,29 +71,8 @@ __global__ void __launch_bounds__(kCellsPerBlock)
   double cellEnergy = 0.0;
   if (e < c.cells) {
     int node[4];
-    double d[4][3], g[4][3];
-    for (int a = 0; a < 4; ++a) {
-      node[a] = c.corners[4 * e + a];
-      const double* local = u + 3 * static_cast<std::int64_t>(node[a]);
-      const double l0 = local[0], l1 = local[1], l2 = local[2];
-      const int frame = c.frameOf[node[a]];
-      if (frame < 0) {
-        d[a][0] = l0;
-        d[a][1] = l1;
-        d[a][2] = l2;
-      } else {
-        const double* q = c.frames + 9 * static_cast<std::int64_t>(frame); // column-major
-        for (int i = 0; i < 3; ++i)
-          d[a][i] = q[i] * l0 + q[i + 3] * l1 + q[i + 6] * l2;
-      }
-      for (int j = 0; j < 3; ++j)
-        g[a][j] = c.gradients[12 * e + 3 * a + j];
-    }
-    double F[3][3];
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        F[i][j] = (i == j ? 1.0 : 0.0) + d[0][i] * g[0][j] + d[1][i] * g[1][j] + d[2][i] * g[2][j] +
-                  d[3][i] * g[3][j];
+    double g[4][3], F[3][3];
+    CellDeformationGradient(c, u, e, node, g, F);
     // Cofactors: F^-T = cof(F) / J.
     double cof[3][3];
     cof[0][0] = F[1][1] * F[2][2] - F[1][2] * F[2][1];
@@ -147,24 +157,9 @@ __global__ void __launch_bounds__(kCellsPerBlock)
   double det = CUDART_INF, largest = 0.0;
   long long cell = -1;
   if (e < c.cells) {
-    double d[4][3], g[4][3];
-    for (int a = 0; a < 4; ++a) {
-      const int node = c.corners[4 * e + a];
-      const double* local = u + 3 * static_cast<std::int64_t>(node);
-      const int frame = c.frameOf[node];
-      for (int i = 0; i < 3; ++i)
-        d[a][i] = frame < 0 ? local[i]
-                            : c.frames[9 * frame + i] * local[0] +
-                                  c.frames[9 * frame + i + 3] * local[1] +
-                                  c.frames[9 * frame + i + 6] * local[2];
-      for (int j = 0; j < 3; ++j)
-        g[a][j] = c.gradients[12 * e + 3 * a + j];
-    }
-    double F[3][3];
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        F[i][j] = (i == j ? 1.0 : 0.0) + d[0][i] * g[0][j] + d[1][i] * g[1][j] + d[2][i] * g[2][j] +
-                  d[3][i] * g[3][j];
+    int node[4];
+    double g[4][3], F[3][3];
+    CellDeformationGradient(c, u, e, node, g, F);
     det = F[0][0] * (F[1][1] * F[2][2] - F[1][2] * F[2][1]) -
           F[0][1] * (F[1][0] * F[2][2] - F[1][2] * F[2][0]) +
           F[0][2] * (F[1][0] * F[2][1] - F[1][1] * F[2][0]);

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 struct cholmod_factor_struct;
 struct cholmod_common_struct;
@@ -62,6 +63,21 @@ private:
   void* ptr_ = nullptr;
   size_t capacity_ = 0;
 };
+
+// Copies `count` host values into dst (grown to hold them, at least one) on `stream`.
+template <class T>
+bool Upload(DeviceArray& dst, const T* src, size_t count, cudaStream_t stream, std::string& error) {
+  if (!dst.ensure(sizeof(T) * std::max<size_t>(count, 1), error))
+    return false;
+  if (count > 0)
+    FP_CUDA_TRY(
+        cudaMemcpyAsync(dst.as<T>(), src, sizeof(T) * count, cudaMemcpyHostToDevice, stream));
+  return true;
+}
+template <class T>
+bool Upload(DeviceArray& dst, const std::vector<T>& src, cudaStream_t stream, std::string& error) {
+  return Upload(dst, src.data(), src.size(), stream, error);
+}
 
 // Page-locked host memory (fast, truly asynchronous copies).
 class PinnedArray {

@@ -3,9 +3,8 @@
 
 #include "CudaInternal.h"
 #include "CudaKernels.h"
-#include "SparseSolver/CholmodFactor.h"
-
-#include <cholmod.h>
+#include "SparseSolver/SinglePrecisionFactor.h"
+#include "SparseSolver/SupernodalTree.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,16 +15,6 @@
 namespace faceplan::cuda::detail {
 
 namespace {
-
-template <class T>
-bool Upload(DeviceArray& dst, const std::vector<T>& src, cudaStream_t stream, std::string& error) {
-  if (!dst.ensure(sizeof(T) * std::max<size_t>(src.size(), 1), error))
-    return false;
-  if (!src.empty())
-    FP_CUDA_TRY(cudaMemcpyAsync(dst.as<void>(), src.data(), sizeof(T) * src.size(),
-                                cudaMemcpyHostToDevice, stream));
-  return true;
-}
 
 // A stream of one object's own.
 class OwnStream {
@@ -207,51 +196,34 @@ public:
       cublasDestroy(blas_);
   }
 
-  bool init(const CholmodFactor& factor, const SparseMatrix& upper, std::string& error) {
-    const cholmod_factor* L = factor.numericFactor();
-    if (!L || !L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_INT) {
-      error = "the factor is not a numeric supernodal LL^T factor with 32-bit indices";
+  bool init(const SinglePrecisionFactor& factor, const SparseMatrix& upper, std::string& error) {
+    // The values were converted (and checked finite) by SinglePrecisionFactor::assign: they are
+    // copied as they are.
+    const SinglePrecisionFactor::Layout f = factor.layout();
+    if (!f.super) {
+      error = "internal: the single-precision factor is empty";
       return false;
     }
-    n_ = static_cast<int>(L->n);
+    n_ = f.n;
     if (upper.rows() != n_ || upper.cols() != n_) {
       error = "internal: the matrix does not match the factor";
       return false;
     }
-    const int nsuper = static_cast<int>(L->nsuper);
-    const int* super = static_cast<const int*>(L->super);
-    const int* pi = static_cast<const int*>(L->pi);
-    const int* px = static_cast<const int*>(L->px);
-    const int* s = static_cast<const int*>(L->s);
-    const double* x = static_cast<const double*>(L->x);
-    std::vector<int> superV(super, super + nsuper + 1), piV(pi, pi + nsuper + 1),
-        sV(s, s + pi[nsuper]), perm(n_);
-    std::vector<std::int64_t> pxV(px, px + nsuper + 1);
-    const int* p = static_cast<const int*>(L->Perm);
-    for (int k = 0; k < n_; ++k)
-      perm[k] = p ? p[k] : k;
-    std::vector<float> values(static_cast<size_t>(pxV.back()));
-    for (size_t k = 0; k < values.size(); ++k) {
-      values[k] = static_cast<float>(x[k]);
-      if (!std::isfinite(values[k])) {
-        error = "the factor does not fit single precision";
-        return false;
-      }
-    }
-    // Levels: a supernode's parent is the supernode of its first off-diagonal row, always later
-    // in CHOLMOD's order, so one ascending pass gives each its height above the leaves.
-    std::vector<int> supernodeOf(n_), level(nsuper, 0);
-    for (int k = 0; k < nsuper; ++k)
-      for (int c = super[k]; c < super[k + 1]; ++c)
-        supernodeOf[c] = k;
+    const int nsuper = f.nsuper;
+    const int* super = f.super;
+    const int* pi = f.pi;
+    const std::int64_t* px = f.px;
+    const size_t valueCount = static_cast<size_t>(px[nsuper]);
+    // Levels: a supernode's parent is always later in CHOLMOD's order, so one ascending pass gives
+    // each its height above the leaves.
+    const faceplan::SupernodalStructure tree{n_, nsuper, super, pi, f.s};
+    const std::vector<int> parent = SupernodeParents(tree, SupernodeOfColumns(tree));
+    std::vector<int> level(nsuper, 0);
     int levels = 0;
     for (int k = 0; k < nsuper; ++k) {
-      const int nc = super[k + 1] - super[k], nr = pi[k + 1] - pi[k];
       levels = std::max(levels, level[k] + 1);
-      if (nr > nc) {
-        const int parent = supernodeOf[s[pi[k] + nc]];
-        level[parent] = std::max(level[parent], level[k] + 1);
-      }
+      if (parent[k] >= 0)
+        level[parent[k]] = std::max(level[parent[k]], level[k] + 1);
     }
     // Small supernodes go to the level kernels; large ones (the top of the tree, where a level has
     // few supernodes and one thread block each would leave the GPU idle) to cuBLAS products with
@@ -265,7 +237,7 @@ public:
     for (int k = 0; k < nsuper; ++k) {
       const int nc = super[k + 1] - super[k], nr = pi[k + 1] - pi[k];
       if (nc >= largeColumns || nr > kLargeRows) {
-        big_[level[k]].push_back({super[k], nc, nr - nc, pxV[k], inverseEntries, pi[k] + nc});
+        big_[level[k]].push_back({super[k], nc, nr - nc, px[k], inverseEntries, pi[k] + nc});
         inverseEntries += std::int64_t(nc) * nc;
         bigColumns = std::max(bigColumns, nc);
         bigRows = std::max(bigRows, nr - nc);
@@ -313,9 +285,12 @@ public:
     if (shared > 48 * 1024)
       FP_CUDA_TRY(AllowSweepSharedMemory(static_cast<int>(shared)));
     cudaStream_t st = stream_.get();
-    if (!Upload(super_, superV, st, error) || !Upload(pi_, piV, st, error) ||
-        !Upload(px_, pxV, st, error) || !Upload(s_, sV, st, error) ||
-        !Upload(values_, values, st, error) || !Upload(perm_, perm, st, error) ||
+    const size_t ends = static_cast<size_t>(nsuper) + 1;
+    if (!Upload(super_, super, ends, st, error) || !Upload(pi_, pi, ends, st, error) ||
+        !Upload(px_, px, ends, st, error) ||
+        !Upload(s_, f.s, static_cast<size_t>(pi[nsuper]), st, error) ||
+        !Upload(values_, f.values, valueCount, st, error) ||
+        !Upload(perm_, f.perm, static_cast<size_t>(n_), st, error) ||
         !Upload(order_, order, st, error) || !Upload(rows_, rows, st, error) ||
         !Upload(cols_, cols, st, error) || !Upload(entries_, entries, st, error))
       return false;
@@ -329,7 +304,7 @@ public:
     arrays_.px = px_.as<std::int64_t>();
     arrays_.s = s_.as<int>();
     arrays_.values = values_.as<float>();
-    valueBytes_ = 4.0 * double(values.size());
+    valueBytes_ = 4.0 * double(valueCount);
     FP_CUBLAS_TRY(cublasCreate(&blas_));
     FP_CUBLAS_TRY(cublasSetStream(blas_, st));
     FP_CUBLAS_TRY(cublasSetPointerMode(blas_, CUBLAS_POINTER_MODE_HOST));
@@ -572,7 +547,7 @@ Status MakeCudaHyperelasticForces(const HyperelasticCells& cells,
   return Status::Ok();
 }
 
-Status MakeCudaFactorOnDevice(const CholmodFactor& factor, const SparseMatrix& upper,
+Status MakeCudaFactorOnDevice(const SinglePrecisionFactor& factor, const SparseMatrix& upper,
                               std::unique_ptr<FactorOnDevice>& device) {
   auto made = std::make_unique<CudaFactor>();
   std::string error;

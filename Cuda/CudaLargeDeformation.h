@@ -28,7 +28,7 @@ namespace faceplan::cuda::detail {
 
 Status MakeCudaHyperelasticForces(const HyperelasticCells& cells,
                                   std::unique_ptr<HyperelasticForces>& forces);
-Status MakeCudaFactorOnDevice(const CholmodFactor& factor, const SparseMatrix& upper,
+Status MakeCudaFactorOnDevice(const SinglePrecisionFactor& factor, const SparseMatrix& upper,
                               std::unique_ptr<FactorOnDevice>& device);
 
 // The levels of a factor's supernodal tree as the sweeps use them (for tests and benchmarks).

@@ -14,6 +14,7 @@
 namespace faceplan {
 
 class CholmodFactor;
+class SinglePrecisionFactor;
 class ResponseOperator;
 class HyperelasticForces;
 class FactorOnDevice;
@@ -85,12 +86,11 @@ public:
     (void)cells, (void)forces;
     return Status::Error("this backend has no large-deformation steps");
   }
-  // Optional: a copy of a numeric supernodal factor (its values in single precision, as
-  // SinglePrecisionFactor's) and of the symmetric matrix `upper` (its upper triangle; the
-  // factored matrix before pinning), for the solve's substitutions and tangent products. Called
-  // on the background refactorization's thread. Fails when the backend has none or it does not
-  // fit.
-  virtual Status makeFactorOnDevice(const CholmodFactor& factor, const SparseMatrix& upper,
+  // Optional: a copy of a factor's single-precision values and structure (`factor`, assigned) and
+  // of the symmetric matrix `upper` (its upper triangle; the factored matrix before pinning), for
+  // the solve's substitutions and tangent products. Called on the background refactorization's
+  // thread. Fails when the backend has none, `factor` is not assigned or the copy does not fit.
+  virtual Status makeFactorOnDevice(const SinglePrecisionFactor& factor, const SparseMatrix& upper,
                                     std::unique_ptr<FactorOnDevice>& device) {
     (void)factor, (void)upper, (void)device;
     return Status::Error("this backend has no large-deformation steps");

@@ -95,7 +95,7 @@ Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
     return status;
   if (backend && singlePrecision) {
     std::unique_ptr<FactorOnDevice> device;
-    const Status copied = backend->makeFactorOnDevice(made->factor, made->tangent, device);
+    const Status copied = backend->makeFactorOnDevice(made->single, made->tangent, device);
     if (copied)
       made->device = std::move(device);
     else

@@ -295,4 +295,20 @@ double SinglePrecisionFactor::valueBytes() const {
   return 4.0 * double(impl_->values.size());
 }
 
+SinglePrecisionFactor::Layout SinglePrecisionFactor::layout() const {
+  const Impl& d = *impl_;
+  Layout out;
+  if (d.super.empty())
+    return out;
+  out.n = d.n;
+  out.nsuper = static_cast<int>(d.super.size()) - 1;
+  out.super = d.super.data();
+  out.pi = d.pi.data();
+  out.px = d.px.data();
+  out.s = d.s.data();
+  out.values = d.values.data();
+  out.perm = d.perm.data();
+  return out;
+}
+
 } // namespace faceplan

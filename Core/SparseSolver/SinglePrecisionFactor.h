@@ -12,6 +12,7 @@
 #include "Common/Status.h"
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
 
 namespace faceplan {
@@ -33,6 +34,23 @@ public:
   Eigen::Index rows() const;
   // Bytes of the single-precision values.
   double valueBytes() const;
+
+  // The copy in CHOLMOD's supernodal layout, for a backend that copies it as it is: each
+  // supernode's first column (super), the starts of its row list (pi) and of its values (px), the
+  // row lists (s), the columns' values (column-major per supernode) and the fill-reducing
+  // permutation (column k of the factor is row perm[k] of the matrix). Arrays of nsuper + 1
+  // entries (super, pi, px), pi[nsuper] (s), px[nsuper] (values) and n (perm); all null before a
+  // successful assign. Valid until the next assign.
+  struct Layout {
+    int n = 0, nsuper = 0;
+    const int* super = nullptr;
+    const int* pi = nullptr;
+    const std::int64_t* px = nullptr;
+    const int* s = nullptr;
+    const float* values = nullptr;
+    const int* perm = nullptr;
+  };
+  Layout layout() const;
 
 private:
   struct Impl;

@@ -13,7 +13,9 @@
 #include "CondensedFEM/PrecomputedLargeDeformation.h"
 #include "Element/NeoHookeanTet.h"
 #include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/SinglePrecisionFactor.h"
 #include "Support/FEMTestScenes.h"
+#include "Support/PrecomputedSystem.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -26,6 +28,7 @@ namespace faceplan {
 namespace {
 
 using faceplan::testing::Gpu;
+using faceplan::testing::Precomputed;
 
 // A perturbed box's cells with random moduli, a third of the nodes in random frames and every
 // fifth cell small-strain, and its reference energy and force at u from Core's element routines.
@@ -200,8 +203,10 @@ TEST(CudaLargeDeformation, SubstitutionAndProductMatchTheCpu) {
   CholmodFactor factor;
   ASSERT_TRUE(factor.analyze(upper));
   ASSERT_TRUE(factor.factorize(upper));
+  SinglePrecisionFactor single;
+  ASSERT_TRUE(single.assign(factor));
   std::unique_ptr<FactorOnDevice> device;
-  const Status made = backend->makeFactorOnDevice(factor, upper, device);
+  const Status made = backend->makeFactorOnDevice(single, upper, device);
   ASSERT_TRUE(made) << made.message;
   cuda::detail::SweepShape shape;
   ASSERT_TRUE(cuda::detail::ShapeOfFactorOnDevice(*device, shape));
@@ -237,20 +242,15 @@ TEST(CudaLargeDeformation, SubstitutionAndProductMatchTheCpu) {
   EXPECT_FALSE(device->solve(bad, x));
   EXPECT_FALSE(device->solve(Eigen::VectorXd::Ones(4), x));
   EXPECT_FALSE(device->multiply(Eigen::VectorXd::Ones(4), x));
-  // A factor that is only symbolic is refused.
+  // A factor that is only symbolic has no single-precision copy (assign fails and leaves it
+  // empty), and an empty copy is refused.
   CholmodFactor symbolic;
   ASSERT_TRUE(symbolic.analyze(upper));
+  SinglePrecisionFactor empty;
+  EXPECT_FALSE(empty.assign(symbolic));
   std::unique_ptr<FactorOnDevice> none;
-  EXPECT_FALSE(backend->makeFactorOnDevice(symbolic, upper, none));
+  EXPECT_FALSE(backend->makeFactorOnDevice(empty, upper, none));
   EXPECT_FALSE(none);
-}
-
-std::shared_ptr<LargeDeformationSystem>
-Precomputed(const PrecomputeRequest& request, PrecomputedLargeDeformationOptions options = {}) {
-  std::shared_ptr<LargeDeformationSystem> system;
-  const Status s = PrecomputeLargeDeformation(request, options, system);
-  EXPECT_TRUE(s.ok) << s.message;
-  return system;
 }
 
 TEST(CudaLargeDeformation, SolvesAndDragsAsTheCpu) {

@@ -7,6 +7,7 @@
 #include "CondensedFEM/PrecomputedLargeDeformation.h"
 #include "Support/BoxMeshGenerator.h"
 #include "Support/FEMTestScenes.h"
+#include "Support/PrecomputedSystem.h"
 
 #include <cmath>
 #include <functional>
@@ -73,14 +74,6 @@ std::function<Eigen::RowVector3d(const Eigen::RowVector3d&)> Tilt(double angle) 
     const double x = p.x() - 0.5 * kLx;
     return Eigen::RowVector3d(x * (std::cos(angle) - 1.0), 0.0, x * std::sin(angle));
   };
-}
-
-std::shared_ptr<LargeDeformationSystem>
-Precomputed(const PrecomputeRequest& request, PrecomputedLargeDeformationOptions options = {}) {
-  std::shared_ptr<LargeDeformationSystem> system;
-  const Status s = PrecomputeLargeDeformation(request, options, system);
-  EXPECT_TRUE(s.ok) << s.message;
-  return system;
 }
 
 // One step of a drag whose refactorization is awaited: the warm solve from `state` (advanced to its
