@@ -16,6 +16,18 @@ namespace faceplan::cuda::detail {
 
 namespace {
 
+// out = the n values at `from`, in the pass that checks them: false when one is not finite.
+bool CopyFinite(const double* from, size_t n, Eigen::VectorXd& out) {
+  out.resize(static_cast<Eigen::Index>(n));
+  double* to = out.data();
+  bool finite = true;
+  for (size_t i = 0; i < n; ++i) {
+    to[i] = from[i];
+    finite = finite && std::isfinite(from[i]);
+  }
+  return finite;
+}
+
 // A stream of one object's own.
 class OwnStream {
 public:
@@ -124,8 +136,7 @@ private:
     int flag = 0;
     std::memcpy(&flag, host + dofs + 1, sizeof(int));
     energy = host[dofs];
-    force = Eigen::Map<const Eigen::VectorXd>(host, static_cast<Eigen::Index>(dofs));
-    admissible = flag == 0 && std::isfinite(energy) && force.allFinite();
+    admissible = flag == 0 && std::isfinite(energy) && CopyFinite(host, dofs, force);
     return true;
   }
 
@@ -335,16 +346,27 @@ public:
     std::lock_guard<std::mutex> lock(mutex_);
     if (b.size() != n_)
       return Status::Error("internal: a right-hand side of the wrong size");
-    const double scale = n_ > 0 ? b.cwiseAbs().maxCoeff() : 0.0;
-    x.setZero(n_);
-    if (!(scale > 0.0))
-      return std::isfinite(scale) ? Status::Ok()
-                                  : Status::Error("the right-hand side is not finite");
+    // b into the pinned buffer with its largest magnitude, in one pass (a step's host work is
+    // mostly such passes over the state's length).
+    double* in = hostIn_.as<double>();
+    double scale = 0.0;
+    bool finite = true;
+    for (int i = 0; i < n_; ++i) {
+      const double v = b[i];
+      in[i] = v;
+      scale = std::max(scale, std::abs(v));
+      finite = finite && std::isfinite(v);
+    }
+    if (!finite)
+      return Status::Error("the right-hand side is not finite");
+    if (!(scale > 0.0)) {
+      x.setZero(n_);
+      return Status::Ok();
+    }
+    in[n_] = scale;
     std::string error;
-    if (!substitute(b, scale, x, error))
+    if (!substitute(x, error))
       return Status::Error(error);
-    if (!x.allFinite())
-      return Status::Error("the single-precision substitution overflowed");
     return Status::Ok();
   }
 
@@ -492,18 +514,20 @@ private:
     }
   }
 
-  bool substitute(const Eigen::VectorXd& b, double scale, Eigen::VectorXd& x, std::string& error) {
+  // x from hostIn_'s right-hand side and scale (hostIn_[n]).
+  bool substitute(Eigen::VectorXd& x, std::string& error) {
     cudaStream_t st = stream_.get();
     FP_CUDA_TRY(cudaSetDevice(0));
-    std::memcpy(hostIn_.as<double>(), b.data(), sizeof(double) * n_);
-    hostIn_.as<double>()[n_] = scale;
     if (graph_) {
       FP_CUDA_TRY(cudaGraphLaunch(graph_, st));
     } else if (!enqueueSubstitution(st, error)) {
       return false;
     }
     FP_CUDA_TRY(cudaStreamSynchronize(st));
-    x = Eigen::Map<const Eigen::VectorXd>(hostOut_.as<double>(), n_);
+    if (!CopyFinite(hostOut_.as<double>(), static_cast<size_t>(n_), x)) {
+      error = "the single-precision substitution overflowed";
+      return false;
+    }
     return true;
   }
 

@@ -92,8 +92,9 @@ constexpr double kSettleTolerance = 1e-6;
 // Total potential energy and the free DOFs' residual at u for the load fraction s.
 struct Balance {
   double potential = 0.0;
-  Eigen::VectorXd residual; // zero on prescribed DOFs
-  double scale = 0.0;       // what the residual is measured against
+  Eigen::VectorXd residual;  // zero on prescribed DOFs
+  double residualNorm = 0.0; // |residual|
+  double scale = 0.0;        // what the residual is measured against
 };
 Balance BalanceOf(const Problem& pb, const Evaluation& ev, const Eigen::VectorXd& u, double s);
 // The same into `b`, reusing its residual's memory (an iteration's hot path).

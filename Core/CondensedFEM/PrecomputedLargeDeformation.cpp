@@ -135,6 +135,10 @@ public:
   std::string forcesError;
   FillReducingOrdering ordering;
   SparseMatrix restTangent; // upper, unpinned
+  // The rest tangent's columns of the movable nodes' DOFs, the only ones a target moves: the
+  // yardstick |K_0 u_prescribed| of each solve reads these instead of the whole tangent.
+  std::vector<int> movableDofs;
+  SparseMatrix restMovableColumns;
   // The rest state's factor, kept for solves that start from rest (a move back towards zero is
   // nearer the rest state than the last converged one).
   std::shared_ptr<const TangentFactor> restFactor;
@@ -150,15 +154,15 @@ public:
   }
 
   // Queues a refactorization at (u, prescribed); a newer request replaces a queued one.
-  // ahead: a state to factor at instead, if no cell is inverted there.
+  // ahead: a state to factor at instead, if no cell is inverted there (empty: none).
   void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed,
-                              const Eigen::VectorXd* ahead = nullptr) {
+                              Eigen::VectorXd ahead = Eigen::VectorXd()) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (stop_)
         return;
       pendingU_ = u;
-      pendingAhead_ = ahead ? *ahead : Eigen::VectorXd();
+      pendingAhead_ = std::move(ahead);
       pendingPrescribed_ = prescribed;
       pending_ = true;
       if (!worker_.joinable()) {
@@ -249,6 +253,25 @@ Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
   return Status::Ok();
 }
 
+// The columns `dofs` of the symmetric matrix whose upper triangle is `upper` (rows: all DOFs).
+SparseMatrix SymmetricColumns(const SparseMatrix& upper, const std::vector<int>& dofs) {
+  std::vector<int> column(static_cast<size_t>(upper.cols()), -1);
+  for (size_t k = 0; k < dofs.size(); ++k)
+    column[dofs[k]] = static_cast<int>(k);
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index j = 0; j < upper.outerSize(); ++j)
+    for (SparseMatrix::InnerIterator it(upper, j); it; ++it) {
+      const Eigen::Index i = it.row();
+      if (column[j] >= 0)
+        entries.emplace_back(static_cast<int>(i), column[j], it.value());
+      if (i != j && column[i] >= 0)
+        entries.emplace_back(static_cast<int>(j), column[i], it.value());
+    }
+  SparseMatrix out(upper.rows(), static_cast<Eigen::Index>(dofs.size()));
+  out.setFromTriplets(entries.begin(), entries.end());
+  return out;
+}
+
 // The structure's cells in the backend's plain arrays.
 HyperelasticCells CellsOf(const Structure& st) {
   HyperelasticCells c;
@@ -324,12 +347,34 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
   sys->restTangent = factor->tangent;
+  for (int node : request.sets.movable)
+    for (int j = 0; j < 3; ++j)
+      sys->movableDofs.push_back(3 * node + j);
+  sys->restMovableColumns = SymmetricColumns(sys->restTangent, sys->movableDofs);
   st.unitStrainForce = RestForceNorm(sys->restTangent, LocalPositions(st));
   sys->restFactor = factor;
   sys->setFactor(std::move(factor));
   sys->timings[Stage::Total].ms = total.elapsedMs();
   out = std::move(sys);
   return Status::Ok();
+}
+
+// The L-BFGS pair s = x1 - x0, y = r1 - r0 and its products s.y, s.s and y.y, in one pass.
+void NewPair(const Eigen::VectorXd& x1, const Eigen::VectorXd& x0, const Eigen::VectorXd& r1,
+             const Eigen::VectorXd& r0, Eigen::VectorXd& s, Eigen::VectorXd& y, double& sy,
+             double& ss, double& yy) {
+  const Eigen::Index n = x1.size();
+  s.resize(n);
+  y.resize(n);
+  sy = ss = yy = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double si = x1[i] - x0[i], yi = r1[i] - r0[i];
+    s[i] = si;
+    y[i] = yi;
+    sy += si * yi;
+    ss += si * si;
+    yy += yi * yi;
+  }
 }
 
 // Why a sub-step failed: a smaller one may mend it, or the solve falls back.
@@ -393,7 +438,7 @@ public:
   double lastResidual() const { return lastResidual_; }
   // The internal force at the first sub-step's start (a converged state's), when known.
   void setStartForce(const Eigen::VectorXd* force) { startForce_ = force; }
-  const Eigen::VectorXd& lastForce() const { return lastForce_; }
+  Eigen::VectorXd takeLastForce() { return std::move(lastForce_); }
 
 private:
   bool evaluate(const Eigen::VectorXd& u, Evaluation& ev) {
@@ -538,14 +583,18 @@ private:
         startForce_ = &factor_->force;
       }
     }
-    Eigen::VectorXd move = Eigen::VectorXd::Zero(u.size());
-    for (Eigen::Index i = 0; i < u.size(); ++i)
-      if (pb_.prescribed[i]) {
-        move[i] = pb_.target[i] - u[i];
-      }
+    const Eigen::Index n = u.size();
+    Eigen::VectorXd move(n);
+    double largestMove = 0.0, largestTarget = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      move[i] = pb_.prescribed[i] ? pb_.target[i] - u[i] : 0.0;
+      largestMove = std::max(largestMove, std::abs(move[i]));
+      largestTarget = std::max(largestTarget, std::abs(pb_.target[i]));
+    }
     Evaluation ev;
-    if (startForce_ && startForce_->size() == u.size()) {
-      ev.force = *startForce_; // the converged state's own
+    const Eigen::VectorXd* force = &ev.force;
+    if (startForce_ && startForce_->size() == n) {
+      force = startForce_; // the converged state's own
     } else if (!evaluate(u, ev)) {
       return false;
     }
@@ -553,26 +602,28 @@ private:
     // From a factor made where the drag leads, the prescribed values are already at their targets
     // to round-off: the tangent's product with that move is skipped (the move itself is applied;
     // the predictor only starts the iterations, whose residual decides convergence).
-    Eigen::VectorXd rhs = ev.force - pb_.externalLoad;
-    if (move.lpNorm<Eigen::Infinity>() > 1e-12 * pb_.target.lpNorm<Eigen::Infinity>()) {
-      Eigen::VectorXd product;
+    Eigen::VectorXd product;
+    if (largestMove > 1e-12 * largestTarget) {
       Status multiplied = Status::Error("no device");
       if (factor_->device && !(multiplied = factor_->device->multiply(move, product)))
         noteDevice("a tangent product: " + multiplied.message);
-      if (multiplied)
-        rhs += product;
-      else
-        rhs += factor_->tangent.selfadjointView<Eigen::Upper>() * move;
+      if (!multiplied)
+        product = factor_->tangent.selfadjointView<Eigen::Upper>() * move;
     }
-    rhs = -rhs;
-    ZeroPrescribed(pb_.prescribed, rhs);
+    // -(f - f_ext + K move) on the free DOFs.
+    Eigen::VectorXd rhs(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double r = (*force)[i] - pb_.externalLoad[i];
+      rhs[i] = pb_.prescribed[i] ? 0.0 : -(product.size() ? r + product[i] : r);
+    }
     Eigen::VectorXd follow = applyFactor(rhs);
     if (follow.size() == 0 || !follow.allFinite())
       return false;
+    Eigen::VectorXd trial;
     for (double alpha : {1.0, 0.5, 0.25, 0.0}) {
-      const Eigen::VectorXd trial = u + move + alpha * follow;
+      trial = u + move + alpha * follow;
       if (evaluate(trial, cached_)) {
-        u = trial;
+        u.swap(trial);
         haveCached_ = true;
         return true;
       }
@@ -634,9 +685,9 @@ private:
     Evaluation tev;
     Balance tb;
     while (true) {
-      lastResidual_ = b.scale > 0.0 ? b.residual.norm() / b.scale : 0.0;
+      lastResidual_ = b.scale > 0.0 ? b.residualNorm / b.scale : 0.0;
       report_.convergence.emplace_back(clock_.elapsedMs(), lastResidual_);
-      if (b.residual.norm() <= tolerance * b.scale) {
+      if (b.residualNorm <= tolerance * b.scale) {
         lastEnergy_ = ev.energy;
         lastForce_ = std::move(ev.force);
         return Failure::None;
@@ -672,11 +723,10 @@ private:
             continue; // a cell would invert: a shorter step
           BalanceInto(pb_, tev, trial, 1.0, tb);
           if (tb.potential <= b.potential + 1e-4 * alpha * slope ||
-              tb.residual.norm() < b.residual.norm()) {
-            sk = trial - u;
-            yk = tb.residual - b.residual;
-            const double sy = sk.dot(yk);
-            if (sys_.options.historySize > 0 && sy > 1e-14 * sk.norm() * yk.norm()) {
+              tb.residualNorm < b.residualNorm) {
+            double sy = 0.0, ss = 0.0, yy = 0.0;
+            NewPair(trial, u, tb.residual, b.residual, sk, yk, sy, ss, yy);
+            if (sys_.options.historySize > 0 && sy > 1e-14 * std::sqrt(ss) * std::sqrt(yy)) {
               Eigen::VectorXd oldS, oldY;
               if (static_cast<int>(s_.size()) == sys_.options.historySize) {
                 oldS = std::move(s_.front());
@@ -765,15 +815,13 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   Status status = SetValues(request, input, pb);
   if (!status)
     return status;
-  const Eigen::VectorXd fullTarget = pb.target, fullLoad = pb.externalLoad;
-  // The yardstick |K_0 u_prescribed|: with the rest tangent's device copy where there is one (the
-  // host's product reads every entry of the tangent on one core).
+  Eigen::VectorXd fullTarget = pb.target, fullLoad = pb.externalLoad; // moved out at the end
+  // The yardstick |K_0 u_prescribed| (the targets are zero off the movable nodes' DOFs).
   {
-    Eigen::VectorXd product;
-    if (sys.restFactor->device && sys.restFactor->device->multiply(fullTarget, product))
-      pb.linearForce = product.norm();
-    else
-      pb.linearForce = RestForceNorm(sys.restTangent, fullTarget);
+    Eigen::VectorXd moved(static_cast<Eigen::Index>(sys.movableDofs.size()));
+    for (size_t k = 0; k < sys.movableDofs.size(); ++k)
+      moved[static_cast<Eigen::Index>(k)] = fullTarget[sys.movableDofs[k]];
+    pb.linearForce = (sys.restMovableColumns * moved).norm();
   }
 
   Eigen::VectorXd u, fromTarget, fromLoad;
@@ -808,8 +856,13 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   std::string why;
   while (reached < 1.0) {
     const double to = std::min(1.0, reached + step);
-    pb.target = fromTarget + to * (fullTarget - fromTarget);
-    pb.externalLoad = fromLoad + to * (fullLoad - fromLoad);
+    if (to == 1.0) {
+      pb.target = fullTarget;
+      pb.externalLoad = fullLoad;
+    } else {
+      pb.target = fromTarget + to * (fullTarget - fromTarget);
+      pb.externalLoad = fromLoad + to * (fullLoad - fromLoad);
+    }
     Eigen::VectorXd trial = u;
     const std::vector<char> contact = pb.prescribed;
     solver.why.clear();
@@ -907,9 +960,9 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
       const bool steady =
           sys.options.factorAheadOrder >= 2 && warm->before.size() == u.size() &&
           (warm->target - warm->targetBefore - change).norm() <= kSteadyDrag * change.norm();
-      const Eigen::VectorXd ahead = steady ? Eigen::VectorXd(3.0 * (u - warm->u) + warm->before)
-                                           : Eigen::VectorXd(2.0 * u - warm->u);
-      sys.requestRefactorization(u, pb.prescribed, &ahead);
+      Eigen::VectorXd ahead = steady ? Eigen::VectorXd(3.0 * (u - warm->u) + warm->before)
+                                     : Eigen::VectorXd(2.0 * u - warm->u);
+      sys.requestRefactorization(u, pb.prescribed, std::move(ahead));
     } else {
       sys.requestRefactorization(u, pb.prescribed);
     }
@@ -918,9 +971,9 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     converged->system = &sys;
     converged->u = std::move(u);
     converged->prescribed = pb.prescribed;
-    converged->target = fullTarget;
-    converged->load = fullLoad;
-    converged->force = solver.lastForce();
+    converged->target = std::move(fullTarget);
+    converged->load = std::move(fullLoad);
+    converged->force = solver.takeLastForce();
     if (drag) {
       converged->before = warm->u;
       converged->targetBefore = warm->target;

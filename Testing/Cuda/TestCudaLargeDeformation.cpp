@@ -240,6 +240,8 @@ TEST(CudaLargeDeformation, SubstitutionAndProductMatchTheCpu) {
   Eigen::VectorXd bad = Eigen::VectorXd::Ones(upper.rows());
   bad[3] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(device->solve(bad, x));
+  bad[3] = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(device->solve(bad, x));
   EXPECT_FALSE(device->solve(Eigen::VectorXd::Ones(4), x));
   EXPECT_FALSE(device->multiply(Eigen::VectorXd::Ones(4), x));
   // A factor that is only symbolic has no single-precision copy (assign fails and leaves it
