@@ -15,6 +15,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <limits>
 #include <mutex>
 #include <thread>
 
@@ -143,6 +144,9 @@ public:
   // nearer the rest state than the last converged one).
   std::shared_ptr<const TangentFactor> restFactor;
   StageTimings timings;
+  // Wall time of the last numeric factorization made on the solve's thread (the precompute's
+  // first): what adaptive refactorization weighs iterations against.
+  double factorMs = 0.0;
 
   std::shared_ptr<const TangentFactor> factor() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -246,7 +250,7 @@ namespace {
 constexpr double kSteadyDrag = 0.1;
 
 Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
-  if (!(o.tolerance > 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
+  if (!(o.tolerance > 0.0) || !(o.settleTolerance > 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
       o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
       o.maxCoupledReleases < 0 || o.factorAheadOrder < 1 || o.factorAheadOrder > 2)
     return Status::Error("invalid large-deformation options");
@@ -347,6 +351,8 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
   sys->restTangent = factor->tangent;
+  sys->factorMs = sys->timings[Stage::ElementStiffness].ms + sys->timings[Stage::Assembly].ms +
+                  sys->timings[Stage::Factorization].ms;
   for (int node : request.sets.movable)
     for (int j = 0; j < 3; ++j)
       sys->movableDofs.push_back(3 * node + j);
@@ -399,7 +405,8 @@ public:
       return Failure::Smaller;
     const bool liftOff = !st_.liftOffDofs.empty();
     const double tight = sys_.options.tolerance;
-    double tolerance = liftOff ? std::max(tight, kSettleTolerance) : tight;
+    const double settle = sys_.options.settleTolerance;
+    double tolerance = liftOff ? std::max(tight, settle) : tight;
     int updates = 0;
     while (true) {
       const Failure f = minimise(u, tolerance);
@@ -423,7 +430,7 @@ public:
             moved = true;
           }
         clearHistory();
-        tolerance = std::max(tight, kSettleTolerance);
+        tolerance = std::max(tight, settle);
       } else {
         tolerance = tight;
       }
@@ -635,6 +642,7 @@ private:
     s_.clear();
     y_.clear();
     rho_.clear();
+    phase_.clear();
   }
 
   Eigen::VectorXd direction(const Eigen::VectorXd& r) {
@@ -660,13 +668,33 @@ private:
   bool refactor(const Eigen::VectorXd& u) {
     if (report_.refactorizations >= sys_.options.maxRefactorizations)
       return false;
+    StageClock clock;
     std::shared_ptr<TangentFactor> made;
     if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed,
                        sys_.options.singlePrecisionFactor, sys_.backend.get(), made, &timings_))
       return false;
     factor_ = std::move(made);
     ++report_.refactorizations;
+    sys_.factorMs = clock.elapsedMs();
     return true;
+  }
+
+  // Whether factoring the tangent here now costs less than the iterations that the last few
+  // iterations' rate of convergence predicts with the present factor (it converges slowly where
+  // the present factor's state is far from u): a factor at u makes the rest of the way one or two
+  // iterations.
+  bool refactorPays(double residual, double goal) {
+    constexpr int kRateSpan = 4;
+    phase_.push_back(residual);
+    if (!sys_.options.adaptiveRefactorization || adaptiveFailed_ || iterationsTimed_ == 0 ||
+        static_cast<int>(phase_.size()) <= kRateSpan ||
+        report_.refactorizations >= sys_.options.maxRefactorizations)
+      return false;
+    const double before = phase_[phase_.size() - 1 - kRateSpan];
+    const double rate = std::pow(residual / before, 1.0 / kRateSpan);
+    const double left = rate < 1.0 ? std::log(goal / residual) / std::log(rate)
+                                   : std::numeric_limits<double>::infinity();
+    return left * (iterationMs_ / iterationsTimed_) > sys_.factorMs;
   }
 
   // L-BFGS on the free DOFs with the current contact, to `tolerance`.
@@ -704,7 +732,14 @@ private:
         sinceFactor_ = 0;
         if (refactor(u))
           clearHistory();
+      } else if (refactorPays(b.residualNorm, tolerance * b.scale)) {
+        sinceFactor_ = 0;
+        if (refactor(u))
+          clearHistory();
+        else
+          adaptiveFailed_ = true; // not positive definite here: the present factor goes on
       }
+      StageClock iterationClock;
       bool accepted = false;
       for (int attempt = 0; attempt < 2 && !accepted; ++attempt) {
         const Eigen::VectorXd d = direction(b.residual);
@@ -755,6 +790,8 @@ private:
         why = "its line search found no step that lowers the energy or the residual";
         return Failure::Smaller;
       }
+      iterationMs_ += iterationClock.elapsedMs();
+      ++iterationsTimed_;
     }
   }
 
@@ -782,6 +819,10 @@ private:
     Eigen::MatrixXd schurInverse; // S^-1 (k x k, k small)
   } released_;
   int sinceFactor_ = 0;
+  std::vector<double> phase_; // residual norms since the history was last cleared
+  double iterationMs_ = 0.0;  // wall time of the iterations so far (their count below)
+  int iterationsTimed_ = 0;
+  bool adaptiveFailed_ = false;
   bool forcesFailed_ = false;
   double lastResidual_ = 0.0;
   Evaluation cached_; // the predictor's accepted state

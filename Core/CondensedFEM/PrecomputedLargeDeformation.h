@@ -19,9 +19,10 @@
 // equal changes at the parabola through the last three states, 3 (u - u_before) + u_2before. A
 // solve whose targets are nearer the factor's state than its start starts there, so its predictor
 // is Newton's own step at the state the factor was made at and the drag's next step converges in a
-// couple of iterations. Within a solve, a sub-step that has not converged after `refactorAfter`
-// iterations factors the current tangent (modified Newton with a refresh) and restarts the L-BFGS
-// history. The substitutions use a single-precision copy of the factor (SinglePrecisionFactor):
+// couple of iterations. Within a solve, the current tangent is factored (modified Newton with a
+// refresh, and the L-BFGS history restarted) when the last iterations' rate predicts that the
+// present factor needs longer than a factorization takes on this machine
+// (`adaptiveRefactorization`), and in any case after `refactorAfter` iterations of a sub-step. The substitutions use a single-precision copy of the factor (SinglePrecisionFactor):
 // they read half the bytes, and the initial Hessian need not be exact, as the residual that decides
 // convergence is evaluated in double precision.
 //
@@ -32,8 +33,8 @@
 // pinned now but free in the factor is projected out (the initial inverse Hessian is P F^-1 P, P
 // zeroing the pinned DOFs), which stays symmetric positive definite on the free DOFs, so L-BFGS
 // minimises the energy over exactly the free DOFs. The active set is updated with Newton's rule
-// (UpdateContact) on states converged to 1e-6 and the final state is converged to the tolerance
-// with no change left: the constrained equilibrium Newton finds (the tests compare them).
+// (UpdateContact) on states converged to `settleTolerance` and the final state is converged to the
+// tolerance with no change left: the constrained equilibrium Newton finds (the tests compare them).
 //
 // Warm start: a solve may start from the last converged state (only the prescribed values or
 // loads changed); the prescribed values and loads then go from that state's to the new ones. A
@@ -64,12 +65,21 @@ namespace faceplan {
 struct PrecomputedLargeDeformationOptions {
   double tolerance = 1e-9; // as LargeDeformationOptions::tolerance
   bool slidingLiftOff = false;
+  // With lift-off: the relative residual at which the contact is updated before the final solve
+  // to `tolerance`. Loose, because each update restarts the L-BFGS history and a contact found at
+  // a loose residual is corrected by the final check (Newton, which pays a factorization per
+  // iteration, settles at kSettleTolerance).
+  double settleTolerance = 1e-3;
   int historySize = 8; // L-BFGS pairs kept
   // Quasi-Newton iterations over the whole solve; past it the solve falls back to Newton.
   int maxIterations = 400;
   // A sub-step that has run this many iterations without converging factors the tangent at its
   // current state (0: never).
   int refactorAfter = 40;
+  // Also factor the tangent at the current state when the rate of the last iterations predicts
+  // that finishing with the present factor takes longer than a factorization (timed on this
+  // machine: the precompute's, then each one made during a solve).
+  bool adaptiveRefactorization = true;
   int maxRefactorizations = 4; // per solve
   int maxSubstepHalvings = 8;
   int maxContactUpdates = 100;

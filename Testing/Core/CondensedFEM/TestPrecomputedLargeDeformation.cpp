@@ -398,6 +398,35 @@ TEST(PrecomputedLargeDeformation, ItFallsBackToNewtonAndSaysSo) {
   EXPECT_NE(s.message.find("did not converge"), std::string::npos) << s.message;
 }
 
+TEST(PrecomputedLargeDeformation, ASlowConvergenceRefactorsWhereItIs) {
+  // A 55 % press from rest converges slowly with the rest tangent's factor: with adaptive
+  // refactorization the solve factors the tangent at its iterate once the last iterations' rate
+  // predicts more work than a factorization, and then needs fewer iterations; both are Newton's
+  // equilibrium.
+  const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+  const SolveInput input = PlateMove(request, 0.55 * kLz);
+  const SolveResult newton = Newton(request, input, false);
+  PrecomputedLargeDeformationReport reports[2];
+  for (int adaptive = 0; adaptive < 2; ++adaptive) {
+    PrecomputedLargeDeformationOptions options;
+    options.refactorAfter = 0; // only the adaptive rule refactors
+    options.adaptiveRefactorization = adaptive == 1;
+    auto system = Precomputed(request, options);
+    ASSERT_TRUE(system);
+    SolveResult result;
+    const Status s =
+        SolvePrecomputedLargeDeformation(*system, input, nullptr, result, reports[adaptive]);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_FALSE(reports[adaptive].fellBack) << reports[adaptive].fallbackReason;
+    EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement),
+              kAgreement)
+        << "adaptive " << adaptive;
+  }
+  EXPECT_EQ(reports[0].refactorizations, 0);
+  EXPECT_GE(reports[1].refactorizations, 1);
+  EXPECT_LT(reports[1].iterations, reports[0].iterations);
+}
+
 TEST(PrecomputedLargeDeformation, AMoveBackTowardsRestStartsFromRest) {
   // After the 35 % press, a 5 % press is nearer the rest state than the pressed one: it starts
   // from rest with the rest factor, and equals the cold solve.
@@ -521,6 +550,11 @@ TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   options = {};
   options.maxIterations = 0;
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options = {};
+  options.settleTolerance = 0.0;
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options.settleTolerance = std::nan("");
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   PrecomputeRequest broken = request;
   broken.mesh.tets(0, 0) = -1;
