@@ -681,10 +681,12 @@ private:
 
   // Whether factoring the tangent here now costs less than the iterations that the last few
   // iterations' rate of convergence predicts with the present factor (it converges slowly where
-  // the present factor's state is far from u): a factor at u makes the rest of the way one or two
-  // iterations.
+  // the present factor's state is far from u). After a factor at u the rest of the way still takes
+  // a few iterations (kAfterFactor), and a rate that only just pays is left alone: L-BFGS often
+  // speeds up as its history fills.
   bool refactorPays(double residual, double goal) {
     constexpr int kRateSpan = 4;
+    constexpr double kAfterFactor = 3.0;
     phase_.push_back(residual);
     if (!sys_.options.adaptiveRefactorization || adaptiveFailed_ || iterationsTimed_ == 0 ||
         static_cast<int>(phase_.size()) <= kRateSpan ||
@@ -694,7 +696,7 @@ private:
     const double rate = std::pow(residual / before, 1.0 / kRateSpan);
     const double left = rate < 1.0 ? std::log(goal / residual) / std::log(rate)
                                    : std::numeric_limits<double>::infinity();
-    return left * (iterationMs_ / iterationsTimed_) > sys_.factorMs;
+    return (left - kAfterFactor) * (iterationMs_ / iterationsTimed_) > sys_.factorMs;
   }
 
   // L-BFGS on the free DOFs with the current contact, to `tolerance`.
