@@ -1150,7 +1150,7 @@ def iteration_section(w, main_rows):
           "accuracy_convergence.csv",
           " On the osteotomy plans, whose lips may lift off the teeth, the first iterations converge towards the "
           "equilibrium with the contact of the rest state: the skin error stalls there, the residual jumps where "
-          "the contact changes (Newton's rule on iterates converged to 1e-6), and the error falls again after it."
+          "the contact changes (Newton's rule, on iterates converged to a relative residual of 1e-3), and the error falls again after it."
           if any(r["scene"] in ("lefort1", "bsso", "genioplasty") for r in limited) else ""))
     w("")
     w("| scene | k | iterations run | relative residual | converged | per update ms | largest mm | 95th pct mm | "
