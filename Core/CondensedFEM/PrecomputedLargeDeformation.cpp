@@ -144,9 +144,6 @@ public:
   // nearer the rest state than the last converged one).
   std::shared_ptr<const TangentFactor> restFactor;
   StageTimings timings;
-  // Wall time of the last numeric factorization made on the solve's thread (the precompute's
-  // first): what adaptive refactorization weighs iterations against.
-  double factorMs = 0.0;
 
   std::shared_ptr<const TangentFactor> factor() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -250,7 +247,8 @@ namespace {
 constexpr double kSteadyDrag = 0.1;
 
 Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
-  if (!(o.tolerance > 0.0) || !(o.settleTolerance > 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
+  if (!(o.tolerance > 0.0) || !(o.settleTolerance > 0.0) || !(o.refactorCostIterations >= 0.0) ||
+      !(o.refactorCostIterationsOnDevice >= 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
       o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
       o.maxCoupledReleases < 0 || o.factorAheadOrder < 1 || o.factorAheadOrder > 2)
     return Status::Error("invalid large-deformation options");
@@ -351,8 +349,6 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
   sys->restTangent = factor->tangent;
-  sys->factorMs = sys->timings[Stage::ElementStiffness].ms + sys->timings[Stage::Assembly].ms +
-                  sys->timings[Stage::Factorization].ms;
   for (int node : request.sets.movable)
     for (int j = 0; j < 3; ++j)
       sys->movableDofs.push_back(3 * node + j);
@@ -668,27 +664,25 @@ private:
   bool refactor(const Eigen::VectorXd& u) {
     if (report_.refactorizations >= sys_.options.maxRefactorizations)
       return false;
-    StageClock clock;
     std::shared_ptr<TangentFactor> made;
     if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed,
                        sys_.options.singlePrecisionFactor, sys_.backend.get(), made, &timings_))
       return false;
     factor_ = std::move(made);
     ++report_.refactorizations;
-    sys_.factorMs = clock.elapsedMs();
     return true;
   }
 
   // Whether factoring the tangent here now costs less than the iterations that the last few
   // iterations' rate of convergence predicts with the present factor (it converges slowly where
   // the present factor's state is far from u). After a factor at u the rest of the way still takes
-  // a few iterations (kAfterFactor), and a rate that only just pays is left alone: L-BFGS often
-  // speeds up as its history fills.
+  // a few iterations (kAfterFactor). The factorization's cost is a fixed number of iterations, not
+  // a timing, so that the same input gives the same result on every run.
   bool refactorPays(double residual, double goal) {
     constexpr int kRateSpan = 4;
     constexpr double kAfterFactor = 3.0;
     phase_.push_back(residual);
-    if (!sys_.options.adaptiveRefactorization || adaptiveFailed_ || iterationsTimed_ == 0 ||
+    if (!sys_.options.adaptiveRefactorization || adaptiveFailed_ ||
         static_cast<int>(phase_.size()) <= kRateSpan ||
         report_.refactorizations >= sys_.options.maxRefactorizations)
       return false;
@@ -696,7 +690,9 @@ private:
     const double rate = std::pow(residual / before, 1.0 / kRateSpan);
     const double left = rate < 1.0 ? std::log(goal / residual) / std::log(rate)
                                    : std::numeric_limits<double>::infinity();
-    return (left - kAfterFactor) * (iterationMs_ / iterationsTimed_) > sys_.factorMs;
+    const double cost = factor_->device ? sys_.options.refactorCostIterationsOnDevice
+                                        : sys_.options.refactorCostIterations;
+    return left - kAfterFactor > cost;
   }
 
   // L-BFGS on the free DOFs with the current contact, to `tolerance`.
@@ -741,7 +737,6 @@ private:
         else
           adaptiveFailed_ = true; // not positive definite here: the present factor goes on
       }
-      StageClock iterationClock;
       bool accepted = false;
       for (int attempt = 0; attempt < 2 && !accepted; ++attempt) {
         const Eigen::VectorXd d = direction(b.residual);
@@ -792,8 +787,6 @@ private:
         why = "its line search found no step that lowers the energy or the residual";
         return Failure::Smaller;
       }
-      iterationMs_ += iterationClock.elapsedMs();
-      ++iterationsTimed_;
     }
   }
 
@@ -822,8 +815,6 @@ private:
   } released_;
   int sinceFactor_ = 0;
   std::vector<double> phase_; // residual norms since the history was last cleared
-  double iterationMs_ = 0.0;  // wall time of the iterations so far (their count below)
-  int iterationsTimed_ = 0;
   bool adaptiveFailed_ = false;
   bool forcesFailed_ = false;
   double lastResidual_ = 0.0;
@@ -867,24 +858,34 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     pb.linearForce = (sys.restMovableColumns * moved).norm();
   }
 
-  Eigen::VectorXd u, fromTarget, fromLoad;
-  report.warmStarted = warm && warm->system == &sys && warm->u.size() == 3 * st.n;
+  Eigen::VectorXd u, rest;
+  report.warmStarted = warm && warm->system == &sys && warm->u.size() == 3 * st.n &&
+                       warm->target.size() == 3 * st.n && warm->load.size() == 3 * st.n;
   // From rest instead when the new targets and loads are nearer the rest state (zero) than the
   // warm state's: a move back towards the start is then a short solve with the rest factor.
-  if (report.warmStarted && fullTarget.norm() <= (fullTarget - warm->target).norm() &&
-      fullLoad.norm() <= (fullLoad - warm->load).norm())
-    report.warmStarted = false;
+  if (report.warmStarted) {
+    double target = 0.0, targetChange = 0.0, load = 0.0, loadChange = 0.0; // squared norms
+    for (Eigen::Index i = 0; i < 3 * st.n; ++i) {
+      const double t = fullTarget[i], dt = t - warm->target[i];
+      const double l = fullLoad[i], dl = l - warm->load[i];
+      target += t * t;
+      targetChange += dt * dt;
+      load += l * l;
+      loadChange += dl * dl;
+    }
+    if (target <= targetChange && load <= loadChange)
+      report.warmStarted = false;
+  }
   if (report.warmStarted) {
     u = warm->u;
     pb.prescribed = warm->prescribed;
-    fromTarget = warm->target;
-    fromLoad = warm->load;
   } else {
-    u = Eigen::VectorXd::Zero(3 * st.n);
+    u = rest = Eigen::VectorXd::Zero(3 * st.n);
     pb.prescribed = st.prescribed;
-    fromTarget = Eigen::VectorXd::Zero(3 * st.n);
-    fromLoad = Eigen::VectorXd::Zero(3 * st.n);
   }
+  // Where the targets and loads go from (read only for a sub-step short of the whole move).
+  const Eigen::VectorXd& fromTarget = report.warmStarted ? warm->target : rest;
+  const Eigen::VectorXd& fromLoad = report.warmStarted ? warm->load : rest;
 
   if (iterationLimit < 0)
     return Status::Error("the quasi-Newton iteration limit must be 0 (none) or positive");

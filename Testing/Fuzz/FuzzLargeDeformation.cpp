@@ -161,6 +161,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (auto& flag : request.materials.smallStrain)
       flag = in.flag() ? 1 : 0;
   }
+  // Read last, so that the corpus's earlier bytes keep their meaning.
+  quasiNewton.adaptiveRefactorization = in.flag();
+  quasiNewton.settleTolerance = std::pow(10.0, -in.range(1, 9));
   if (precomputed)
     PrecomputedSolve(request, input, quasiNewton, limit, drag);
 

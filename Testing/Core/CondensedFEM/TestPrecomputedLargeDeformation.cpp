@@ -402,7 +402,7 @@ TEST(PrecomputedLargeDeformation, ASlowConvergenceRefactorsWhereItIs) {
   // A 55 % press from rest converges slowly with the rest tangent's factor: with adaptive
   // refactorization the solve factors the tangent at its iterate once the last iterations' rate
   // predicts more work than a factorization, and then needs fewer iterations; both are Newton's
-  // equilibrium.
+  // equilibrium, and a second solve repeats the first bit for bit.
   const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
   const SolveInput input = PlateMove(request, 0.55 * kLz);
   const SolveResult newton = Newton(request, input, false);
@@ -425,6 +425,13 @@ TEST(PrecomputedLargeDeformation, ASlowConvergenceRefactorsWhereItIs) {
   EXPECT_EQ(reports[0].refactorizations, 0);
   EXPECT_GE(reports[1].refactorizations, 1);
   EXPECT_LT(reports[1].iterations, reports[0].iterations);
+  auto system = Precomputed(request);
+  ASSERT_TRUE(system);
+  SolveResult first, second;
+  PrecomputedLargeDeformationReport report;
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, nullptr, first, report).ok);
+  ASSERT_TRUE(SolvePrecomputedLargeDeformation(*system, input, nullptr, second, report).ok);
+  EXPECT_EQ(RelativeMaxNodeDifference(first.allDisplacement, second.allDisplacement), 0.0);
 }
 
 TEST(PrecomputedLargeDeformation, AMoveBackTowardsRestStartsFromRest) {
@@ -555,6 +562,12 @@ TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
   options.settleTolerance = 0.0;
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   options.settleTolerance = std::nan("");
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options = {};
+  options.refactorCostIterations = -1.0;
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options = {};
+  options.refactorCostIterationsOnDevice = std::nan("");
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   PrecomputeRequest broken = request;
   broken.mesh.tets(0, 0) = -1;
