@@ -248,9 +248,10 @@ constexpr double kSteadyDrag = 0.1;
 
 Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
   if (!(o.tolerance > 0.0) || !(o.settleTolerance > 0.0) || !(o.refactorCostIterations >= 0.0) ||
-      !(o.refactorCostIterationsOnDevice >= 0.0) || o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
-      o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
-      o.maxCoupledReleases < 0 || o.factorAheadOrder < 1 || o.factorAheadOrder > 2)
+      !(o.refactorCostIterationsOnDevice >= 0.0) || o.historySize < 0 || o.maxIterations < 1 ||
+      o.refactorAfter < 0 || o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 ||
+      o.maxContactUpdates < 0 || o.maxCoupledReleases < 0 || o.factorAheadOrder < 1 ||
+      o.factorAheadOrder > 2)
     return Status::Error("invalid large-deformation options");
   return Status::Ok();
 }

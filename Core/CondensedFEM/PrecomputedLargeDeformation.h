@@ -20,10 +20,11 @@
 // solve whose targets are nearer the factor's state than its start starts there, so its predictor
 // is Newton's own step at the state the factor was made at and the drag's next step converges in a
 // couple of iterations. Within a solve, the current tangent is factored (modified Newton with a
-// refresh, and the L-BFGS history restarted) when the last iterations' rate predicts that the
-// present factor needs longer than a factorization takes on this machine
-// (`adaptiveRefactorization`), and in any case after `refactorAfter` iterations of a sub-step. The substitutions use a single-precision copy of the factor (SinglePrecisionFactor):
-// they read half the bytes, and the initial Hessian need not be exact, as the residual that decides
+// refresh, and the L-BFGS history restarted) when the last iterations' rate predicts more
+// iterations with the present factor than a factorization costs, counted in iterations
+// (`adaptiveRefactorization`), and in any case after `refactorAfter` iterations of a sub-step.
+// The substitutions use a single-precision copy of the factor (SinglePrecisionFactor): they read
+// half the bytes, and the initial Hessian need not be exact, as the residual that decides
 // convergence is evaluated in double precision.
 //
 // Lift-off (unilateral contact): the factor is made with the contact of its state pinned. A DOF
