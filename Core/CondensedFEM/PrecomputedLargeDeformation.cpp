@@ -679,10 +679,10 @@ private:
   // the present factor's state is far from u). After a factor at u the rest of the way still takes
   // a few iterations (kAfterFactor). The factorization's cost is a fixed number of iterations, not
   // a timing, so that the same input gives the same result on every run.
-  bool refactorPays(double residual, double goal) {
+  // `residual` is the last of phase_.
+  bool refactorPays(double residual, double goal) const {
     constexpr int kRateSpan = 4;
     constexpr double kAfterFactor = 3.0;
-    phase_.push_back(residual);
     if (!sys_.options.adaptiveRefactorization || adaptiveFailed_ ||
         static_cast<int>(phase_.size()) <= kRateSpan ||
         report_.refactorizations >= sys_.options.maxRefactorizations)
@@ -727,15 +727,15 @@ private:
         return Failure::Fallback;
       }
       ++report_.iterations;
-      if (sys_.options.refactorAfter > 0 && ++sinceFactor_ >= sys_.options.refactorAfter) {
+      phase_.push_back(b.residualNorm);
+      const bool due =
+          sys_.options.refactorAfter > 0 && ++sinceFactor_ >= sys_.options.refactorAfter;
+      const bool pays = !due && refactorPays(b.residualNorm, tolerance * b.scale);
+      if (due || pays) {
         sinceFactor_ = 0;
         if (refactor(u))
           clearHistory();
-      } else if (refactorPays(b.residualNorm, tolerance * b.scale)) {
-        sinceFactor_ = 0;
-        if (refactor(u))
-          clearHistory();
-        else
+        else if (pays)
           adaptiveFailed_ = true; // not positive definite here: the present factor goes on
       }
       bool accepted = false;
