@@ -135,7 +135,6 @@ public:
   std::unique_ptr<HyperelasticForces> forces;
   std::string forcesError;
   FillReducingOrdering ordering;
-  SparseMatrix restTangent; // upper, unpinned
   // The rest tangent's columns of the movable nodes' DOFs, the only ones a target moves: the
   // yardstick |K_0 u_prescribed| of each solve reads these instead of the whole tangent.
   std::vector<int> movableDofs;
@@ -349,12 +348,12 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   if (!status)
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
-  sys->restTangent = factor->tangent;
+  // The rest tangent (upper, unpinned) stays in restFactor.
   for (int node : request.sets.movable)
     for (int j = 0; j < 3; ++j)
       sys->movableDofs.push_back(3 * node + j);
-  sys->restMovableColumns = SymmetricColumns(sys->restTangent, sys->movableDofs);
-  st.unitStrainForce = RestForceNorm(sys->restTangent, LocalPositions(st));
+  sys->restMovableColumns = SymmetricColumns(factor->tangent, sys->movableDofs);
+  st.unitStrainForce = RestForceNorm(factor->tangent, LocalPositions(st));
   sys->restFactor = factor;
   sys->setFactor(std::move(factor));
   sys->timings[Stage::Total].ms = total.elapsedMs();
