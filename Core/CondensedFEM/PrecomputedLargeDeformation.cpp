@@ -155,14 +155,19 @@ public:
 
   // Queues a refactorization at (u, prescribed); a newer request replaces a queued one.
   // ahead: a state to factor at instead, if no cell is inverted there (empty: none).
+  // aheadValues: with lift-off, the targets and loads extrapolated to `ahead` (st null: none), for
+  // the contact there: Newton's rule applied once at `ahead` gives the factor's contact, so that a
+  // drag whose next step lifts a node off (or puts one back) finds it already in the factor.
   void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed,
-                              Eigen::VectorXd ahead = Eigen::VectorXd()) {
+                              Eigen::VectorXd ahead = Eigen::VectorXd(),
+                              Problem aheadValues = Problem()) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (stop_)
         return;
       pendingU_ = u;
       pendingAhead_ = std::move(ahead);
+      pendingAheadValues_ = std::move(aheadValues);
       pendingPrescribed_ = prescribed;
       pending_ = true;
       if (!worker_.joinable()) {
@@ -200,6 +205,7 @@ private:
         return;
       const Eigen::VectorXd u = std::move(pendingU_);
       const Eigen::VectorXd ahead = std::move(pendingAhead_);
+      Problem aheadValues = std::move(pendingAheadValues_);
       const std::vector<char> prescribed = std::move(pendingPrescribed_);
       pending_ = false;
       busy_ = true;
@@ -207,9 +213,13 @@ private:
       std::shared_ptr<TangentFactor> made;
       // A tangent that is not positive definite keeps the previous factor.
       Status status = Status::Error("no state ahead");
-      if (ahead.size() == u.size())
-        status = FactorTangent(*structure, ordering, pattern, ahead, prescribed,
+      if (ahead.size() == u.size()) {
+        aheadValues.prescribed = prescribed;
+        if (aheadValues.st)
+          UpdateContact(aheadValues, ahead, 1.0);
+        status = FactorTangent(*structure, ordering, pattern, ahead, aheadValues.prescribed,
                                options.singlePrecisionFactor, backend.get(), made, nullptr);
+      }
       const bool refusedAhead = ahead.size() == u.size() && !status.ok;
       if (!status)
         status = FactorTangent(*structure, ordering, pattern, u, prescribed,
@@ -233,6 +243,7 @@ private:
   std::shared_ptr<const TangentFactor> factor_;
   AssemblyPattern workerPattern_; // the worker's only
   Eigen::VectorXd pendingU_, pendingAhead_;
+  Problem pendingAheadValues_;
   std::vector<char> pendingPrescribed_;
   bool pending_ = false, busy_ = false, stop_ = false;
   int backgroundCount_ = 0;
@@ -574,16 +585,19 @@ private:
   // factor's own state when its prescribed values are nearer the targets than u's (a drag's
   // factor, made one step ahead): the predictor is then Newton's step there.
   bool predict(Eigen::VectorXd& u) {
-    if (factor_->state.size() == u.size() && factor_->prescribed == pb_.prescribed) {
+    if (factor_->state.size() == u.size() && sameExceptLiftOff(factor_->prescribed)) {
       double fromU = 0.0, fromFactor = 0.0;
       for (Eigen::Index i = 0; i < u.size(); ++i)
-        if (pb_.prescribed[i]) {
+        if (pb_.prescribed[i] || factor_->prescribed[i]) {
           fromU += (pb_.target[i] - u[i]) * (pb_.target[i] - u[i]);
           fromFactor += (pb_.target[i] - factor_->state[i]) * (pb_.target[i] - factor_->state[i]);
         }
+      // From the factor's state with the factor's contact (the contact predicted there, for a
+      // factor made ahead): the contact updates that follow settle whatever it got wrong.
       if (fromFactor < fromU) {
         u = factor_->state;
         startForce_ = &factor_->force;
+        pb_.prescribed = factor_->prescribed;
       }
     }
     const Eigen::Index n = u.size();
@@ -632,6 +646,16 @@ private:
       }
     }
     return false;
+  }
+
+  // Whether `prescribed` pins what pb_ pins, lift-off's DOFs aside.
+  bool sameExceptLiftOff(const std::vector<char>& prescribed) const {
+    if (prescribed.size() != pb_.prescribed.size())
+      return false;
+    std::vector<char> mine = pb_.prescribed;
+    for (int d : st_.liftOffDofs)
+      mine[d] = prescribed[d];
+    return mine == prescribed;
   }
 
   void clearHistory() {
@@ -1006,7 +1030,15 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
           (warm->target - warm->targetBefore - change).norm() <= kSteadyDrag * change.norm();
       Eigen::VectorXd ahead = steady ? Eigen::VectorXd(3.0 * (u - warm->u) + warm->before)
                                      : Eigen::VectorXd(2.0 * u - warm->u);
-      sys.requestRefactorization(u, pb.prescribed, std::move(ahead));
+      Problem aheadValues;
+      if (!st.liftOffDofs.empty() && sys.options.predictContactAhead) {
+        aheadValues.st = pb.st;
+        aheadValues.target = steady ? Eigen::VectorXd(3.0 * change + warm->targetBefore)
+                                    : Eigen::VectorXd(fullTarget + change);
+        aheadValues.externalLoad = fullLoad;
+        aheadValues.linearForce = pb.linearForce;
+      }
+      sys.requestRefactorization(u, pb.prescribed, std::move(ahead), std::move(aheadValues));
     } else {
       sys.requestRefactorization(u, pb.prescribed);
     }

@@ -16,9 +16,10 @@
 // > 0. After a converged solve the tangent is factored again on a background thread (with that
 // state's contact): at the converged state, or, after a drag step (a warm solve whose move changed
 // little), one step ahead, where the same change again would lead: at 2 u - u_before, or after two
-// equal changes at the parabola through the last three states, 3 (u - u_before) + u_2before. A
-// solve whose targets are nearer the factor's state than its start starts there, so its predictor
-// is Newton's own step at the state the factor was made at and the drag's next step converges in a
+// equal changes at the parabola through the last three states, 3 (u - u_before) + u_2before, with
+// the contact that Newton's rule gives there (predictContactAhead). A solve whose targets are
+// nearer the factor's state than its start starts there, with that contact, so its predictor is
+// Newton's own step at the state the factor was made at and the drag's next step converges in a
 // couple of iterations. Within a solve, the current tangent is factored (modified Newton with a
 // refresh, and the L-BFGS history restarted) when the last iterations' rate predicts more
 // iterations with the present factor than a factorization costs, counted in iterations
@@ -98,6 +99,12 @@ struct PrecomputedLargeDeformationOptions {
   // How far ahead is extrapolated: 1, the line through the last two states; 2, after two equal
   // changes (a steady drag), the parabola through the last three.
   int factorAheadOrder = 2;
+  // With lift-off, the factor made ahead takes the contact that Newton's rule gives at the state
+  // ahead (with the targets and loads extrapolated there), and a solve that starts from that
+  // factor's state starts with its contact: a drag that lifts the tissue off node after node then
+  // finds each node already free in its factor, where it would otherwise change the contact, couple
+  // the node back in and iterate again. The contact updates still decide the final contact.
+  bool predictContactAhead = true;
   // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
   // through their Schur complement, one substitution each, when there are at most this many.
   int maxCoupledReleases = 8;

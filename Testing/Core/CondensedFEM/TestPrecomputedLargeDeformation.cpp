@@ -243,49 +243,80 @@ TEST(PrecomputedLargeDeformation, WarmStartsEqualColdSolvesAndTheActiveSetChange
   EXPECT_GT(BackgroundRefactorizations(*system), 0);
 }
 
-TEST(PrecomputedLargeDeformation, NodesReleasedInADragAreCoupledBackIntoTheInitialHessian) {
-  // The tilt dragged step after step, each refactorization awaited: floor nodes lift off on the
-  // way, freeing DOFs that the factor has pinned. Coupled back in through their Schur complement
-  // the steps take fewer iterations than with their diagonal alone, and equal the cold solve.
+// The block pressed onto the floor, then tilted more and more, step after step with each
+// refactorization awaited: the floor unloads row by row from one side, so nodes lift off on the
+// way. Every step equals the cold solve. Sums the iterations and contact updates of the steps
+// after the first (the drag's, from a factor made for it) and counts the steps that lifted nodes.
+struct TiltDrag {
+  int iterations = 0, contactUpdates = 0, releasingSteps = 0;
+};
+void DragTheTilt(const PrecomputedLargeDeformationOptions& options, TiltDrag& out) {
   const FloorBlock b = BlockOnFloor();
   PrecomputedLargeDeformationOptions coldOptions;
   coldOptions.slidingLiftOff = true;
   coldOptions.backgroundRefactorization = false;
   auto coldSystem = Precomputed(b.request, coldOptions);
   ASSERT_TRUE(coldSystem);
-  int iterations[2] = {0, 0}, releasingSteps = 0;
+  auto system = Precomputed(b.request, options);
+  ASSERT_TRUE(system);
+  LargeDeformationState state;
+  int lastLifted = 0;
+  for (int step = 1; step <= 10; ++step) {
+    const double angle = 0.03 * step;
+    const SolveInput input = b.input([angle](const Eigen::RowVector3d& p) {
+      const double x = p.x() - 0.5 * kLx;
+      return Eigen::RowVector3d(x * (std::cos(angle) - 1.0), 0.0, x * std::sin(angle) - 0.1 * kLz);
+    });
+    SCOPED_TRACE("step " + std::to_string(step));
+    PrecomputedLargeDeformationReport report, coldReport;
+    ASSERT_NO_FATAL_FAILURE(
+        AwaitedDragStep(*system, *coldSystem, input, state, report, coldReport));
+    EXPECT_EQ(report.liftedNodes, coldReport.liftedNodes);
+    if (step > 1) {
+      out.iterations += report.iterations;
+      out.contactUpdates += report.contactUpdates;
+      if (report.liftedNodes > lastLifted)
+        ++out.releasingSteps;
+    }
+    lastLifted = report.liftedNodes;
+  }
+}
+
+TEST(PrecomputedLargeDeformation, NodesReleasedInADragAreCoupledBackIntoTheInitialHessian) {
+  // Without the contact predicted ahead, each release happens inside a step, freeing DOFs that the
+  // factor has pinned. Coupled back in through their Schur complement the steps take fewer
+  // iterations than with their diagonal alone.
+  TiltDrag drag[2];
   for (int coupled = 0; coupled < 2; ++coupled) {
     PrecomputedLargeDeformationOptions options;
     options.slidingLiftOff = true;
+    options.predictContactAhead = false;
     options.maxCoupledReleases = coupled ? 8 : 0;
-    auto system = Precomputed(b.request, options);
-    ASSERT_TRUE(system);
-    LargeDeformationState state;
-    int lastLifted = 0;
-    for (int step = 1; step <= 10; ++step) {
-      // Pressed down, then tilted more and more: the floor unloads row by row from one side.
-      const double angle = 0.03 * step;
-      const SolveInput input = b.input([angle](const Eigen::RowVector3d& p) {
-        const double x = p.x() - 0.5 * kLx;
-        return Eigen::RowVector3d(x * (std::cos(angle) - 1.0), 0.0,
-                                  x * std::sin(angle) - 0.1 * kLz);
-      });
-      SCOPED_TRACE("step " + std::to_string(step));
-      PrecomputedLargeDeformationReport report, coldReport;
-      ASSERT_NO_FATAL_FAILURE(
-          AwaitedDragStep(*system, *coldSystem, input, state, report, coldReport));
-      EXPECT_EQ(report.liftedNodes, coldReport.liftedNodes);
-      if (step > 1) {
-        iterations[coupled] += report.iterations;
-        if (coupled && report.liftedNodes > lastLifted)
-          ++releasingSteps;
-      }
-      lastLifted = report.liftedNodes;
-    }
+    ASSERT_NO_FATAL_FAILURE(DragTheTilt(options, drag[coupled]));
   }
-  EXPECT_GT(releasingSteps, 1) << "the drag released nodes on several steps";
-  EXPECT_LT(iterations[1], iterations[0])
-      << "coupled: " << iterations[1] << " iterations, diagonal only: " << iterations[0];
+  EXPECT_GT(drag[1].releasingSteps, 1) << "the drag released nodes on several steps";
+  EXPECT_LT(drag[1].iterations, drag[0].iterations)
+      << "coupled: " << drag[1].iterations << " iterations, diagonal only: " << drag[0].iterations;
+}
+
+TEST(PrecomputedLargeDeformation, TheContactPredictedAheadSparesTheDragsContactChanges) {
+  // The same drag with the factor made ahead taking the contact predicted there: the nodes that a
+  // step lifts off are free in its factor already, so the steps change the contact less often and
+  // iterate less, and still equal the cold solve (DragTheTilt).
+  TiltDrag drag[2];
+  for (int predicted = 0; predicted < 2; ++predicted) {
+    PrecomputedLargeDeformationOptions options;
+    options.slidingLiftOff = true;
+    options.predictContactAhead = predicted == 1;
+    ASSERT_NO_FATAL_FAILURE(DragTheTilt(options, drag[predicted]));
+  }
+  EXPECT_GT(drag[1].releasingSteps, 1) << "the drag released nodes on several steps";
+  EXPECT_LT(drag[1].contactUpdates, drag[0].contactUpdates)
+      << "predicted: " << drag[1].contactUpdates
+      << " contact updates, not predicted: " << drag[0].contactUpdates;
+  EXPECT_LT(drag[1].iterations, drag[0].iterations)
+      << "predicted: " << drag[1].iterations
+      << " iterations, not predicted: " << drag[0].iterations;
 }
 
 TEST(PrecomputedLargeDeformation, ADragOnTheShellEqualsTheColdSolve) {
@@ -418,8 +449,7 @@ TEST(PrecomputedLargeDeformation, ASlowConvergenceRefactorsWhereItIs) {
         SolvePrecomputedLargeDeformation(*system, input, nullptr, result, reports[adaptive]);
     ASSERT_TRUE(s.ok) << s.message;
     EXPECT_FALSE(reports[adaptive].fellBack) << reports[adaptive].fallbackReason;
-    EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement),
-              kAgreement)
+    EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement), kAgreement)
         << "adaptive " << adaptive;
   }
   EXPECT_EQ(reports[0].refactorizations, 0);
