@@ -55,16 +55,24 @@ struct TangentFactor {
   std::vector<char> prescribed;
 };
 
-// Assembles the tangent at u into `pattern` and factors it. False (with a message) when a cell is
+// What a factorization assembles into, kept from one to the next by each thread that factors: the
+// cells' packed tangents are tens of megabytes, which fresh each time cost their zero-fill and page
+// faults.
+struct TangentBuffers {
+  AssemblyPattern pattern;
+  std::vector<double> packed;
+};
+
+// Assembles the tangent at u into `buffers` and factors it. False (with a message) when a cell is
 // inverted or the pinned tangent is not positive definite.
-Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
-                     AssemblyPattern& pattern, const Eigen::VectorXd& u,
-                     const std::vector<char>& prescribed, bool singlePrecision,
-                     ComputeBackend* backend, std::shared_ptr<TangentFactor>& out,
-                     StageTimings* timings) {
+Status FactorTangent(const Structure& st, const CholmodFactor& analysis, TangentBuffers& buffers,
+                     const Eigen::VectorXd& u, const std::vector<char>& prescribed,
+                     bool singlePrecision, ComputeBackend* backend,
+                     std::shared_ptr<TangentFactor>& out, StageTimings* timings) {
   StageClock clock;
   Evaluation ev;
-  std::vector<double> packed;
+  std::vector<double>& packed = buffers.packed;
+  AssemblyPattern& pattern = buffers.pattern;
   if (!Evaluate(st, u, ev, &packed))
     return Status::Error("a cell is inverted at the state to factor");
   if (timings)
@@ -85,7 +93,7 @@ Status FactorTangent(const Structure& st, const FillReducingOrdering& ordering,
       values[k] = 1.0;
   if (timings)
     (*timings)[Stage::Assembly].ms += clock.lapMs();
-  Status status = made->factor.analyze(pattern.upper, &ordering);
+  Status status = made->factor.analyzeLike(analysis);
   if (status)
     status = made->factor.factorize(pattern.upper);
   if (status && singlePrecision)
@@ -134,7 +142,9 @@ public:
   std::shared_ptr<ComputeBackend> backend;
   std::unique_ptr<HyperelasticForces> forces;
   std::string forcesError;
-  FillReducingOrdering ordering;
+  // The tangent's ordering and symbolic analysis, made once: every factorization copies it (the
+  // pattern never changes; the contact only zeroes rows and columns).
+  CholmodFactor analysis;
   // The rest tangent's columns of the movable nodes' DOFs, the only ones a target moves: the
   // yardstick |K_0 u_prescribed| of each solve reads these instead of the whole tangent.
   std::vector<int> movableDofs;
@@ -171,7 +181,7 @@ public:
       pendingPrescribed_ = prescribed;
       pending_ = true;
       if (!worker_.joinable()) {
-        workerPattern_ = solvePattern; // copied here: the solve's thread writes solvePattern
+        workerBuffers_.pattern = solveBuffers.pattern; // copied here: the solve's thread writes it
         worker_ = std::thread([this] { work(); });
       }
     }
@@ -191,13 +201,12 @@ public:
     return aheadFailures_;
   }
 
-  // The pattern a synchronous refactorization assembles into (the solve's thread only).
-  AssemblyPattern solvePattern;
+  // What a synchronous refactorization assembles into (the solve's thread only).
+  TangentBuffers solveBuffers;
 
 private:
   void work() {
     YieldToInteractiveWork();
-    AssemblyPattern& pattern = workerPattern_;
     std::unique_lock<std::mutex> lock(mutex_);
     while (true) {
       wake_.wait(lock, [this] { return stop_ || pending_; });
@@ -217,12 +226,12 @@ private:
         aheadValues.prescribed = prescribed;
         if (aheadValues.st)
           UpdateContact(aheadValues, ahead, 1.0);
-        status = FactorTangent(*structure, ordering, pattern, ahead, aheadValues.prescribed,
+        status = FactorTangent(*structure, analysis, workerBuffers_, ahead, aheadValues.prescribed,
                                options.singlePrecisionFactor, backend.get(), made, nullptr);
       }
       const bool refusedAhead = ahead.size() == u.size() && !status.ok;
       if (!status)
-        status = FactorTangent(*structure, ordering, pattern, u, prescribed,
+        status = FactorTangent(*structure, analysis, workerBuffers_, u, prescribed,
                                options.singlePrecisionFactor, backend.get(), made, nullptr);
       lock.lock();
       if (refusedAhead)
@@ -241,7 +250,7 @@ private:
   std::condition_variable wake_, idle_;
   std::thread worker_;
   std::shared_ptr<const TangentFactor> factor_;
-  AssemblyPattern workerPattern_; // the worker's only
+  TangentBuffers workerBuffers_; // the worker's only
   Eigen::VectorXd pendingU_, pendingAhead_;
   Problem pendingAheadValues_;
   std::vector<char> pendingPrescribed_;
@@ -337,7 +346,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   Structure& st = *sys->structure;
   status = MakeStructure(sys->request, options.slidingLiftOff, st);
   if (status)
-    status = MakePattern(st, sys->solvePattern);
+    status = MakePattern(st, sys->solveBuffers.pattern);
   if (!status)
     return status;
   if (sys->backend) {
@@ -348,13 +357,16 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     }
   }
   sys->timings[Stage::Separation].ms = clock.lapMs();
-  status = OrderNodesWithTrailing(sys->solvePattern.upper, 3, {}, sys->ordering);
+  FillReducingOrdering ordering;
+  status = OrderNodesWithTrailing(sys->solveBuffers.pattern.upper, 3, {}, ordering);
+  if (status)
+    status = sys->analysis.analyze(sys->solveBuffers.pattern.upper, &ordering);
   if (!status)
     return status;
   sys->timings[Stage::Reordering].ms = clock.lapMs();
   const Eigen::VectorXd rest = Eigen::VectorXd::Zero(3 * st.n);
   std::shared_ptr<TangentFactor> factor;
-  status = FactorTangent(st, sys->ordering, sys->solvePattern, rest, st.prescribed,
+  status = FactorTangent(st, sys->analysis, sys->solveBuffers, rest, st.prescribed,
                          options.singlePrecisionFactor, sys->backend.get(), factor, &sys->timings);
   if (!status)
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
@@ -689,7 +701,7 @@ private:
     if (report_.refactorizations >= sys_.options.maxRefactorizations)
       return false;
     std::shared_ptr<TangentFactor> made;
-    if (!FactorTangent(st_, sys_.ordering, sys_.solvePattern, u, pb_.prescribed,
+    if (!FactorTangent(st_, sys_.analysis, sys_.solveBuffers, u, pb_.prescribed,
                        sys_.options.singlePrecisionFactor, sys_.backend.get(), made, &timings_))
       return false;
     factor_ = std::move(made);

@@ -187,6 +187,25 @@ Status CholmodFactor::analyze(const SparseMatrix& upper,
   return Status::Ok();
 }
 
+Status CholmodFactor::analyzeLike(const CholmodFactor& analysed) {
+  if (&analysed == this)
+    return Status::Error("internal: a factor cannot copy its own analysis");
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  std::lock_guard<std::mutex> source(analysed.impl_->mutex);
+  if (!analysed.impl_->factor)
+    return Status::Error("internal: the analysis to copy has not been made");
+  cholmod_common& common = impl_->common;
+  cholmod_free_factor(&impl_->factor, &common);
+  impl_->numeric = false;
+  impl_->trailingBlock.resize(0, 0);
+  impl_->factor = cholmod_copy_factor(analysed.impl_->factor, &common);
+  if (!impl_->factor)
+    return Status::Error("CHOLMOD could not copy the analysis (out of memory?)");
+  impl_->trailing = analysed.impl_->trailing;
+  impl_->position = analysed.impl_->position;
+  return Status::Ok();
+}
+
 Status CholmodFactor::factorize(const SparseMatrix& upper) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   if (!impl_->factor)

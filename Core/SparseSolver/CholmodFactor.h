@@ -37,6 +37,10 @@ public:
   // choice, or the given ordering (see FillReducingOrdering.h), whose trailing DOFs then allow
   // solveTrailing().
   Status analyze(const SparseMatrix& upper, const FillReducingOrdering* ordering = nullptr);
+  // The analysis `analysed` made (its ordering and symbolic factor, copied): for a matrix with the
+  // same pattern, factored again and again (the large-deformation tangent), without the symbolic
+  // analysis each time. `analysed` may be used by other threads meanwhile (it is only read).
+  Status analyzeLike(const CholmodFactor& analysed);
   // The same with several candidate orderings: each is analysed symbolically and the one with the
   // lowest cost(factor non-zeros, factorization flops, DOFs kept in the trailing block) is kept.
   using OrderingCost = std::function<double(double nonzeros, double flops, int trailingDofs)>;

@@ -2,12 +2,16 @@
 #include "SparseSolver/SinglePrecisionFactor.h"
 
 #include "Common/BlasThreads.h"
+#include "Common/ParallelFor.h"
+#include "Common/UninitializedVector.h"
 #include "Common/WorkerThreads.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/SupernodalTree.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <limits>
 #include <thread>
 #include <vector>
 
@@ -33,7 +37,7 @@ struct SinglePrecisionFactor::Impl {
   int n = 0;
   std::vector<int> super, pi, s, perm;
   std::vector<std::int64_t> px;
-  std::vector<float> values;
+  UninitializedVector<float> values; // filled whole by assign()
   // The split for two threads: top supernodes (ascending), each side's supernodes (ascending), and
   // per column its index among the top part's columns (-1 elsewhere).
   std::vector<int> top, side[2];
@@ -219,14 +223,25 @@ Status SinglePrecisionFactor::assign(const CholmodFactor& factor, int threads) {
     for (int k = 0; k < d.n; ++k)
       d.perm.push_back(k);
   const double* x = static_cast<const double*>(L->x);
+  // Rounded and checked in one pass, on the cores that first touch the new values' pages.
   d.values.resize(static_cast<size_t>(d.px.back()));
-  for (size_t k = 0; k < d.values.size(); ++k)
-    d.values[k] = static_cast<float>(x[k]);
-  for (float v : d.values)
-    if (!std::isfinite(v)) {
-      impl_ = std::make_unique<Impl>();
-      return Status::Error("the factor does not fit single precision");
-    }
+  std::atomic<bool> fits{true};
+  ParallelFor(static_cast<std::int64_t>(d.values.size()), 1 << 16,
+              [&](std::int64_t begin, std::int64_t end) {
+                float* out = d.values.data();
+                bool finite = true;
+                for (std::int64_t k = begin; k < end; ++k) {
+                  const float v = static_cast<float>(x[k]);
+                  out[k] = v;
+                  finite &= std::abs(v) <= std::numeric_limits<float>::max(); // false for NaN
+                }
+                if (!finite)
+                  fits = false;
+              });
+  if (!fits) {
+    impl_ = std::make_unique<Impl>();
+    return Status::Error("the factor does not fit single precision");
+  }
   if (threads > 1 && WorkerThreads(2) > 1)
     d.chooseSplit(tree);
   return Status::Ok();

@@ -13,6 +13,7 @@
 #include <cholmod.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <vector>
 
 using namespace faceplan;
@@ -143,6 +144,40 @@ TEST(CholmodAnalysis, CholmodFactorUsesIt) {
     cholmod_free_factor(&direct, &quiet.common);
   }
   EXPECT_LT(supernodes[1], supernodes[0]); // coarse: fewer, larger supernodes
+}
+
+// A factor that copies another's analysis (analyzeLike) has the same symbolic factor, factors
+// the matrix to the same values bit for bit and solves it alike; the analysis it copied stays
+// as it was, and copying nothing, or itself, is refused.
+TEST(CholmodAnalysis, AnalyzeLikeCopiesTheAnalysis) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  FillReducingOrdering ordering;
+  ASSERT_TRUE(OrderNodesWithTrailing(system->kff, 3, {}, ordering).ok);
+  CholmodFactor analysed, own, copy;
+  ASSERT_TRUE(analysed.analyze(system->kff, &ordering).ok);
+  ASSERT_TRUE(own.analyze(system->kff, &ordering).ok);
+  ASSERT_TRUE(copy.analyzeLike(analysed).ok);
+  ExpectSameFactor(copy.cholmodFactor(), own.cholmodFactor());
+  EXPECT_EQ(copy.eliminationPosition(), own.eliminationPosition());
+  ASSERT_TRUE(own.factorize(system->kff).ok);
+  ASSERT_TRUE(copy.factorize(system->kff).ok);
+  const cholmod_factor* a = own.cholmodFactor();
+  const cholmod_factor* b = copy.cholmodFactor();
+  ASSERT_EQ(a->xsize, b->xsize);
+  const double* ax = static_cast<const double*>(a->x);
+  const double* bx = static_cast<const double*>(b->x);
+  EXPECT_TRUE(std::equal(ax, ax + a->xsize, bx)) << "the same factor values";
+  EXPECT_FALSE(analysed.isFactorized()) << "the copied analysis is left as it was";
+  const Eigen::VectorXd rhs = Eigen::VectorXd::Random(system->kff.rows());
+  Eigen::MatrixXd x1, x2;
+  ASSERT_TRUE(own.solve(rhs, x1).ok);
+  ASSERT_TRUE(copy.solve(rhs, x2).ok);
+  EXPECT_EQ(x1, x2);
+
+  CholmodFactor unanalysed, another;
+  EXPECT_FALSE(another.analyzeLike(unanalysed).ok);
+  EXPECT_FALSE(copy.analyzeLike(copy).ok);
 }
 
 } // namespace

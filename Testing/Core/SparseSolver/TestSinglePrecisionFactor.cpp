@@ -2,7 +2,7 @@
 // SparseSolver/SinglePrecisionFactor: the single-precision substitutions with a copy of a
 // supernodal factor solve the factored matrix to single precision's accuracy (relative to the
 // double substitution), on one thread and split over two, the same either way; a factor that is
-// not numeric is refused.
+// not numeric, or whose values a float cannot hold, is refused.
 #include "CondensedFEM/CondensedSystem.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/SinglePrecisionFactor.h"
@@ -79,4 +79,27 @@ TEST(SinglePrecisionFactor, ZeroAndBadInput) {
   EXPECT_FALSE(single.solve(nan, x).ok);
   CholmodFactor unfactored;
   EXPECT_FALSE(single.assign(unfactored).ok);
+}
+
+TEST(SinglePrecisionFactor, AFactorBeyondSinglePrecisionIsRefused) {
+  // The factor of diag(1, 1e80, 1) holds 1e40, beyond a float's range; of diag(1, 1e60, 1), 1e30.
+  for (double big : {1e80, 1e60}) {
+    SparseMatrix upper(3, 3);
+    upper.insert(0, 0) = 1.0;
+    upper.insert(1, 1) = big;
+    upper.insert(2, 2) = 1.0;
+    upper.makeCompressed();
+    CholmodFactor factor;
+    ASSERT_TRUE(factor.analyze(upper).ok);
+    ASSERT_TRUE(factor.factorize(upper).ok);
+    SinglePrecisionFactor single;
+    const Status assigned = single.assign(factor);
+    if (big > 1e76) {
+      EXPECT_FALSE(assigned.ok);
+      EXPECT_NE(assigned.message.find("single precision"), std::string::npos) << assigned.message;
+      EXPECT_EQ(single.valueBytes(), 0.0) << "nothing kept";
+    } else {
+      EXPECT_TRUE(assigned.ok) << assigned.message;
+    }
+  }
 }
