@@ -53,37 +53,6 @@ Eigen::Matrix3d NeoHookeanStress(const Eigen::Matrix3d& F, const NeoHookeanParam
   return p.mu * a * (F - (i1 / 3.0) * inverseT) + p.kappa * (J - 1.0) * J * inverseT;
 }
 
-namespace {
-
-// dP for a change dF of F (the derivative of NeoHookeanStress), written out so that the 9 x 9
-// material tangent costs nine evaluations of a few 3 x 3 products.
-struct StressDerivative {
-  StressDerivative(const Eigen::Matrix3d& F, const NeoHookeanParameters& p) : F(F), p(p) {
-    J = F.determinant();
-    inverseT = F.inverse().transpose();
-    a = IsochoricFactor(J);
-    i1 = F.squaredNorm();
-    deviator = F - (i1 / 3.0) * inverseT;
-  }
-  Eigen::Matrix3d operator()(const Eigen::Matrix3d& dF) const {
-    const double dJOverJ = (inverseT.array() * dF.array()).sum(); // tr(F^-1 dF)
-    const double dI1Half = (F.array() * dF.array()).sum();        // F : dF
-    const Eigen::Matrix3d dInverseT = -inverseT * dF.transpose() * inverseT;
-    const Eigen::Matrix3d isochoric = p.mu * a *
-                                      (-(2.0 / 3.0) * dJOverJ * deviator + dF -
-                                       (2.0 / 3.0) * dI1Half * inverseT - (i1 / 3.0) * dInverseT);
-    const Eigen::Matrix3d volumetric =
-        p.kappa * ((2.0 * J - 1.0) * J * dJOverJ * inverseT + (J * J - J) * dInverseT);
-    return isochoric + volumetric;
-  }
-  const Eigen::Matrix3d& F;
-  const NeoHookeanParameters& p;
-  double J, a, i1;
-  Eigen::Matrix3d inverseT, deviator;
-};
-
-} // namespace
-
 bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameters& p,
                         const CornerDisplacements& u, double& energy, ElementVector& force,
                         ElementMatrix* tangent) {
@@ -106,26 +75,30 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
     force.segment<3>(3 * a) = f.row(a).transpose();
   if (!tangent)
     return true;
-  // dF for a unit change of DOF (b, k) is e_k (x) grad N_b; the tangent's column (b, k) is
-  // V dP grad N_a for each row block a.
-  const StressDerivative dP(F, p);
-  for (int k = 0; k < 3; ++k) {
-    // dP is linear in dF, so the column for corner b is sum_l G(b, l) dP(e_k e_l^T).
-    Eigen::Matrix3d unit[3];
-    for (int l = 0; l < 3; ++l) {
-      Eigen::Matrix3d dF = Eigen::Matrix3d::Zero();
-      dF(k, l) = 1.0;
-      unit[l] = dP(dF);
+  // The tangent's block (a, b), V grad N_a . dP/dF . grad N_b, in closed form. With H = F^-T,
+  // dP/dF for dF = e_k e_l^T has the terms mu a delta_ik delta_jl, rank-one products of F and H,
+  // and H_il H_kj; summed against the gradients each is an outer product of the corner vectors
+  // F g and H g (g = grad N), so a block costs a few 3 x 3 outer products instead of nine stress
+  // derivatives.
+  const double mua = p.mu * a;
+  const double crossFH = -(2.0 / 3.0) * mua; // (F g_a)(H g_b)^T + transpose
+  const double alongH = (2.0 / 9.0) * mua * i1 + p.kappa * (2.0 * J - 1.0) * J; // (H g_a)(H g_b)^T
+  const double swapH = mua * i1 / 3.0 - p.kappa * (J * J - J);                  // (H g_b)(H g_a)^T
+  const Eigen::Matrix<double, 3, 4> h = inverseT * G.transpose(), fg = F * G.transpose();
+  const Eigen::Matrix4d gg = G * G.transpose();
+  for (int r = 0; r < 4; ++r)
+    for (int c = r; c < 4; ++c) {
+      Eigen::Matrix3d block =
+          crossFH * (fg.col(r) * h.col(c).transpose() + h.col(r) * fg.col(c).transpose()) +
+          alongH * h.col(r) * h.col(c).transpose() + swapH * h.col(c) * h.col(r).transpose();
+      block.diagonal().array() += mua * gg(r, c);
+      block *= V;
+      if (c == r) // symmetric but for round-off in the products' order
+        block = 0.5 * (block + block.transpose()).eval();
+      tangent->block<3, 3>(3 * r, 3 * c) = block;
+      if (c != r)
+        tangent->block<3, 3>(3 * c, 3 * r) = block.transpose();
     }
-    for (int b = 0; b < 4; ++b) {
-      const Eigen::Matrix3d dPb = G(b, 0) * unit[0] + G(b, 1) * unit[1] + G(b, 2) * unit[2];
-      const Eigen::Matrix<double, 4, 3> column = V * G * dPb.transpose();
-      for (int a = 0; a < 4; ++a)
-        tangent->block<3, 1>(3 * a, 3 * b + k) = column.row(a).transpose();
-    }
-  }
-  // Symmetric in exact arithmetic; symmetrised so the assembled upper triangle is the matrix.
-  *tangent = 0.5 * (*tangent + tangent->transpose()).eval();
   return true;
 }
 
