@@ -190,8 +190,7 @@ Status CholmodFactor::analyze(const SparseMatrix& upper,
 Status CholmodFactor::analyzeLike(const CholmodFactor& analysed) {
   if (&analysed == this)
     return Status::Error("internal: a factor cannot copy its own analysis");
-  std::lock_guard<std::mutex> lock(impl_->mutex);
-  std::lock_guard<std::mutex> source(analysed.impl_->mutex);
+  std::scoped_lock locks(impl_->mutex, analysed.impl_->mutex);
   if (!analysed.impl_->factor)
     return Status::Error("internal: the analysis to copy has not been made");
   cholmod_common& common = impl_->common;

@@ -37,15 +37,15 @@ public:
   // choice, or the given ordering (see FillReducingOrdering.h), whose trailing DOFs then allow
   // solveTrailing().
   Status analyze(const SparseMatrix& upper, const FillReducingOrdering* ordering = nullptr);
-  // The analysis `analysed` made (its ordering and symbolic factor, copied): for a matrix with the
-  // same pattern, factored again and again (the large-deformation tangent), without the symbolic
-  // analysis each time. `analysed` may be used by other threads meanwhile (it is only read).
-  Status analyzeLike(const CholmodFactor& analysed);
   // The same with several candidate orderings: each is analysed symbolically and the one with the
   // lowest cost(factor non-zeros, factorization flops, DOFs kept in the trailing block) is kept.
   using OrderingCost = std::function<double(double nonzeros, double flops, int trailingDofs)>;
   Status analyze(const SparseMatrix& upper, const std::vector<FillReducingOrdering>& candidates,
                  const OrderingCost& cost);
+  // The analysis `analysed` made (its ordering and symbolic factor, copied): for a matrix with the
+  // same pattern, factored again and again (the large-deformation tangent), without the symbolic
+  // analysis each time. `analysed` may be used by other threads meanwhile (it is only read).
+  Status analyzeLike(const CholmodFactor& analysed);
   // Numeric factorization; fails with a message if the matrix is not positive definite.
   Status factorize(const SparseMatrix& upper);
   // x = A^-1 b for one or many columns.
