@@ -63,11 +63,13 @@ struct TangentBuffers {
   std::vector<double> packed;
 };
 
-// Assembles the tangent at u into `buffers` and factors it. False (with a message) when a cell is
-// inverted or the pinned tangent is not positive definite.
+// Assembles the tangent at u into `buffers` and factors it with the DOFs `prescribed` pinned, or,
+// given `contactAtU` (targets and loads at u), with the contact that Newton's rule gives at u from
+// `prescribed` and the force evaluated here. False (with a message) when a cell is inverted or the
+// pinned tangent is not positive definite.
 Status FactorTangent(const Structure& st, const CholmodFactor& analysis, TangentBuffers& buffers,
                      const Eigen::VectorXd& u, const std::vector<char>& prescribed,
-                     bool singlePrecision, ComputeBackend* backend,
+                     Problem* contactAtU, bool singlePrecision, ComputeBackend* backend,
                      std::shared_ptr<TangentFactor>& out, StageTimings* timings) {
   StageClock clock;
   Evaluation ev;
@@ -81,10 +83,15 @@ Status FactorTangent(const Structure& st, const CholmodFactor& analysis, Tangent
   auto made = std::make_shared<TangentFactor>();
   made->tangent = pattern.upper;
   made->state = u;
-  made->force = std::move(ev.force);
   made->prescribed = prescribed;
+  if (contactAtU) {
+    contactAtU->prescribed = prescribed;
+    UpdateContact(*contactAtU, u, 1.0, &ev.force);
+    made->prescribed = contactAtU->prescribed;
+  }
+  made->force = std::move(ev.force);
   std::vector<int> entries, diagonal;
-  FindPinnedEntries(pattern.upper, prescribed, entries, diagonal);
+  FindPinnedEntries(pattern.upper, made->prescribed, entries, diagonal);
   double* values = pattern.upper.valuePtr();
   for (int k : entries)
     values[k] = 0.0;
@@ -222,16 +229,13 @@ private:
       std::shared_ptr<TangentFactor> made;
       // A tangent that is not positive definite keeps the previous factor.
       Status status = Status::Error("no state ahead");
-      if (ahead.size() == u.size()) {
-        aheadValues.prescribed = prescribed;
-        if (aheadValues.st)
-          UpdateContact(aheadValues, ahead, 1.0);
-        status = FactorTangent(*structure, analysis, workerBuffers_, ahead, aheadValues.prescribed,
+      if (ahead.size() == u.size())
+        status = FactorTangent(*structure, analysis, workerBuffers_, ahead, prescribed,
+                               aheadValues.st ? &aheadValues : nullptr,
                                options.singlePrecisionFactor, backend.get(), made, nullptr);
-      }
       const bool refusedAhead = ahead.size() == u.size() && !status.ok;
       if (!status)
-        status = FactorTangent(*structure, analysis, workerBuffers_, u, prescribed,
+        status = FactorTangent(*structure, analysis, workerBuffers_, u, prescribed, nullptr,
                                options.singlePrecisionFactor, backend.get(), made, nullptr);
       lock.lock();
       if (refusedAhead)
@@ -366,7 +370,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   sys->timings[Stage::Reordering].ms = clock.lapMs();
   const Eigen::VectorXd rest = Eigen::VectorXd::Zero(3 * st.n);
   std::shared_ptr<TangentFactor> factor;
-  status = FactorTangent(st, sys->analysis, sys->solveBuffers, rest, st.prescribed,
+  status = FactorTangent(st, sys->analysis, sys->solveBuffers, rest, st.prescribed, nullptr,
                          options.singlePrecisionFactor, sys->backend.get(), factor, &sys->timings);
   if (!status)
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
@@ -701,7 +705,7 @@ private:
     if (report_.refactorizations >= sys_.options.maxRefactorizations)
       return false;
     std::shared_ptr<TangentFactor> made;
-    if (!FactorTangent(st_, sys_.analysis, sys_.solveBuffers, u, pb_.prescribed,
+    if (!FactorTangent(st_, sys_.analysis, sys_.solveBuffers, u, pb_.prescribed, nullptr,
                        sys_.options.singlePrecisionFactor, sys_.backend.get(), made, &timings_))
       return false;
     factor_ = std::move(made);
@@ -1040,13 +1044,16 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
       const bool steady =
           sys.options.factorAheadOrder >= 2 && warm->before.size() == u.size() &&
           (warm->target - warm->targetBefore - change).norm() <= kSteadyDrag * change.norm();
-      Eigen::VectorXd ahead = steady ? Eigen::VectorXd(3.0 * (u - warm->u) + warm->before)
-                                     : Eigen::VectorXd(2.0 * u - warm->u);
+      auto extrapolate = [steady](const Eigen::VectorXd& now, const Eigen::VectorXd& before,
+                                  const Eigen::VectorXd& twoBefore) {
+        return steady ? Eigen::VectorXd(3.0 * (now - before) + twoBefore)
+                      : Eigen::VectorXd(2.0 * now - before);
+      };
+      Eigen::VectorXd ahead = extrapolate(u, warm->u, warm->before);
       Problem aheadValues;
       if (!st.liftOffDofs.empty() && sys.options.predictContactAhead) {
         aheadValues.st = pb.st;
-        aheadValues.target = steady ? Eigen::VectorXd(3.0 * change + warm->targetBefore)
-                                    : Eigen::VectorXd(fullTarget + change);
+        aheadValues.target = extrapolate(fullTarget, warm->target, warm->targetBefore);
         aheadValues.externalLoad = fullLoad;
         aheadValues.linearForce = pb.linearForce;
       }
