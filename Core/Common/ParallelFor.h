@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// Splits [0, count) into one contiguous range per hardware thread; runs inline when small.
+// Splits [0, count) into one contiguous range per hardware thread, the first run on the calling
+// thread and the others on its helpers (HelperThreads.h); runs inline when small.
+#include "Common/HelperThreads.h"
 #include "Common/WorkerThreads.h"
 #include <algorithm>
 #include <cstdint>
-#include <thread>
-#include <vector>
 
 namespace faceplan {
 
@@ -15,15 +15,12 @@ template <class Work> void ParallelFor(std::int64_t count, std::int64_t serialBe
     work(std::int64_t{0}, count);
     return;
   }
-  std::vector<std::thread> pool;
   const std::int64_t chunk = (count + threads - 1) / threads;
-  for (std::int64_t t = 0; t < threads; ++t) {
-    const std::int64_t begin = t * chunk, end = std::min(count, begin + chunk);
-    if (begin < end)
-      pool.emplace_back([&work, begin, end] { work(begin, end); });
-  }
-  for (auto& th : pool)
-    th.join();
+  const int parts = static_cast<int>((count + chunk - 1) / chunk);
+  RunOnHelpers(parts, [&work, chunk, count](int part) {
+    const std::int64_t begin = part * chunk, end = std::min(count, begin + chunk);
+    work(begin, end);
+  });
 }
 
 } // namespace faceplan

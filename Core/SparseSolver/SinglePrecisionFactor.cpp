@@ -2,6 +2,7 @@
 #include "SparseSolver/SinglePrecisionFactor.h"
 
 #include "Common/BlasThreads.h"
+#include "Common/HelperThreads.h"
 #include "Common/ParallelFor.h"
 #include "Common/UninitializedVector.h"
 #include "Common/WorkerThreads.h"
@@ -12,7 +13,6 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <thread>
 #include <vector>
 
 extern "C" {
@@ -280,9 +280,7 @@ Status SinglePrecisionFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x
       for (auto it = d.side[side].rbegin(); it != d.side[side].rend(); ++it)
         d.backward(*it, y.data(), t);
     };
-    std::thread other(forwardSide, 1);
-    forwardSide(0);
-    other.join();
+    RunOnHelpers(2, forwardSide);
     for (int k : d.top)
       for (int c = d.super[k]; c < d.super[k + 1]; ++c)
         y[c] -= accumulate[0][d.topIndex[c]] + accumulate[1][d.topIndex[c]];
@@ -291,9 +289,7 @@ Status SinglePrecisionFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x
       d.forward(k, y.data(), nullptr, t);
     for (auto it = d.top.rbegin(); it != d.top.rend(); ++it)
       d.backward(*it, y.data(), t);
-    std::thread back(backwardSide, 1);
-    backwardSide(0);
-    back.join();
+    RunOnHelpers(2, backwardSide);
   }
   for (int k = 0; k < d.n; ++k)
     x[d.perm[k]] = static_cast<double>(y[k]) * scale;

@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Common/HelperThreads: every part runs once, part 0 on the calling thread and the others on
+// threads of their own that are kept from one call to the next; a call with more parts adds
+// helpers, one with fewer leaves the rest idle; a part's exception reaches the caller, and the
+// helpers serve the next call after it; a call from within a part runs its parts there; each
+// calling thread has its own helpers (TSan runs this).
+#include "Common/HelperThreads.h"
+#include "Common/ParallelFor.h"
+
+#include <atomic>
+#include <gtest/gtest.h>
+#include <mutex>
+#include <numeric>
+#include <set>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+using namespace faceplan;
+
+namespace {
+
+// The threads that ran each part of one call.
+std::vector<std::thread::id> RunAndRecord(int parts) {
+  std::vector<std::thread::id> ran(static_cast<size_t>(parts));
+  std::vector<int> count(static_cast<size_t>(parts), 0);
+  RunOnHelpers(parts, [&](int part) {
+    ran[part] = std::this_thread::get_id();
+    ++count[part];
+  });
+  for (int part = 0; part < parts; ++part)
+    EXPECT_EQ(count[part], 1) << "part " << part;
+  return ran;
+}
+
+} // namespace
+
+TEST(HelperThreads, RunsEachPartOnceOnThreadsKeptFromCallToCall) {
+  const std::vector<std::thread::id> first = RunAndRecord(3);
+  EXPECT_EQ(first[0], std::this_thread::get_id());
+  EXPECT_EQ(std::set<std::thread::id>(first.begin(), first.end()).size(), 3u);
+  // The same helpers on the next call, more for a call with more parts, the same with fewer.
+  EXPECT_EQ(RunAndRecord(3), first);
+  const std::vector<std::thread::id> more = RunAndRecord(5);
+  EXPECT_EQ(std::vector<std::thread::id>(more.begin(), more.begin() + 3), first);
+  EXPECT_EQ(std::set<std::thread::id>(more.begin(), more.end()).size(), 5u);
+  const std::vector<std::thread::id> fewer = RunAndRecord(2);
+  EXPECT_EQ(fewer[1], first[1]);
+  EXPECT_EQ(RunAndRecord(1)[0], std::this_thread::get_id());
+  RunOnHelpers(0, [](int) { FAIL() << "no part to run"; });
+}
+
+TEST(HelperThreads, ManyCallsSumAsOneThreadWould) {
+  std::vector<std::int64_t> values(100000);
+  std::iota(values.begin(), values.end(), 1);
+  for (int round = 0; round < 500; ++round) {
+    const int parts = 1 + round % 4;
+    std::vector<std::int64_t> sums(static_cast<size_t>(parts), 0);
+    RunOnHelpers(parts, [&](int part) {
+      for (size_t k = static_cast<size_t>(part); k < values.size(); k += parts)
+        sums[part] += values[k];
+    });
+    ASSERT_EQ(std::accumulate(sums.begin(), sums.end(), std::int64_t{0}), 5000050000) << round;
+  }
+}
+
+TEST(HelperThreads, APartsExceptionReachesTheCallerAndTheHelpersServeOn) {
+  for (int thrower : {0, 1, 2}) {
+    std::atomic<int> ran{0};
+    EXPECT_THROW(RunOnHelpers(3,
+                              [&](int part) {
+                                ++ran;
+                                if (part == thrower)
+                                  throw std::runtime_error("part failed");
+                              }),
+                 std::runtime_error)
+        << "thrown by part " << thrower;
+    EXPECT_EQ(ran.load(), 3) << "the other parts still ran";
+    EXPECT_EQ(RunAndRecord(3).size(), 3u);
+  }
+}
+
+TEST(HelperThreads, ACallFromWithinAPartRunsItsPartsThere) {
+  std::mutex mutex;
+  std::vector<std::pair<int, int>> ran;
+  RunOnHelpers(2, [&](int outer) {
+    const std::thread::id here = std::this_thread::get_id();
+    RunOnHelpers(3, [&](int inner) {
+      std::lock_guard<std::mutex> lock(mutex);
+      ran.emplace_back(outer, inner);
+      if (outer == 0) // the calling thread's own call: inline
+        EXPECT_EQ(std::this_thread::get_id(), here);
+    });
+  });
+  EXPECT_EQ(ran.size(), 6u);
+}
+
+TEST(HelperThreads, EachCallingThreadHasItsOwnHelpers) {
+  std::vector<std::thread::id> a, b;
+  std::thread first([&] { a = RunAndRecord(2); });
+  std::thread second([&] { b = RunAndRecord(2); });
+  first.join();
+  second.join();
+  ASSERT_EQ(a.size(), 2u);
+  ASSERT_EQ(b.size(), 2u);
+  EXPECT_NE(a[1], b[1]);
+  // ParallelFor covers its range once, on them.
+  std::vector<int> hits(10007, 0);
+  ParallelFor(static_cast<std::int64_t>(hits.size()), 1, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t k = begin; k < end; ++k)
+      ++hits[static_cast<size_t>(k)];
+  });
+  for (int h : hits)
+    ASSERT_EQ(h, 1);
+}
