@@ -16,8 +16,6 @@
 #include <vector>
 
 extern "C" {
-void strsv_(const char* uplo, const char* trans, const char* diag, const int* n, const float* a,
-            const int* lda, float* x, const int* incx);
 void sgemv_(const char* trans, const int* m, const int* n, const float* alpha, const float* a,
             const int* lda, const float* x, const int* incx, const float* beta, float* y,
             const int* incy);
@@ -30,6 +28,8 @@ namespace {
 // Below this many entries a supernode's block is done with plain loops: a BLAS call's overhead
 // would be most of its time.
 constexpr int kBlasEntries = 512;
+// The columns of a supernode's block in the substitutions' blocked triangular solves.
+constexpr int kBlock = 32;
 
 } // namespace
 
@@ -56,13 +56,31 @@ struct SinglePrecisionFactor::Impl {
     float* y1 = y + super[k];
     const int* rows = s.data() + pi[k] + nc;
     if (nc * nr >= kBlasEntries) {
+      // By blocks of columns: the block's triangle with plain loops, then one product for every
+      // row below it, in the triangle and in L21 alike (BLAS's triangular solve does its
+      // diagonal blocks a column at a time and costs several times a product's time per entry).
+      t.resize(nr);
+      std::copy(y1, y1 + nc, t.begin());
+      std::fill(t.begin() + nc, t.end(), 0.0f);
+      float* w = t.data();
       const int one = 1;
-      const float alpha = 1.0f, beta = 0.0f;
-      strsv_("L", "N", "N", &nc, L, &nr, y1, &one);
-      if (m > 0) {
-        t.resize(m);
-        sgemv_("N", &m, &nc, &alpha, L + nc, &nr, y1, &one, &beta, t.data(), &one);
+      const float alpha = -1.0f, beta = 1.0f;
+      for (int j0 = 0; j0 < nc; j0 += kBlock) {
+        const int b = std::min(kBlock, nc - j0);
+        for (int j = j0; j < j0 + b; ++j) {
+          const float* col = L + std::int64_t(j) * nr;
+          const float v = (w[j] /= col[j]);
+          for (int i = j + 1; i < j0 + b; ++i)
+            w[i] -= col[i] * v;
+        }
+        const int below = nr - j0 - b;
+        if (below > 0)
+          sgemv_("N", &below, &b, &alpha, L + std::int64_t(j0) * nr + j0 + b, &nr, w + j0, &one,
+                 &beta, w + j0 + b, &one);
       }
+      std::copy(w, w + nc, y1);
+      for (int i = 0; i < m; ++i)
+        w[i] = -w[nc + i]; // L21 y1, as the loops below leave it
     } else {
       for (int j = 0; j < nc; ++j) {
         const float* col = L + std::int64_t(j) * nr;
@@ -93,16 +111,37 @@ struct SinglePrecisionFactor::Impl {
     const float* L = values.data() + px[k];
     float* y1 = y + super[k];
     const int* rows = s.data() + pi[k] + nc;
+    if (nc * nr >= kBlasEntries) {
+      // By blocks of columns, from the last: one product with every row below the block, then
+      // the block's triangle with plain loops (as forward).
+      t.resize(nr);
+      std::copy(y1, y1 + nc, t.begin());
+      for (int i = 0; i < m; ++i)
+        t[nc + i] = y[rows[i]];
+      float* w = t.data();
+      const int one = 1;
+      const float alpha = -1.0f, beta = 1.0f;
+      for (int j0 = ((nc - 1) / kBlock) * kBlock; j0 >= 0; j0 -= kBlock) {
+        const int b = std::min(kBlock, nc - j0);
+        const int below = nr - j0 - b;
+        if (below > 0)
+          sgemv_("T", &below, &b, &alpha, L + std::int64_t(j0) * nr + j0 + b, &nr, w + j0 + b, &one,
+                 &beta, w + j0, &one);
+        for (int j = j0 + b - 1; j >= j0; --j) {
+          const float* col = L + std::int64_t(j) * nr;
+          float sum = 0.0f;
+          for (int i = j + 1; i < j0 + b; ++i)
+            sum += col[i] * w[i];
+          w[j] = (w[j] - sum) / col[j];
+        }
+      }
+      std::copy(w, w + nc, y1);
+      return;
+    }
     t.resize(m);
     for (int i = 0; i < m; ++i)
       t[i] = y[rows[i]];
-    if (nc * nr >= kBlasEntries) {
-      const int one = 1;
-      const float alpha = -1.0f, beta = 1.0f;
-      if (m > 0)
-        sgemv_("T", &m, &nc, &alpha, L + nc, &nr, t.data(), &one, &beta, y1, &one);
-      strsv_("L", "T", "N", &nc, L, &nr, y1, &one);
-    } else {
+    {
       for (int j = 0; j < nc; ++j) {
         const float* col = L + std::int64_t(j) * nr + nc;
         float sum = 0.0f;
