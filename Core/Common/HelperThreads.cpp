@@ -10,6 +10,8 @@
 #include <thread>
 #include <vector>
 
+#include <unistd.h>
+
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #define FACEPLAN_PAUSE() _mm_pause()
@@ -136,8 +138,16 @@ void RunOnHelpers(int parts, const std::function<void(int)>& work) {
       work(part);
     return;
   }
-  if (!crew)
+  // A process forked after the crew started has none of its threads: it starts its own (the
+  // parent's crew, a copy of memory only, is left as it is).
+  thread_local long owner = 0;
+  const long process = static_cast<long>(getpid());
+  if (crew && owner != process)
+    (void)crew.release();
+  if (!crew) {
     crew = std::make_unique<Crew>();
+    owner = process;
+  }
   running = true;
   try {
     crew->run(parts, work);

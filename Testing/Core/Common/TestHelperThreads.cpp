@@ -3,7 +3,8 @@
 // threads of their own that are kept from one call to the next; a call with more parts adds
 // helpers, one with fewer leaves the rest idle; a part's exception reaches the caller, and the
 // helpers serve the next call after it; a call from within a part runs its parts there; each
-// calling thread has its own helpers (TSan runs this).
+// calling thread has its own helpers (TSan runs this); a forked child, which has none of them,
+// starts its own.
 #include "Common/HelperThreads.h"
 #include "Common/ParallelFor.h"
 
@@ -15,6 +16,18 @@
 #include <stdexcept>
 #include <thread>
 #include <vector>
+
+#include <csignal>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#if defined(__SANITIZE_THREAD__)
+#define FACEPLAN_TSAN 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define FACEPLAN_TSAN 1
+#endif
+#endif
 
 using namespace faceplan;
 
@@ -112,4 +125,24 @@ TEST(HelperThreads, EachCallingThreadHasItsOwnHelpers) {
   });
   for (int h : hits)
     ASSERT_EQ(h, 1);
+}
+
+TEST(HelperThreads, AForkedChildStartsItsOwn) {
+#ifdef FACEPLAN_TSAN
+  GTEST_SKIP() << "ThreadSanitizer does not support threads started after a fork";
+#else
+  ASSERT_EQ(RunAndRecord(2).size(), 2u); // this thread's crew exists before the fork
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    alarm(20); // a child waiting on the parent's helpers would hang: killed instead
+    std::atomic<int> ran{0};
+    RunOnHelpers(3, [&](int) { ++ran; });
+    _exit(ran == 3 ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "the child was killed (signal " << WTERMSIG(status) << ")";
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+#endif
 }
