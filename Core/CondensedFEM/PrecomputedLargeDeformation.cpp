@@ -156,6 +156,13 @@ public:
   // yardstick |K_0 u_prescribed| of each solve reads these instead of the whole tangent.
   std::vector<int> movableDofs;
   SparseMatrix restMovableColumns;
+  // Where the movable DOFs' columns lie in every tangent's values (all tangents share one
+  // pattern): per movable DOF k, the entries movableEntries[movableStart[k] ...] as (value index,
+  // the other DOF), each off-diagonal entry once for its column and once for its row. A predictor
+  // whose prescribed move lies on these DOFs multiplies the tangent by it through them alone.
+  std::vector<int> movableStart;
+  std::vector<std::pair<int, int>> movableEntries;
+  std::vector<char> isMovable; // per DOF
   // The rest state's factor, kept for solves that start from rest (a move back towards zero is
   // nearer the rest state than the last converged one).
   std::shared_ptr<const TangentFactor> restFactor;
@@ -298,6 +305,33 @@ SparseMatrix SymmetricColumns(const SparseMatrix& upper, const std::vector<int>&
   return out;
 }
 
+// The entries of the symmetric matrix whose upper triangle is `upper` in the columns `dofs`, as
+// (index into upper's values, row), grouped by column (start: offsets, one per column and one
+// more).
+void MovableEntries(const SparseMatrix& upper, const std::vector<int>& dofs,
+                    std::vector<int>& start, std::vector<std::pair<int, int>>& entries) {
+  std::vector<int> column(static_cast<size_t>(upper.cols()), -1);
+  for (size_t k = 0; k < dofs.size(); ++k)
+    column[dofs[k]] = static_cast<int>(k);
+  std::vector<std::vector<std::pair<int, int>>> of(dofs.size());
+  const int* outer = upper.outerIndexPtr();
+  const int* inner = upper.innerIndexPtr();
+  for (Eigen::Index j = 0; j < upper.outerSize(); ++j)
+    for (int q = outer[j]; q < outer[j + 1]; ++q) {
+      const int i = inner[q];
+      if (column[j] >= 0)
+        of[column[j]].emplace_back(q, i);
+      if (i != j && column[i] >= 0)
+        of[column[i]].emplace_back(q, static_cast<int>(j));
+    }
+  start.assign(1, 0);
+  entries.clear();
+  for (const auto& list : of) {
+    entries.insert(entries.end(), list.begin(), list.end());
+    start.push_back(static_cast<int>(entries.size()));
+  }
+}
+
 // The structure's cells in the backend's plain arrays.
 HyperelasticCells CellsOf(const Structure& st) {
   HyperelasticCells c;
@@ -380,6 +414,10 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     for (int j = 0; j < 3; ++j)
       sys->movableDofs.push_back(3 * node + j);
   sys->restMovableColumns = SymmetricColumns(factor->tangent, sys->movableDofs);
+  MovableEntries(factor->tangent, sys->movableDofs, sys->movableStart, sys->movableEntries);
+  sys->isMovable.assign(static_cast<size_t>(3 * st.n), 0);
+  for (int dof : sys->movableDofs)
+    sys->isMovable[dof] = 1;
   st.unitStrainForce = RestForceNorm(factor->tangent, LocalPositions(st));
   sys->restFactor = factor;
   sys->setFactor(std::move(factor));
@@ -640,7 +678,7 @@ private:
       Status multiplied = Status::Error("no device");
       if (factor_->device && !(multiplied = factor_->device->multiply(move, product)))
         noteDevice("a tangent product: " + multiplied.message);
-      if (!multiplied)
+      if (!multiplied && !movableProduct(move, product))
         product = factor_->tangent.selfadjointView<Eigen::Upper>() * move;
     }
     // -(f - f_ext + K move) on the free DOFs.
@@ -662,6 +700,27 @@ private:
       }
     }
     return false;
+  }
+
+  // K move through the movable DOFs' columns alone, when the move lies on them (a bone's move; a
+  // lift-off DOF pinned again moves elsewhere): the whole tangent's product reads every entry.
+  bool movableProduct(const Eigen::VectorXd& move, Eigen::VectorXd& product) const {
+    if (sys_.movableStart.empty() ||
+        factor_->tangent.nonZeros() != sys_.solveBuffers.pattern.upper.nonZeros())
+      return false;
+    for (Eigen::Index i = 0; i < move.size(); ++i)
+      if (move[i] != 0.0 && !sys_.isMovable[i])
+        return false;
+    product.setZero(move.size());
+    const double* values = factor_->tangent.valuePtr();
+    for (size_t k = 0; k < sys_.movableDofs.size(); ++k) {
+      const double m = move[sys_.movableDofs[k]];
+      if (m == 0.0)
+        continue;
+      for (int e = sys_.movableStart[k]; e < sys_.movableStart[k + 1]; ++e)
+        product[sys_.movableEntries[e].second] += values[sys_.movableEntries[e].first] * m;
+    }
+    return true;
   }
 
   // Whether `prescribed` pins what pb_ pins, lift-off's DOFs aside.

@@ -52,10 +52,6 @@ TetReference MakeTetReference(const TetCorners& corners) {
   return r;
 }
 
-Eigen::Matrix3d DeformationGradient(const TetReference& reference, const CornerDisplacements& u) {
-  return Eigen::Matrix3d::Identity() + u.transpose() * reference.gradients;
-}
-
 double NeoHookeanEnergyDensity(const Eigen::Matrix3d& F, const NeoHookeanParameters& p) {
   const double J = F.determinant();
   return 0.5 * p.mu * (IsochoricFactor(J) * F.squaredNorm() - 3.0) +

@@ -33,7 +33,11 @@ using ElementVector = Eigen::Matrix<double, 12, 1>;
 using CornerDisplacements = Eigen::Matrix<double, 4, 3>; // one corner per row
 
 // F = I + sum_a u_a (x) grad N_a.
-Eigen::Matrix3d DeformationGradient(const TetReference& reference, const CornerDisplacements& u);
+// Inline: the large-deformation solves' innermost loop calls it per cell and evaluation.
+inline Eigen::Matrix3d DeformationGradient(const TetReference& reference,
+                                           const CornerDisplacements& u) {
+  return Eigen::Matrix3d::Identity() + u.transpose() * reference.gradients;
+}
 
 // Strain energy density W(F) and the first Piola-Kirchhoff stress P = dW/dF. Requires det F > 0.
 double NeoHookeanEnergyDensity(const Eigen::Matrix3d& F, const NeoHookeanParameters& p);
