@@ -218,9 +218,15 @@ BoneSegments ReadBoneSegments(vtkPointSet* bone, const std::vector<double>& unde
     out.whyNot = "the undeformed bone does not match the bone's points";
     return out;
   }
+  // Osteotomy's Displacement is a double array: read in place, without a virtual call per point.
+  auto* moves = vtkDoubleArray::FastDownCast(d);
+  const double* raw = moves && moves->GetNumberOfComponents() == 3 ? moves->GetPointer(0) : nullptr;
   for (vtkIdType i = 0; i < n; ++i) {
     double u[3];
-    d->GetTuple(i, u);
+    if (raw)
+      std::copy(raw + 3 * i, raw + 3 * i + 3, u);
+    else
+      d->GetTuple(i, u);
     for (int c = 0; c < 3; ++c) {
       undeformed(i, c) = undeformedPoints[3 * i + c];
       displacement(i, c) = u[c];

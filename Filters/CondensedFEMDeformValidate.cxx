@@ -7,6 +7,7 @@
 #include "vtkCellData.h"
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
 #include "vtkIdList.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
@@ -227,7 +228,39 @@ Status ValidateBone(vtkPointSet* bone, std::vector<double>& undeformed) {
   return Status::Ok();
 }
 
+// The usual edit's check in one pass: points and Displacement both double arrays (BezierCut's
+// and Osteotomy's outputs), the undeformed points written as they are checked. False when the
+// arrays are of another kind or a value is not usable; the caller then checks step by step, which
+// names the first problem.
+bool UsableBoneValuesInOnePass(vtkPointSet* bone, vtkDataArray* displacement,
+                               std::vector<double>& undeformed) {
+  const vtkIdType n = bone->GetNumberOfPoints();
+  auto* points =
+      bone->GetPoints() ? vtkDoubleArray::FastDownCast(bone->GetPoints()->GetData()) : nullptr;
+  auto* moves = vtkDoubleArray::FastDownCast(displacement);
+  if (!points || !moves || points->GetNumberOfComponents() != 3 ||
+      moves->GetNumberOfComponents() != 3 || moves->GetNumberOfTuples() != n ||
+      points->GetNumberOfTuples() != n)
+    return false;
+  undeformed.resize(static_cast<size_t>(3 * n));
+  const double* x = points->GetPointer(0);
+  const double* u = moves->GetPointer(0);
+  double* out = undeformed.data();
+  bool usable = true;
+  for (vtkIdType k = 0; k < 3 * n; ++k) {
+    const double rest = x[k] - u[k];
+    out[k] = rest;
+    // Not finite fails every comparison; a finite Displacement with usable points and a usable
+    // difference is what the step-by-step checks accept.
+    usable &= std::abs(x[k]) <= kLargestCoordinate && std::isfinite(u[k]) &&
+              std::abs(rest) <= kLargestCoordinate;
+  }
+  return usable;
+}
+
 Status ValidateBoneValues(vtkPointSet* bone, std::vector<double>& undeformed) {
+  if (UsableBoneValuesInOnePass(bone, bone->GetPointData()->GetArray("Displacement"), undeformed))
+    return Status::Ok();
   const vtkIdType bad = FirstNonFinitePoint(bone);
   if (bad >= 0)
     return Error("the bone's point ", bad,
@@ -266,10 +299,19 @@ std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
 std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement, double tissueSize,
                             double lengthUnit) {
   double boneLargest = 0.0;
-  for (vtkIdType i = 0; boneDisplacement && i < boneDisplacement->GetNumberOfTuples(); ++i) {
-    double d[3];
-    boneDisplacement->GetTuple(i, d);
-    boneLargest = std::max(boneLargest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+  auto* moves = vtkDoubleArray::FastDownCast(boneDisplacement);
+  if (moves && moves->GetNumberOfComponents() == 3) { // the usual edit: no per-tuple virtual call
+    const double* d = moves->GetPointer(0);
+    double largest2 = 0.0;
+    for (vtkIdType i = 0; i < moves->GetNumberOfTuples(); ++i, d += 3)
+      largest2 = std::max(largest2, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    boneLargest = std::sqrt(largest2);
+  } else {
+    for (vtkIdType i = 0; boneDisplacement && i < boneDisplacement->GetNumberOfTuples(); ++i) {
+      double d[3];
+      boneDisplacement->GetTuple(i, d);
+      boneLargest = std::max(boneLargest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    }
   }
   // A move below the floor (0.03 mm for a head whose bounds span 300 mm) is no move: round-off or
   // a solver's tolerance (a warm-started solve back at zero leaves about 1e-13 mm), far below
