@@ -63,6 +63,57 @@ struct TangentBuffers {
   std::vector<double> packed;
 };
 
+// The movable nodes' DOFs, the only ones a target moves, and where their columns lie in every
+// tangent's values (all tangents share one pattern): per movable DOF k, entries[start[k] ...] as
+// (value index, the other DOF), each off-diagonal entry once for its column and once for its row.
+// The tangent's product with a move on these DOFs reads them alone, not every entry: the
+// yardstick |K_0 u_prescribed| of each solve and the predictor's K move for a bone's move.
+struct MovableColumns {
+  std::vector<int> dofs;
+  std::vector<char> isMovable; // per DOF
+  std::vector<int> start;
+  std::vector<std::pair<int, int>> entries;
+
+  MovableColumns() = default;
+  MovableColumns(const SparseMatrix& upper, std::vector<int> movable) : dofs(std::move(movable)) {
+    isMovable.assign(static_cast<size_t>(upper.cols()), 0);
+    std::vector<int> column(static_cast<size_t>(upper.cols()), -1);
+    for (size_t k = 0; k < dofs.size(); ++k) {
+      column[dofs[k]] = static_cast<int>(k);
+      isMovable[dofs[k]] = 1;
+    }
+    std::vector<std::vector<std::pair<int, int>>> of(dofs.size());
+    const int* outer = upper.outerIndexPtr();
+    const int* inner = upper.innerIndexPtr();
+    for (Eigen::Index j = 0; j < upper.outerSize(); ++j)
+      for (int q = outer[j]; q < outer[j + 1]; ++q) {
+        const int i = inner[q];
+        if (column[j] >= 0)
+          of[column[j]].emplace_back(q, i);
+        if (i != j && column[i] >= 0)
+          of[column[i]].emplace_back(q, static_cast<int>(j));
+      }
+    start.assign(1, 0);
+    for (const auto& list : of) {
+      entries.insert(entries.end(), list.begin(), list.end());
+      start.push_back(static_cast<int>(entries.size()));
+    }
+  }
+
+  // out = K v for the symmetric matrix whose upper triangle holds `values` in the shared pattern;
+  // only v's entries on the movable DOFs are read (the caller's v is zero elsewhere).
+  void multiply(const double* values, const Eigen::VectorXd& v, Eigen::VectorXd& out) const {
+    out.setZero(v.size());
+    for (size_t k = 0; k < dofs.size(); ++k) {
+      const double m = v[dofs[k]];
+      if (m == 0.0)
+        continue;
+      for (int e = start[k]; e < start[k + 1]; ++e)
+        out[entries[e].second] += values[entries[e].first] * m;
+    }
+  }
+};
+
 // Assembles the tangent at u into `buffers` and factors it with the DOFs `prescribed` pinned, or,
 // given `contactAtU` (targets and loads at u), with the contact that Newton's rule gives at u from
 // `prescribed` and the force evaluated here. False (with a message) when a cell is inverted or the
@@ -152,17 +203,7 @@ public:
   // The tangent's ordering and symbolic analysis, made once: every factorization copies it (the
   // pattern never changes; the contact only zeroes rows and columns).
   CholmodFactor analysis;
-  // The rest tangent's columns of the movable nodes' DOFs, the only ones a target moves: the
-  // yardstick |K_0 u_prescribed| of each solve reads these instead of the whole tangent.
-  std::vector<int> movableDofs;
-  SparseMatrix restMovableColumns;
-  // Where the movable DOFs' columns lie in every tangent's values (all tangents share one
-  // pattern): per movable DOF k, the entries movableEntries[movableStart[k] ...] as (value index,
-  // the other DOF), each off-diagonal entry once for its column and once for its row. A predictor
-  // whose prescribed move lies on these DOFs multiplies the tangent by it through them alone.
-  std::vector<int> movableStart;
-  std::vector<std::pair<int, int>> movableEntries;
-  std::vector<char> isMovable; // per DOF
+  MovableColumns movable;
   // The rest state's factor, kept for solves that start from rest (a move back towards zero is
   // nearer the rest state than the last converged one).
   std::shared_ptr<const TangentFactor> restFactor;
@@ -286,52 +327,6 @@ Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
   return Status::Ok();
 }
 
-// The columns `dofs` of the symmetric matrix whose upper triangle is `upper` (rows: all DOFs).
-SparseMatrix SymmetricColumns(const SparseMatrix& upper, const std::vector<int>& dofs) {
-  std::vector<int> column(static_cast<size_t>(upper.cols()), -1);
-  for (size_t k = 0; k < dofs.size(); ++k)
-    column[dofs[k]] = static_cast<int>(k);
-  std::vector<Eigen::Triplet<double>> entries;
-  for (Eigen::Index j = 0; j < upper.outerSize(); ++j)
-    for (SparseMatrix::InnerIterator it(upper, j); it; ++it) {
-      const Eigen::Index i = it.row();
-      if (column[j] >= 0)
-        entries.emplace_back(static_cast<int>(i), column[j], it.value());
-      if (i != j && column[i] >= 0)
-        entries.emplace_back(static_cast<int>(j), column[i], it.value());
-    }
-  SparseMatrix out(upper.rows(), static_cast<Eigen::Index>(dofs.size()));
-  out.setFromTriplets(entries.begin(), entries.end());
-  return out;
-}
-
-// The entries of the symmetric matrix whose upper triangle is `upper` in the columns `dofs`, as
-// (index into upper's values, row), grouped by column (start: offsets, one per column and one
-// more).
-void MovableEntries(const SparseMatrix& upper, const std::vector<int>& dofs,
-                    std::vector<int>& start, std::vector<std::pair<int, int>>& entries) {
-  std::vector<int> column(static_cast<size_t>(upper.cols()), -1);
-  for (size_t k = 0; k < dofs.size(); ++k)
-    column[dofs[k]] = static_cast<int>(k);
-  std::vector<std::vector<std::pair<int, int>>> of(dofs.size());
-  const int* outer = upper.outerIndexPtr();
-  const int* inner = upper.innerIndexPtr();
-  for (Eigen::Index j = 0; j < upper.outerSize(); ++j)
-    for (int q = outer[j]; q < outer[j + 1]; ++q) {
-      const int i = inner[q];
-      if (column[j] >= 0)
-        of[column[j]].emplace_back(q, i);
-      if (i != j && column[i] >= 0)
-        of[column[i]].emplace_back(q, static_cast<int>(j));
-    }
-  start.assign(1, 0);
-  entries.clear();
-  for (const auto& list : of) {
-    entries.insert(entries.end(), list.begin(), list.end());
-    start.push_back(static_cast<int>(entries.size()));
-  }
-}
-
 // The structure's cells in the backend's plain arrays.
 HyperelasticCells CellsOf(const Structure& st) {
   HyperelasticCells c;
@@ -410,14 +405,11 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
   // The rest tangent (upper, unpinned) stays in restFactor.
+  std::vector<int> movableDofs;
   for (int node : request.sets.movable)
     for (int j = 0; j < 3; ++j)
-      sys->movableDofs.push_back(3 * node + j);
-  sys->restMovableColumns = SymmetricColumns(factor->tangent, sys->movableDofs);
-  MovableEntries(factor->tangent, sys->movableDofs, sys->movableStart, sys->movableEntries);
-  sys->isMovable.assign(static_cast<size_t>(3 * st.n), 0);
-  for (int dof : sys->movableDofs)
-    sys->isMovable[dof] = 1;
+      movableDofs.push_back(3 * node + j);
+  sys->movable = MovableColumns(factor->tangent, std::move(movableDofs));
   st.unitStrainForce = RestForceNorm(factor->tangent, LocalPositions(st));
   sys->restFactor = factor;
   sys->setFactor(std::move(factor));
@@ -705,21 +697,12 @@ private:
   // K move through the movable DOFs' columns alone, when the move lies on them (a bone's move; a
   // lift-off DOF pinned again moves elsewhere): the whole tangent's product reads every entry.
   bool movableProduct(const Eigen::VectorXd& move, Eigen::VectorXd& product) const {
-    if (sys_.movableStart.empty() ||
-        factor_->tangent.nonZeros() != sys_.solveBuffers.pattern.upper.nonZeros())
+    if (factor_->tangent.nonZeros() != sys_.restFactor->tangent.nonZeros())
       return false;
     for (Eigen::Index i = 0; i < move.size(); ++i)
-      if (move[i] != 0.0 && !sys_.isMovable[i])
+      if (move[i] != 0.0 && !sys_.movable.isMovable[i])
         return false;
-    product.setZero(move.size());
-    const double* values = factor_->tangent.valuePtr();
-    for (size_t k = 0; k < sys_.movableDofs.size(); ++k) {
-      const double m = move[sys_.movableDofs[k]];
-      if (m == 0.0)
-        continue;
-      for (int e = sys_.movableStart[k]; e < sys_.movableStart[k + 1]; ++e)
-        product[sys_.movableEntries[e].second] += values[sys_.movableEntries[e].first] * m;
-    }
+    sys_.movable.multiply(factor_->tangent.valuePtr(), move, product);
     return true;
   }
 
@@ -951,10 +934,9 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   Eigen::VectorXd fullTarget = pb.target, fullLoad = pb.externalLoad; // moved out at the end
   // The yardstick |K_0 u_prescribed| (the targets are zero off the movable nodes' DOFs).
   {
-    Eigen::VectorXd moved(static_cast<Eigen::Index>(sys.movableDofs.size()));
-    for (size_t k = 0; k < sys.movableDofs.size(); ++k)
-      moved[static_cast<Eigen::Index>(k)] = fullTarget[sys.movableDofs[k]];
-    pb.linearForce = (sys.restMovableColumns * moved).norm();
+    Eigen::VectorXd product;
+    sys.movable.multiply(sys.restFactor->tangent.valuePtr(), fullTarget, product);
+    pb.linearForce = product.norm();
   }
 
   Eigen::VectorXd u, rest;
