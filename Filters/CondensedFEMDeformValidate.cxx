@@ -78,6 +78,28 @@ Status CheckArray(vtkDataArray* array, const char* name, const char* owner, vtkI
   return Status::Ok();
 }
 
+// The largest length of a 3-component Displacement's tuples (0 without one). A double array, the
+// usual edit's, is read in place, without a virtual call per tuple; sqrt is monotonic and
+// correctly rounded, so the largest square's root is the largest root.
+double LargestDisplacement(vtkDataArray* displacement) {
+  if (!displacement)
+    return 0.0;
+  double largest2 = 0.0;
+  auto* moves = vtkDoubleArray::FastDownCast(displacement);
+  if (moves && moves->GetNumberOfComponents() == 3) {
+    const double* d = moves->GetPointer(0);
+    for (vtkIdType i = 0; i < moves->GetNumberOfTuples(); ++i, d += 3)
+      largest2 = std::max(largest2, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  } else {
+    for (vtkIdType i = 0; i < displacement->GetNumberOfTuples(); ++i) {
+      double d[3];
+      displacement->GetTuple(i, d);
+      largest2 = std::max(largest2, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    }
+  }
+  return std::sqrt(largest2);
+}
+
 } // namespace
 
 Status ValidateProperties(const Settings& s) {
@@ -281,12 +303,7 @@ std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
   for (char movable : tiedMovable)
     if (movable)
       return std::string();
-  double largest = 0.0;
-  for (vtkIdType i = 0; i < boneDisplacement->GetNumberOfTuples(); ++i) {
-    double d[3];
-    boneDisplacement->GetTuple(i, d);
-    largest = std::max(largest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-  }
+  const double largest = LargestDisplacement(boneDisplacement);
   if (largest == 0.0)
     return std::string();
   std::ostringstream msg;
@@ -298,21 +315,7 @@ std::string UnfollowedBoneMotion(const std::vector<char>& tiedMovable,
 
 std::string LooseTissueNote(double tissueLargest, vtkDataArray* boneDisplacement, double tissueSize,
                             double lengthUnit) {
-  double boneLargest = 0.0;
-  auto* moves = vtkDoubleArray::FastDownCast(boneDisplacement);
-  if (moves && moves->GetNumberOfComponents() == 3) { // the usual edit: no per-tuple virtual call
-    const double* d = moves->GetPointer(0);
-    double largest2 = 0.0;
-    for (vtkIdType i = 0; i < moves->GetNumberOfTuples(); ++i, d += 3)
-      largest2 = std::max(largest2, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    boneLargest = std::sqrt(largest2);
-  } else {
-    for (vtkIdType i = 0; boneDisplacement && i < boneDisplacement->GetNumberOfTuples(); ++i) {
-      double d[3];
-      boneDisplacement->GetTuple(i, d);
-      boneLargest = std::max(boneLargest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-    }
-  }
+  const double boneLargest = LargestDisplacement(boneDisplacement);
   // A move below the floor (0.03 mm for a head whose bounds span 300 mm) is no move: round-off or
   // a solver's tolerance (a warm-started solve back at zero leaves about 1e-13 mm), far below
   // anything a surgeon plans or sees. Without gravity the bones are the only load, so when none
