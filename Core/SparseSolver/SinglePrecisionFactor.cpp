@@ -141,21 +141,19 @@ struct SinglePrecisionFactor::Impl {
     t.resize(m);
     for (int i = 0; i < m; ++i)
       t[i] = y[rows[i]];
-    {
-      for (int j = 0; j < nc; ++j) {
-        const float* col = L + std::int64_t(j) * nr + nc;
-        float sum = 0.0f;
-        for (int i = 0; i < m; ++i)
-          sum += col[i] * t[i];
-        y1[j] -= sum;
-      }
-      for (int j = nc - 1; j >= 0; --j) {
-        const float* col = L + std::int64_t(j) * nr;
-        float sum = 0.0f;
-        for (int i = j + 1; i < nc; ++i)
-          sum += col[i] * y1[i];
-        y1[j] = (y1[j] - sum) / col[j];
-      }
+    for (int j = 0; j < nc; ++j) {
+      const float* col = L + std::int64_t(j) * nr + nc;
+      float sum = 0.0f;
+      for (int i = 0; i < m; ++i)
+        sum += col[i] * t[i];
+      y1[j] -= sum;
+    }
+    for (int j = nc - 1; j >= 0; --j) {
+      const float* col = L + std::int64_t(j) * nr;
+      float sum = 0.0f;
+      for (int i = j + 1; i < nc; ++i)
+        sum += col[i] * y1[i];
+      y1[j] = (y1[j] - sum) / col[j];
     }
   }
 

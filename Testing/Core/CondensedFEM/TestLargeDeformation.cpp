@@ -29,6 +29,16 @@ SolveInput PlateMove(const PrecomputeRequest& request, double press) {
   return input;
 }
 
+// The input that moves the movable nodes by `moves` (one row each) and recovers every node.
+SolveInput MovesInput(const std::vector<Eigen::RowVector3d>& moves) {
+  SolveInput input;
+  input.movableDisplacement.resize(static_cast<Eigen::Index>(moves.size()), 3);
+  for (size_t k = 0; k < moves.size(); ++k)
+    input.movableDisplacement.row(static_cast<Eigen::Index>(k)) = moves[k];
+  input.recoverInterior = true;
+  return input;
+}
+
 // Lateral stretch of the homogeneous uniaxial state F = diag(s, s, axial): the s at which the
 // lateral stress P_11 vanishes (bisection; P_11 increases with s).
 double LateralStretch(double axial, const NeoHookeanParameters& p) {
@@ -71,7 +81,6 @@ TEST(LargeDeformation, RigidRotationOfAClampedFaceIsExact) {
       Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
   const Eigen::RowVector3d centre(0.0, 5.0, 5.0);
   RowVectors3d rigid(request.mesh.numPoints(), 3);
-  SolveInput input;
   std::vector<Eigen::RowVector3d> moves;
   for (Eigen::Index i = 0; i < request.mesh.numPoints(); ++i) {
     const Eigen::RowVector3d x = request.mesh.points.row(i) - centre;
@@ -83,13 +92,9 @@ TEST(LargeDeformation, RigidRotationOfAClampedFaceIsExact) {
       moves.push_back(rigid.row(i));
     }
   }
-  input.movableDisplacement.resize(static_cast<Eigen::Index>(moves.size()), 3);
-  for (size_t k = 0; k < moves.size(); ++k)
-    input.movableDisplacement.row(static_cast<Eigen::Index>(k)) = moves[k];
-  input.recoverInterior = true;
   SolveResult result;
   LargeDeformationReport report;
-  const Status s = SolveLargeDeformation(request, input, {}, result, report);
+  const Status s = SolveLargeDeformation(request, MovesInput(moves), {}, result, report);
   ASSERT_TRUE(s.ok) << s.message;
   EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, rigid), 1e-8);
   EXPECT_LT(report.largestGreenStrain, 1e-8);
@@ -356,14 +361,9 @@ TEST(LargeDeformation, TheLargestStrainIsTheLargestOfEveryCell) {
       }
     }
   }
-  SolveInput input;
-  input.movableDisplacement.resize(static_cast<Eigen::Index>(moves.size()), 3);
-  for (size_t k = 0; k < moves.size(); ++k)
-    input.movableDisplacement.row(static_cast<Eigen::Index>(k)) = moves[k];
-  input.recoverInterior = true;
   SolveResult result;
   LargeDeformationReport report;
-  Status s = SolveLargeDeformation(request, input, {}, result, report);
+  Status s = SolveLargeDeformation(request, MovesInput(moves), {}, result, report);
   ASSERT_TRUE(s.ok) << s.message;
   double smallest = 0.0;
   const auto [largest, cell] = LargestStrainOfEveryCell(request, result.allDisplacement, &smallest);
