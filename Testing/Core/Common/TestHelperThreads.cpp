@@ -9,6 +9,7 @@
 #include "Common/ParallelFor.h"
 
 #include <atomic>
+#include <condition_variable>
 #include <gtest/gtest.h>
 #include <mutex>
 #include <numeric>
@@ -109,9 +110,21 @@ TEST(HelperThreads, ACallFromWithinAPartRunsItsPartsThere) {
 }
 
 TEST(HelperThreads, EachCallingThreadHasItsOwnHelpers) {
+  // Both callers stay alive until both have recorded: a thread id is reused once its thread
+  // ends, so a crew that exited with its caller could share an id with the next one.
   std::vector<std::thread::id> a, b;
-  std::thread first([&] { a = RunAndRecord(2); });
-  std::thread second([&] { b = RunAndRecord(2); });
+  std::mutex mutex;
+  std::condition_variable bothRecorded;
+  int recorded = 0;
+  auto recordAndWait = [&](std::vector<std::thread::id>& into) {
+    into = RunAndRecord(2);
+    std::unique_lock<std::mutex> lock(mutex);
+    ++recorded;
+    bothRecorded.notify_all();
+    bothRecorded.wait(lock, [&] { return recorded == 2; });
+  };
+  std::thread first([&] { recordAndWait(a); });
+  std::thread second([&] { recordAndWait(b); });
   first.join();
   second.join();
   ASSERT_EQ(a.size(), 2u);
