@@ -31,6 +31,22 @@ double IsochoricFactor(double J) {
   return y * y;
 }
 
+// cof(F) = det(F) F^-T, written out: F^-T without the division and the second determinant that a
+// general inverse computes, and det F = F's first row . cof's first row.
+Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F) {
+  Eigen::Matrix3d c;
+  c(0, 0) = F(1, 1) * F(2, 2) - F(1, 2) * F(2, 1);
+  c(0, 1) = F(1, 2) * F(2, 0) - F(1, 0) * F(2, 2);
+  c(0, 2) = F(1, 0) * F(2, 1) - F(1, 1) * F(2, 0);
+  c(1, 0) = F(0, 2) * F(2, 1) - F(0, 1) * F(2, 2);
+  c(1, 1) = F(0, 0) * F(2, 2) - F(0, 2) * F(2, 0);
+  c(1, 2) = F(0, 1) * F(2, 0) - F(0, 0) * F(2, 1);
+  c(2, 0) = F(0, 1) * F(1, 2) - F(0, 2) * F(1, 1);
+  c(2, 1) = F(0, 2) * F(1, 0) - F(0, 0) * F(1, 2);
+  c(2, 2) = F(0, 0) * F(1, 1) - F(0, 1) * F(1, 0);
+  return c;
+}
+
 } // namespace
 
 NeoHookeanParameters NeoHookeanFromLinear(double E, double nu) {
@@ -69,30 +85,30 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
                         const CornerDisplacements& u, double& energy, ElementVector& force,
                         ElementMatrix* tangent) {
   const Eigen::Matrix3d F = DeformationGradient(reference, u);
-  const double J = F.determinant();
+  const Eigen::Matrix3d cofactor = Cofactor(F);
+  const double J = F.row(0).dot(cofactor.row(0));
   if (!(J > 0.0))
     return false;
   const Eigen::Matrix<double, 4, 3>& G = reference.gradients;
   const double V = reference.volume;
-  // NeoHookeanEnergyDensity and NeoHookeanStress with their shared terms computed once (the same
-  // expressions, so the same values): this is the large-deformation solve's innermost loop.
+  // NeoHookeanEnergyDensity and NeoHookeanStress with their shared terms computed once: this is
+  // the large-deformation solves' innermost loop. With F^-T = cof(F) / J,
+  // P = mu a (F - i1/3 F^-T) + kappa (J - 1) J F^-T = mu a F + (kappa (J - 1) - mu a i1 / (3 J)) cof.
   const double a = IsochoricFactor(J), i1 = F.squaredNorm();
   energy = V * (0.5 * p.mu * (a * i1 - 3.0) + 0.5 * p.kappa * (J - 1.0) * (J - 1.0));
-  const Eigen::Matrix3d inverseT = F.inverse().transpose();
-  const Eigen::Matrix3d P =
-      p.mu * a * (F - (i1 / 3.0) * inverseT) + p.kappa * (J - 1.0) * J * inverseT;
+  const double mua = p.mu * a;
+  const Eigen::Matrix3d VP = V * (mua * F + (p.kappa * (J - 1.0) - mua * i1 / (3.0 * J)) * cofactor);
   // f_a = V P grad N_a.
-  const Eigen::Matrix<double, 4, 3> f = V * G * P.transpose();
-  for (int a = 0; a < 4; ++a)
-    force.segment<3>(3 * a) = f.row(a).transpose();
+  for (int c = 0; c < 4; ++c)
+    force.segment<3>(3 * c).noalias() = VP * G.row(c).transpose();
   if (!tangent)
     return true;
+  const Eigen::Matrix3d inverseT = cofactor / J;
   // The tangent's block (a, b), V grad N_a . dP/dF . grad N_b, in closed form. With H = F^-T,
   // dP/dF for dF = e_k e_l^T has the terms mu a delta_ik delta_jl, rank-one products of F and H,
   // and H_il H_kj; summed against the gradients each is an outer product of the corner vectors
   // F g and H g (g = grad N), so a block costs a few 3 x 3 outer products instead of nine stress
   // derivatives.
-  const double mua = p.mu * a;
   const double crossFH = -(2.0 / 3.0) * mua; // (F g_a)(H g_b)^T + transpose
   const double alongH = (2.0 / 9.0) * mua * i1 + p.kappa * (2.0 * J - 1.0) * J; // (H g_a)(H g_b)^T
   const double swapH = mua * i1 / 3.0 - p.kappa * (J * J - J);                  // (H g_b)(H g_a)^T
@@ -111,6 +127,66 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
       if (c != r)
         tangent->block<3, 3>(3 * c, 3 * r) = block.transpose();
     }
+  return true;
+}
+
+// Four-wide AVX2 where the CPU has it (the build's baseline is SSE2's two), chosen at load time.
+// Without FMA contraction, so that both versions give the same bits.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+bool NeoHookeanTetForces(NeoHookeanTetLanes& b) {
+  constexpr int L = kTetLanes;
+  double F[3][3][L];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int l = 0; l < L; ++l)
+        F[i][j][l] = (i == j ? 1.0 : 0.0) + b.corner[0][i][l] * b.gradient[0][j][l] +
+                     b.corner[1][i][l] * b.gradient[1][j][l] +
+                     b.corner[2][i][l] * b.gradient[2][j][l] +
+                     b.corner[3][i][l] * b.gradient[3][j][l];
+  double C[3][3][L], J[L], i1[L];
+  for (int l = 0; l < L; ++l) {
+    C[0][0][l] = F[1][1][l] * F[2][2][l] - F[1][2][l] * F[2][1][l];
+    C[0][1][l] = F[1][2][l] * F[2][0][l] - F[1][0][l] * F[2][2][l];
+    C[0][2][l] = F[1][0][l] * F[2][1][l] - F[1][1][l] * F[2][0][l];
+    C[1][0][l] = F[0][2][l] * F[2][1][l] - F[0][1][l] * F[2][2][l];
+    C[1][1][l] = F[0][0][l] * F[2][2][l] - F[0][2][l] * F[2][0][l];
+    C[1][2][l] = F[0][1][l] * F[2][0][l] - F[0][0][l] * F[2][1][l];
+    C[2][0][l] = F[0][1][l] * F[1][2][l] - F[0][2][l] * F[1][1][l];
+    C[2][1][l] = F[0][2][l] * F[1][0][l] - F[0][0][l] * F[1][2][l];
+    C[2][2][l] = F[0][0][l] * F[1][1][l] - F[0][1][l] * F[1][0][l];
+    J[l] = F[0][0][l] * C[0][0][l] + F[0][1][l] * C[0][1][l] + F[0][2][l] * C[0][2][l];
+    i1[l] = 0.0;
+  }
+  bool valid = true;
+  for (int l = 0; l < L; ++l)
+    valid &= J[l] > 0.0;
+  if (!valid)
+    return false;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int l = 0; l < L; ++l)
+        i1[l] += F[i][j][l] * F[i][j][l];
+  double a[L], cF[L], cC[L];
+  for (int l = 0; l < L; ++l)
+    a[l] = IsochoricFactor(J[l]);
+  for (int l = 0; l < L; ++l) {
+    const double V = b.volume[l], mua = b.mu[l] * a[l], Jm1 = J[l] - 1.0;
+    b.energy[l] = V * (0.5 * b.mu[l] * (a[l] * i1[l] - 3.0) + 0.5 * b.kappa[l] * Jm1 * Jm1);
+    cF[l] = V * mua;
+    cC[l] = V * (b.kappa[l] * Jm1 - mua * i1[l] / (3.0 * J[l]));
+  }
+  double VP[3][3][L];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int l = 0; l < L; ++l)
+        VP[i][j][l] = cF[l] * F[i][j][l] + cC[l] * C[i][j][l];
+  for (int c = 0; c < 4; ++c)
+    for (int i = 0; i < 3; ++i)
+      for (int l = 0; l < L; ++l)
+        b.force[c][i][l] = VP[i][0][l] * b.gradient[c][0][l] + VP[i][1][l] * b.gradient[c][1][l] +
+                           VP[i][2][l] * b.gradient[c][2][l];
   return true;
 }
 

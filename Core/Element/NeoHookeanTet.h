@@ -49,6 +49,24 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
                         const CornerDisplacements& u, double& energy, ElementVector& force,
                         ElementMatrix* tangent);
 
+// Four cells' energies and internal forces at once (no tangent), lane l holding cell l: the
+// expressions of NeoHookeanTetState's force with the lanes innermost, so that the compiler
+// vectorizes them across cells (one cell's 3 x 3 algebra is too short and too serial for it).
+// The force solves' innermost loop; equal to NeoHookeanTetState to round-off.
+constexpr int kTetLanes = 4;
+struct NeoHookeanTetLanes {
+  // In: the corners' displacements and grad N_a (index [corner][component][lane]), the volumes
+  // and the moduli.
+  double corner[4][3][kTetLanes];
+  double gradient[4][3][kTetLanes];
+  double volume[kTetLanes], mu[kTetLanes], kappa[kTetLanes];
+  // Out: each lane's energy and force (dE/du_a, [corner][component][lane]).
+  double energy[kTetLanes];
+  double force[4][3][kTetLanes];
+};
+// False, with the outputs unspecified, when any lane's det F <= 0.
+bool NeoHookeanTetForces(NeoHookeanTetLanes& lanes);
+
 // The same cell with small-strain linear elasticity of the same moduli (shear mu, bulk kappa):
 // W = mu eps:eps + (kappa - 2 mu / 3) / 2 (tr eps)^2 with eps the symmetric part of F - I. Its
 // force is linear in u and its tangent constant. For cells that are no tissue (LipSeal's bridges).

@@ -5,6 +5,8 @@
 #include "Element/NeoHookeanTet.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <gtest/gtest.h>
 
 using namespace faceplan;
@@ -113,6 +115,49 @@ TEST(NeoHookeanTet, InvertedCellIsRejected) {
   ElementVector force;
   EXPECT_FALSE(NeoHookeanTetState(ref, kTissue, u, energy, force, nullptr));
   EXPECT_EQ(energy, -1.0);
+}
+
+// The four-lane force kernel against the one-cell state, lane by lane, with each lane a different
+// cell, move and material; and one inverted lane refuses the whole batch.
+TEST(NeoHookeanTet, FourLaneForcesEqualTheCellState) {
+  NeoHookeanTetLanes lanes;
+  TetReference refs[kTetLanes];
+  CornerDisplacements moves[kTetLanes];
+  NeoHookeanParameters materials[kTetLanes];
+  for (int l = 0; l < kTetLanes; ++l) {
+    TetCorners corners = SkewedTet();
+    corners.row(l) += Eigen::RowVector3d(0.1 * l, -0.05 * l, 0.2);
+    refs[l] = MakeTetReference(corners);
+    moves[l] = (0.25 * (l + 1)) * LargeMove(corners);
+    materials[l] = NeoHookeanFromLinear(1000.0 * (l + 1), 0.3 + 0.05 * l);
+    for (int a = 0; a < 4; ++a)
+      for (int i = 0; i < 3; ++i) {
+        lanes.corner[a][i][l] = moves[l](a, i);
+        lanes.gradient[a][i][l] = refs[l].gradients(a, i);
+      }
+    lanes.volume[l] = refs[l].volume;
+    lanes.mu[l] = materials[l].mu;
+    lanes.kappa[l] = materials[l].kappa;
+  }
+  ASSERT_TRUE(NeoHookeanTetForces(lanes));
+  for (int l = 0; l < kTetLanes; ++l) {
+    double energy;
+    ElementVector force;
+    ASSERT_TRUE(NeoHookeanTetState(refs[l], materials[l], moves[l], energy, force, nullptr));
+    EXPECT_NEAR(lanes.energy[l], energy, 1e-13 * std::max(1.0, std::abs(energy))) << l;
+    const double scale = std::max(force.cwiseAbs().maxCoeff(), 1e-300);
+    for (int a = 0; a < 4; ++a)
+      for (int i = 0; i < 3; ++i)
+        EXPECT_NEAR(lanes.force[a][i][l], force[3 * a + i], 1e-13 * scale) << l << " " << a << i;
+  }
+  // Corner 3 of lane 2 pushed through the opposite face.
+  const TetCorners corners = SkewedTet();
+  for (int i = 0; i < 3; ++i)
+    lanes.corner[3][i][2] = 2.0 * (corners(0, i) - corners(3, i));
+  for (int a = 0; a < 3; ++a)
+    for (int i = 0; i < 3; ++i)
+      lanes.corner[a][i][2] = 0.0;
+  EXPECT_FALSE(NeoHookeanTetForces(lanes));
 }
 
 } // namespace
