@@ -91,19 +91,20 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
     return false;
   const Eigen::Matrix<double, 4, 3>& G = reference.gradients;
   const double V = reference.volume;
-  // NeoHookeanEnergyDensity and NeoHookeanStress with their shared terms computed once: this is
-  // the large-deformation solves' innermost loop. With F^-T = cof(F) / J,
-  // P = mu a (F - i1/3 F^-T) + kappa (J - 1) J F^-T = mu a F + (kappa (J - 1) - mu a i1 / (3 J)) cof.
+  // NeoHookeanEnergyDensity and NeoHookeanStress with their shared terms computed once, F^-T as
+  // cof(F) / J: this is the large-deformation solves' innermost loop. In this form the stress at
+  // F = I is exactly zero.
   const double a = IsochoricFactor(J), i1 = F.squaredNorm();
   energy = V * (0.5 * p.mu * (a * i1 - 3.0) + 0.5 * p.kappa * (J - 1.0) * (J - 1.0));
   const double mua = p.mu * a;
-  const Eigen::Matrix3d VP = V * (mua * F + (p.kappa * (J - 1.0) - mua * i1 / (3.0 * J)) * cofactor);
+  const Eigen::Matrix3d inverseT = cofactor / J;
+  const Eigen::Matrix3d VP =
+      V * (mua * (F - (i1 / 3.0) * inverseT) + p.kappa * (J - 1.0) * J * inverseT);
   // f_a = V P grad N_a.
   for (int c = 0; c < 4; ++c)
     force.segment<3>(3 * c).noalias() = VP * G.row(c).transpose();
   if (!tangent)
     return true;
-  const Eigen::Matrix3d inverseT = cofactor / J;
   // The tangent's block (a, b), V grad N_a . dP/dF . grad N_b, in closed form. With H = F^-T,
   // dP/dF for dF = e_k e_l^T has the terms mu a delta_ik delta_jl, rank-one products of F and H,
   // and H_il H_kj; summed against the gradients each is an outer product of the corner vectors
@@ -168,20 +169,26 @@ bool NeoHookeanTetForces(NeoHookeanTetLanes& b) {
     for (int j = 0; j < 3; ++j)
       for (int l = 0; l < L; ++l)
         i1[l] += F[i][j][l] * F[i][j][l];
-  double a[L], cF[L], cC[L];
+  double a[L], mua[L], third[L], volumetric[L];
   for (int l = 0; l < L; ++l)
     a[l] = IsochoricFactor(J[l]);
   for (int l = 0; l < L; ++l) {
-    const double V = b.volume[l], mua = b.mu[l] * a[l], Jm1 = J[l] - 1.0;
-    b.energy[l] = V * (0.5 * b.mu[l] * (a[l] * i1[l] - 3.0) + 0.5 * b.kappa[l] * Jm1 * Jm1);
-    cF[l] = V * mua;
-    cC[l] = V * (b.kappa[l] * Jm1 - mua * i1[l] / (3.0 * J[l]));
+    const double Jm1 = J[l] - 1.0;
+    b.energy[l] =
+        b.volume[l] * (0.5 * b.mu[l] * (a[l] * i1[l] - 3.0) + 0.5 * b.kappa[l] * Jm1 * Jm1);
+    mua[l] = b.mu[l] * a[l];
+    third[l] = i1[l] / 3.0;
+    volumetric[l] = b.kappa[l] * Jm1 * J[l];
   }
+  // V P with P = mu a (F - i1/3 F^-T) + kappa (J - 1) J F^-T, F^-T = cof / J (as the one cell's).
   double VP[3][3][L];
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
-      for (int l = 0; l < L; ++l)
-        VP[i][j][l] = cF[l] * F[i][j][l] + cC[l] * C[i][j][l];
+      for (int l = 0; l < L; ++l) {
+        const double inverseT = C[i][j][l] / J[l];
+        VP[i][j][l] =
+            b.volume[l] * (mua[l] * (F[i][j][l] - third[l] * inverseT) + volumetric[l] * inverseT);
+      }
   for (int c = 0; c < 4; ++c)
     for (int i = 0; i < 3; ++i)
       for (int l = 0; l < L; ++l)

@@ -150,6 +150,23 @@ TEST(NeoHookeanTet, FourLaneForcesEqualTheCellState) {
       for (int i = 0; i < 3; ++i)
         EXPECT_NEAR(lanes.force[a][i][l], force[3 * a + i], 1e-13 * scale) << l << " " << a << i;
   }
+  // At rest the stress, and so every force, is exactly zero (the CUDA backend's kernel gives
+  // exactly zero there too, and its forces are compared with these relative to their size).
+  NeoHookeanTetLanes rest = lanes;
+  for (int a = 0; a < 4; ++a)
+    for (int i = 0; i < 3; ++i)
+      for (int l = 0; l < kTetLanes; ++l)
+        rest.corner[a][i][l] = 0.0;
+  ASSERT_TRUE(NeoHookeanTetForces(rest));
+  for (int a = 0; a < 4; ++a)
+    for (int i = 0; i < 3; ++i)
+      for (int l = 0; l < kTetLanes; ++l)
+        EXPECT_EQ(rest.force[a][i][l], 0.0) << l << " " << a << i;
+  double restEnergy;
+  ElementVector restForce;
+  ASSERT_TRUE(NeoHookeanTetState(refs[0], materials[0], CornerDisplacements::Zero(), restEnergy,
+                                 restForce, nullptr));
+  EXPECT_EQ(restForce.cwiseAbs().maxCoeff(), 0.0);
   // Corner 3 of lane 2 pushed through the opposite face.
   const TetCorners corners = SkewedTet();
   for (int i = 0; i < 3; ++i)
