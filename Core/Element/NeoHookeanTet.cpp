@@ -32,9 +32,11 @@ double IsochoricFactor(double J) {
 }
 
 // cof(F) = det(F) F^-T, written out: F^-T without the division and the second determinant that a
-// general inverse computes, and det F = F's first row . cof's first row.
-Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F) {
-  Eigen::Matrix3d c;
+// general inverse computes, and det F = F's first row . cof's first row. F(i, j) reads an entry and
+// c(i, j) is assigned one: a 3 x 3 matrix, or one lane of NeoHookeanTetForces' arrays.
+// Always inlined: inside NeoHookeanTetForces' lane loop it must vectorize with its caller.
+template <class In, class Out>
+[[gnu::always_inline]] inline void WriteCofactor(const In& F, Out&& c) {
   c(0, 0) = F(1, 1) * F(2, 2) - F(1, 2) * F(2, 1);
   c(0, 1) = F(1, 2) * F(2, 0) - F(1, 0) * F(2, 2);
   c(0, 2) = F(1, 0) * F(2, 1) - F(1, 1) * F(2, 0);
@@ -44,7 +46,6 @@ Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F) {
   c(2, 0) = F(0, 1) * F(1, 2) - F(0, 2) * F(1, 1);
   c(2, 1) = F(0, 2) * F(1, 0) - F(0, 0) * F(1, 2);
   c(2, 2) = F(0, 0) * F(1, 1) - F(0, 1) * F(1, 0);
-  return c;
 }
 
 } // namespace
@@ -85,7 +86,8 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
                         const CornerDisplacements& u, double& energy, ElementVector& force,
                         ElementMatrix* tangent) {
   const Eigen::Matrix3d F = DeformationGradient(reference, u);
-  const Eigen::Matrix3d cofactor = Cofactor(F);
+  Eigen::Matrix3d cofactor;
+  WriteCofactor(F, cofactor);
   const double J = F.row(0).dot(cofactor.row(0));
   if (!(J > 0.0))
     return false;
@@ -148,15 +150,8 @@ bool NeoHookeanTetForces(NeoHookeanTetLanes& b) {
                      b.corner[3][i][l] * b.gradient[3][j][l];
   double C[3][3][L], J[L], i1[L];
   for (int l = 0; l < L; ++l) {
-    C[0][0][l] = F[1][1][l] * F[2][2][l] - F[1][2][l] * F[2][1][l];
-    C[0][1][l] = F[1][2][l] * F[2][0][l] - F[1][0][l] * F[2][2][l];
-    C[0][2][l] = F[1][0][l] * F[2][1][l] - F[1][1][l] * F[2][0][l];
-    C[1][0][l] = F[0][2][l] * F[2][1][l] - F[0][1][l] * F[2][2][l];
-    C[1][1][l] = F[0][0][l] * F[2][2][l] - F[0][2][l] * F[2][0][l];
-    C[1][2][l] = F[0][1][l] * F[2][0][l] - F[0][0][l] * F[2][1][l];
-    C[2][0][l] = F[0][1][l] * F[1][2][l] - F[0][2][l] * F[1][1][l];
-    C[2][1][l] = F[0][2][l] * F[1][0][l] - F[0][0][l] * F[1][2][l];
-    C[2][2][l] = F[0][0][l] * F[1][1][l] - F[0][1][l] * F[1][0][l];
+    WriteCofactor([&](int i, int j) { return F[i][j][l]; },
+                  [&](int i, int j) -> double& { return C[i][j][l]; });
     J[l] = F[0][0][l] * C[0][0][l] + F[0][1][l] * C[0][1][l] + F[0][2][l] * C[0][2][l];
     i1[l] = 0.0;
   }
