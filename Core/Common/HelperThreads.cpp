@@ -24,9 +24,11 @@ namespace faceplan {
 namespace {
 
 // How long a helper stays awake after its part, and the caller waits awake for the helpers,
-// before sleeping: longer than the gap between two parallel steps of one iteration, short enough
-// not to keep a core from other work.
-constexpr std::chrono::microseconds kSpin(200);
+// before sleeping: longer than the serial gaps of one iteration (the L-BFGS recursion, the top of
+// the factor's tree, a line-search step), short enough not to keep a core from other work for
+// long. A helper that sleeps lets its core halt, and on a virtual machine waking a halted core
+// waits for the hypervisor to schedule it again, which makes every parallel step after a gap slow.
+constexpr std::chrono::microseconds kSpin(2000);
 
 class Crew {
 public:
