@@ -19,6 +19,12 @@ extern "C" {
 void sgemv_(const char* trans, const int* m, const int* n, const float* alpha, const float* a,
             const int* lda, const float* x, const int* incx, const float* beta, float* y,
             const int* incy);
+void sgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
+            const float* alpha, const float* a, const int* lda, const float* b, const int* ldb,
+            const float* beta, float* c, const int* ldc);
+void strsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
+            const int* n, const float* alpha, const float* a, const int* lda, float* b,
+            const int* ldb);
 }
 
 namespace faceplan {
@@ -30,6 +36,8 @@ namespace {
 constexpr int kBlasEntries = 512;
 // The columns of a supernode's block in the substitutions' blocked triangular solves.
 constexpr int kBlock = 32;
+// Right-hand sides substituted together: a supernode's values are read once for all of them.
+constexpr int kRightHandSides = 32;
 
 } // namespace
 
@@ -155,6 +163,91 @@ struct SinglePrecisionFactor::Impl {
         sum += col[i] * y1[i];
       y1[j] = (y1[j] - sum) / col[j];
     }
+  }
+
+  // Forward and backward sweeps through supernode k for `width` right-hand sides at once: y holds
+  // them row by row (width values per column of the factor), so a supernode's rows are one
+  // row-major block, which BLAS reads as the transposed column-major block.
+  void forwardMany(int k, int width, float* y, float* accumulate, std::vector<float>& t) const {
+    const int nc = columns(k), nr = rowsOf(k), m = nr - nc;
+    const float* L = values.data() + px[k];
+    float* y1 = y + std::int64_t(super[k]) * width;
+    const float one = 1.0f, zero = 0.0f;
+    // Y1 <- L11^-1 Y1, as Y1^T <- Y1^T L11^-T.
+    strsm_("R", "L", "T", "N", &width, &nc, &one, L, &nr, y1, &width);
+    if (m == 0)
+      return;
+    // T = L21 Y1, as T^T = Y1^T L21^T.
+    t.resize(std::size_t(m) * width);
+    sgemm_("N", "T", &width, &m, &nc, &one, y1, &width, L + nc, &nr, &zero, t.data(), &width);
+    const int* rows = s.data() + pi[k] + nc;
+    for (int i = 0; i < m; ++i) {
+      const int r = rows[i];
+      const float* ti = t.data() + std::int64_t(i) * width;
+      if (accumulate && topIndex[r] >= 0) {
+        float* a = accumulate + std::int64_t(topIndex[r]) * width;
+        for (int q = 0; q < width; ++q)
+          a[q] += ti[q];
+      } else {
+        float* yr = y + std::int64_t(r) * width;
+        for (int q = 0; q < width; ++q)
+          yr[q] -= ti[q];
+      }
+    }
+  }
+
+  void backwardMany(int k, int width, float* y, std::vector<float>& t) const {
+    const int nc = columns(k), nr = rowsOf(k), m = nr - nc;
+    const float* L = values.data() + px[k];
+    float* y1 = y + std::int64_t(super[k]) * width;
+    const float one = 1.0f, minusOne = -1.0f;
+    t.resize(std::size_t(m) * width);
+    const int* rows = s.data() + pi[k] + nc;
+    for (int i = 0; i < m; ++i)
+      std::copy_n(y + std::int64_t(rows[i]) * width, width, t.data() + std::int64_t(i) * width);
+    // Y1 -= L21^T T with T the rows below, as Y1^T -= T^T L21; then Y1 <- L11^-T Y1, as
+    // Y1^T <- Y1^T L11^-1.
+    if (m > 0)
+      sgemm_("N", "N", &width, &nc, &m, &minusOne, t.data(), &width, L + nc, &nr, &one, y1, &width);
+    strsm_("R", "L", "N", "N", &width, &nc, &one, L, &nr, y1, &width);
+  }
+
+  // The forward sweep then the backward sweep over every supernode, `width` values per column of
+  // y: with the two sides of the split on two threads where there is one.
+  template <class Forward, class Backward>
+  void sweeps(int width, float* y, const Forward& forward, const Backward& backward) const {
+    const int ns = static_cast<int>(super.size()) - 1;
+    if (!split) {
+      std::vector<float> t;
+      for (int k = 0; k < ns; ++k)
+        forward(k, y, nullptr, t);
+      for (int k = ns - 1; k >= 0; --k)
+        backward(k, y, t);
+      return;
+    }
+    std::vector<float> accumulate[2] = {std::vector<float>(std::size_t(topColumns) * width, 0.0f),
+                                        std::vector<float>(std::size_t(topColumns) * width, 0.0f)};
+    RunOnHelpers(2, [&](int side) {
+      std::vector<float> t;
+      for (int k : this->side[side])
+        forward(k, y, accumulate[side].data(), t);
+    });
+    for (int k : top)
+      for (int c = super[k]; c < super[k + 1]; ++c) {
+        const std::int64_t a = std::int64_t(topIndex[c]) * width;
+        for (int q = 0; q < width; ++q)
+          y[std::int64_t(c) * width + q] -= accumulate[0][a + q] + accumulate[1][a + q];
+      }
+    std::vector<float> t;
+    for (int k : top)
+      forward(k, y, nullptr, t);
+    for (auto it = top.rbegin(); it != top.rend(); ++it)
+      backward(*it, y, t);
+    RunOnHelpers(2, [&](int side) {
+      std::vector<float> t;
+      for (auto it = this->side[side].rbegin(); it != this->side[side].rend(); ++it)
+        backward(*it, y, t);
+    });
   }
 
   // Chooses the top part and two sides that minimise the top's work plus the larger side's
@@ -297,39 +390,50 @@ Status SinglePrecisionFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x
     y[k] = static_cast<float>(b[d.perm[k]] / scale);
   // One BLAS thread: these triangular solves and products are too small for threaded BLAS.
   ScopedBlasThreads serial(1, BlasScope::Pinned);
-  if (!d.split) {
-    std::vector<float> t;
-    const int ns = static_cast<int>(d.super.size()) - 1;
-    for (int k = 0; k < ns; ++k)
-      d.forward(k, y.data(), nullptr, t);
-    for (int k = ns - 1; k >= 0; --k)
-      d.backward(k, y.data(), t);
-  } else {
-    std::vector<float> accumulate[2] = {std::vector<float>(d.topColumns, 0.0f),
-                                        std::vector<float>(d.topColumns, 0.0f)};
-    auto forwardSide = [&](int side) {
-      std::vector<float> t;
-      for (int k : d.side[side])
-        d.forward(k, y.data(), accumulate[side].data(), t);
-    };
-    auto backwardSide = [&](int side) {
-      std::vector<float> t;
-      for (auto it = d.side[side].rbegin(); it != d.side[side].rend(); ++it)
-        d.backward(*it, y.data(), t);
-    };
-    RunOnHelpers(2, forwardSide);
-    for (int k : d.top)
-      for (int c = d.super[k]; c < d.super[k + 1]; ++c)
-        y[c] -= accumulate[0][d.topIndex[c]] + accumulate[1][d.topIndex[c]];
-    std::vector<float> t;
-    for (int k : d.top)
-      d.forward(k, y.data(), nullptr, t);
-    for (auto it = d.top.rbegin(); it != d.top.rend(); ++it)
-      d.backward(*it, y.data(), t);
-    RunOnHelpers(2, backwardSide);
-  }
+  d.sweeps(
+      1, y.data(),
+      [&d](int k, float* y, float* accumulate, std::vector<float>& t) {
+        d.forward(k, y, accumulate, t);
+      },
+      [&d](int k, float* y, std::vector<float>& t) { d.backward(k, y, t); });
   for (int k = 0; k < d.n; ++k)
     x[d.perm[k]] = static_cast<double>(y[k]) * scale;
+  if (!x.allFinite())
+    return Status::Error("the single-precision substitution overflowed");
+  return Status::Ok();
+}
+
+Status SinglePrecisionFactor::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) const {
+  const Impl& d = *impl_;
+  if (d.values.empty() || b.rows() != d.n)
+    return Status::Error("internal: single-precision solve before assign, or a wrong size");
+  if (!b.allFinite())
+    return Status::Error("the right-hand side is not finite");
+  x.setZero(d.n, b.cols());
+  ScopedBlasThreads serial(1, BlasScope::Pinned);
+  std::vector<float> y;
+  for (Eigen::Index first = 0; first < b.cols(); first += kRightHandSides) {
+    const int width = static_cast<int>(std::min<Eigen::Index>(kRightHandSides, b.cols() - first));
+    // Each column scaled to unit largest entry (a zero column stays zero).
+    Eigen::VectorXd scale(width);
+    for (int q = 0; q < width; ++q) {
+      const double largest = b.col(first + q).cwiseAbs().maxCoeff();
+      scale[q] = largest > 0.0 ? largest : 1.0;
+    }
+    y.resize(std::size_t(d.n) * width);
+    for (int k = 0; k < d.n; ++k)
+      for (int q = 0; q < width; ++q)
+        y[std::size_t(k) * width + q] = static_cast<float>(b(d.perm[k], first + q) / scale[q]);
+    d.sweeps(
+        width, y.data(),
+        [&d, width](int k, float* y, float* accumulate, std::vector<float>& t) {
+          d.forwardMany(k, width, y, accumulate, t);
+        },
+        [&d, width](int k, float* y, std::vector<float>& t) { d.backwardMany(k, width, y, t); });
+    for (int k = 0; k < d.n; ++k)
+      for (int q = 0; q < width; ++q)
+        x(d.perm[k], first + q) = static_cast<double>(y[std::size_t(k) * width + q]) * scale[q];
+  }
   if (!x.allFinite())
     return Status::Error("the single-precision substitution overflowed");
   return Status::Ok();

@@ -63,6 +63,40 @@ TEST(SinglePrecisionFactor, SolvesTheFactoredMatrixToSinglePrecision) {
   EXPECT_GT(one.valueBytes(), 0.0);
 }
 
+TEST(SinglePrecisionFactor, SeveralRightHandSidesAtOnceEqualOneByOne) {
+  Factored f;
+  Factor(f);
+  const Eigen::Index n = f.system->kff.rows();
+  // More columns than one pass takes, with a zero column and columns of very different scales.
+  Eigen::MatrixXd b = Eigen::MatrixXd::Random(n, 41);
+  b.col(3).setZero();
+  b.col(7) *= 1e-150;
+  b.col(40) *= 1e150;
+  for (int threads : {1, 2}) {
+    SinglePrecisionFactor single;
+    ASSERT_TRUE(single.assign(f.factor, threads).ok);
+    Eigen::MatrixXd x;
+    ASSERT_TRUE(single.solve(b, x).ok);
+    ASSERT_EQ(x.rows(), n);
+    ASSERT_EQ(x.cols(), b.cols());
+    EXPECT_EQ(x.col(3).norm(), 0.0);
+    for (Eigen::Index c = 0; c < b.cols(); ++c) {
+      if (c == 3)
+        continue;
+      Eigen::VectorXd one;
+      ASSERT_TRUE(single.solve(Eigen::VectorXd(b.col(c)), one).ok);
+      EXPECT_LT((x.col(c) - one).norm(), 1e-5 * one.norm())
+          << "column " << c << ", " << threads << " thread(s)";
+    }
+  }
+  SinglePrecisionFactor single;
+  ASSERT_TRUE(single.assign(f.factor).ok);
+  Eigen::MatrixXd x;
+  EXPECT_FALSE(single.solve(Eigen::MatrixXd::Ones(3, 2), x).ok) << "a wrong size";
+  b(5, 9) = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(single.solve(b, x).ok);
+}
+
 TEST(SinglePrecisionFactor, ZeroAndBadInput) {
   Factored f;
   Factor(f);
