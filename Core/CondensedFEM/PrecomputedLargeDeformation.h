@@ -106,7 +106,8 @@ struct PrecomputedLargeDeformationOptions {
   // the node back in and iterate again. The contact updates still decide the final contact.
   bool predictContactAhead = true;
   // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
-  // through their Schur complement, one substitution each, when there are at most this many.
+  // through their Schur complement, when there are at most this many (their columns substituted
+  // at once, once per contact change; each iteration then reads them twice).
   int maxCoupledReleases = 8;
   // The initial inverse Hessian from a single-precision copy of the factor (half the bytes a
   // substitution reads); the residual, and so the result, stay double precision.
