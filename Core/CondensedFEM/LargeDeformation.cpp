@@ -139,7 +139,7 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
   return std::isfinite(out.energy) && out.force.allFinite();
 }
 
-void ZeroPrescribed(const std::vector<char>& prescribed, Eigen::VectorXd& v) {
+void ZeroPrescribed(const std::vector<char>& prescribed, Eigen::Ref<Eigen::VectorXd> v) {
   for (Eigen::Index i = 0; i < v.size(); ++i)
     if (prescribed[i])
       v[i] = 0.0;

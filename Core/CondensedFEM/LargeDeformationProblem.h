@@ -78,7 +78,8 @@ struct EvaluationScratch {
 bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
               std::vector<double>* packed, EvaluationScratch* scratch = nullptr);
 
-void ZeroPrescribed(const std::vector<char>& prescribed, Eigen::VectorXd& v);
+// v: a vector or a matrix's column.
+void ZeroPrescribed(const std::vector<char>& prescribed, Eigen::Ref<Eigen::VectorXd> v);
 
 // The nonzeros of `upper` in a prescribed row or column, off the diagonal and on it.
 void FindPinnedEntries(const SparseMatrix& upper, const std::vector<char>& prescribed,

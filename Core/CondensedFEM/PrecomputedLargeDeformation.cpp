@@ -578,9 +578,7 @@ private:
       for (Eigen::Index i = 0; i < k; ++i)
         arr(i, j) = columns(dofs[i], j);
     for (Eigen::Index j = 0; j < k; ++j) {
-      for (Eigen::Index i = 0; i < n; ++i)
-        if (pb_.prescribed[i])
-          columns(i, j) = 0.0;
+      ZeroPrescribed(pb_.prescribed, columns.col(j));
       for (int d : dofs)
         columns(d, j) = 0.0;
     }
@@ -610,9 +608,7 @@ private:
       if (!solved)
         return false;
       for (Eigen::Index j = 0; j < out.cols(); ++j)
-        for (Eigen::Index i = 0; i < out.rows(); ++i)
-          if (pb_.prescribed[i])
-            out(i, j) = 0.0;
+        ZeroPrescribed(pb_.prescribed, out.col(j));
       return true;
     }
     out.resize(rhs.rows(), rhs.cols());

@@ -6,6 +6,7 @@
 #include "Common/ParallelFor.h"
 #include "Common/UninitializedVector.h"
 #include "Common/WorkerThreads.h"
+#include "SparseSolver/Blas.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/SupernodalTree.h"
 
@@ -14,18 +15,6 @@
 #include <cmath>
 #include <limits>
 #include <vector>
-
-extern "C" {
-void sgemv_(const char* trans, const int* m, const int* n, const float* alpha, const float* a,
-            const int* lda, const float* x, const int* incx, const float* beta, float* y,
-            const int* incy);
-void sgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
-            const float* alpha, const float* a, const int* lda, const float* b, const int* ldb,
-            const float* beta, float* c, const int* ldc);
-void strsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
-            const int* n, const float* alpha, const float* a, const int* lda, float* b,
-            const int* ldb);
-}
 
 namespace faceplan {
 
