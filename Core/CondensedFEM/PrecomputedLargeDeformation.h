@@ -24,9 +24,10 @@
 // refresh, and the L-BFGS history restarted) when the last iterations' rate predicts more
 // iterations with the present factor than a factorization costs, counted in iterations
 // (`adaptiveRefactorization`), and in any case after `refactorAfter` iterations of a sub-step.
-// The substitutions use a single-precision copy of the factor (SinglePrecisionFactor): they read
-// half the bytes, and the initial Hessian need not be exact, as the residual that decides
-// convergence is evaluated in double precision.
+// The factor is computed in single precision (SinglePrecisionFactor::factorize; where single
+// precision breaks down, as a double factor rounded to single): the factorization takes about half
+// the time, the substitutions read half the bytes, and the initial Hessian need not be exact, as
+// the residual that decides convergence is evaluated in double precision.
 //
 // Lift-off (unilateral contact): the factor is made with the contact of its state pinned. A DOF
 // free now but pinned in the factor is coupled back in through its Schur complement when there are
@@ -109,8 +110,9 @@ struct PrecomputedLargeDeformationOptions {
   // through their Schur complement, when there are at most this many (their columns substituted
   // at once, once per contact change; each iteration then reads them twice).
   int maxCoupledReleases = 8;
-  // The initial inverse Hessian from a single-precision copy of the factor (half the bytes a
-  // substitution reads); the residual, and so the result, stay double precision.
+  // The initial inverse Hessian from a factor in single precision (about half the factorization's
+  // time and half the bytes a substitution reads); the residual, and so the result, stay double
+  // precision. False: a double-precision factor.
   bool singlePrecisionFactor = true;
   // When the solve does not converge: Newton (true) or an error (false, for tests).
   bool fallBackToNewton = true;

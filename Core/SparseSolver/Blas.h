@@ -11,7 +11,8 @@ void dtrsm_(const char* side, const char* uplo, const char* transa, const char* 
             const int* ldb);
 void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
             const double* a, const int* lda, const double* beta, double* c, const int* ldc);
-// Single precision, for the substitutions with a single-precision copy of a factor.
+// Single precision, for a single-precision factor (SinglePrecisionFactor): its factorization and
+// substitutions.
 void sgemv_(const char* trans, const int* m, const int* n, const float* alpha, const float* a,
             const int* lda, const float* x, const int* incx, const float* beta, float* y,
             const int* incy);
@@ -21,6 +22,9 @@ void sgemm_(const char* transa, const char* transb, const int* m, const int* n, 
 void strsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
             const int* n, const float* alpha, const float* a, const int* lda, float* b,
             const int* ldb);
+void ssyrk_(const char* uplo, const char* trans, const int* n, const int* k, const float* alpha,
+            const float* a, const int* lda, const float* beta, float* c, const int* ldc);
 // LAPACK (OpenBLAS carries it; CMake links LAPACK::LAPACK for other BLAS).
 void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info);
+void spotrf_(const char* uplo, const int* n, float* a, const int* lda, int* info);
 }

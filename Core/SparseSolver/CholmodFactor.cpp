@@ -286,6 +286,11 @@ const cholmod_factor* CholmodFactor::numericFactor() const {
   return impl_->numeric ? impl_->factor : nullptr;
 }
 
+const cholmod_factor* CholmodFactor::analysis() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->factor;
+}
+
 const Eigen::MatrixXd& CholmodFactor::trailingFactorBlock() const {
   return impl_->trailingBlock;
 }

@@ -69,6 +69,10 @@ public:
   // Read-only views for solvers outside this class (PrunedBackSubstitution): the numeric factor
   // (null unless factorized) and its trailing diagonal block as a dense lower triangle.
   const cholmod_factor_struct* numericFactor() const;
+  // The analysis (symbolic, or numeric once factorized; null before analyze()): its supernodal
+  // structure and ordering, for a factorization elsewhere (SinglePrecisionFactor::factorize). Read
+  // only; the structure does not change until the next analyze() or analyzeLike().
+  const cholmod_factor_struct* analysis() const;
   const Eigen::MatrixXd& trailingFactorBlock() const;
   // Rows of a matrix in elimination order put back in the original DOF order.
   Eigen::MatrixXd fromEliminationOrder(const Eigen::Ref<const Eigen::MatrixXd>& permuted) const;

@@ -13,11 +13,36 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 namespace faceplan {
 
 namespace {
+
+// The LAPACK/BLAS calls of one supernode, for either precision.
+void Potrf(int n, double* a, int lda, int& info) {
+  dpotrf_("L", &n, a, &lda, &info);
+}
+void Potrf(int n, float* a, int lda, int& info) {
+  spotrf_("L", &n, a, &lda, &info);
+}
+template <class Scalar>
+void TrsmRightLowerTransposed(int m, int n, const Scalar* a, int lda, Scalar* b, int ldb) {
+  const Scalar one = 1;
+  if constexpr (std::is_same_v<Scalar, double>)
+    dtrsm_("R", "L", "T", "N", &m, &n, &one, a, &lda, b, &ldb);
+  else
+    strsm_("R", "L", "T", "N", &m, &n, &one, a, &lda, b, &ldb);
+}
+template <class Scalar>
+void SyrkLowerMinus(int n, int k, const Scalar* a, int lda, Scalar beta, Scalar* c, int ldc) {
+  const Scalar minusOne = -1;
+  if constexpr (std::is_same_v<Scalar, double>)
+    dsyrk_("L", "N", &n, &k, &minusOne, a, &lda, &beta, c, &ldc);
+  else
+    ssyrk_("L", "N", &n, &k, &minusOne, a, &lda, &beta, c, &ldc);
+}
 
 // The factor's supernodal structure and tree, and the matrix's entries grouped by the
 // elimination-order column they land in (the lower triangle of P A P^T).
@@ -90,8 +115,8 @@ Status MakePlan(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
 }
 
 // A supernode's update matrix (off x off, column-major, lower triangle meaningful).
-struct Update {
-  std::unique_ptr<double[]> values;
+template <class Scalar> struct Update {
+  std::unique_ptr<Scalar[]> values;
   size_t capacity = 0;
 };
 
@@ -99,21 +124,21 @@ struct Update {
 // the factor, most in blocks large enough for malloc to map fresh pages for each, which the kernel
 // zero-fills on first touch (a visible part of a precompute's CPU time). A released buffer serves
 // a later request of between half its size and its size.
-class UpdatePool {
+template <class Scalar> class UpdatePool {
 public:
-  Update take(size_t size) {
+  Update<Scalar> take(size_t size) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       auto it = free_.lower_bound(size);
       if (it != free_.end() && it->first <= 2 * size + 512) {
-        Update u{std::move(it->second), it->first};
+        Update<Scalar> u{std::move(it->second), it->first};
         free_.erase(it);
         return u;
       }
     }
-    return Update{std::unique_ptr<double[]>(new double[std::max<size_t>(size, 1)]), size};
+    return Update<Scalar>{std::unique_ptr<Scalar[]>(new Scalar[std::max<size_t>(size, 1)]), size};
   }
-  void give(Update& u) {
+  void give(Update<Scalar>& u) {
     if (!u.values)
       return;
     std::lock_guard<std::mutex> lock(mutex_);
@@ -123,22 +148,23 @@ public:
 
 private:
   std::mutex mutex_;
-  std::multimap<size_t, std::unique_ptr<double[]>> free_;
+  std::multimap<size_t, std::unique_ptr<Scalar[]>> free_;
 };
 
 // Adds a child's update columns [b0, b1) into supernode t's front: columns that land in t's own
 // columns go into its block of L (`block`), the others into its update matrix. A child's update
 // rows are a subset of t's rows, and distinct update columns land in distinct front columns, so
 // column ranges may run in parallel.
-void ExtendAdd(const Plan& p, int t, int child, const double* childUpdate,
-               const std::vector<int>& position, double* block, double* update, int b0, int b1) {
+template <class Scalar>
+void ExtendAdd(const Plan& p, int t, int child, const Scalar* childUpdate,
+               const std::vector<int>& position, Scalar* block, Scalar* update, int b0, int b1) {
   const int width = p.columns(t), height = p.rows(t), off = height - width;
   const int childOff = p.rows(child) - p.columns(child);
   const int* childRows = p.s + p.pi[child] + p.columns(child);
   for (int b = b0; b < b1; ++b) {
     const int pb = position[childRows[b]];
-    const double* source = childUpdate + size_t(b) * childOff;
-    double* target =
+    const Scalar* source = childUpdate + size_t(b) * childOff;
+    Scalar* target =
         pb < width ? block + size_t(pb) * height : update + size_t(pb - width) * off - width;
     for (int a = b; a < childOff; ++a)
       target[position[childRows[a]]] += source[a];
@@ -179,22 +205,23 @@ template <class Work> void OverTriangleColumns(int size, int parts, Work&& work)
 // children's other update columns). `threads` > 1 splits the assembly over threads (the top's
 // large fronts, where it is memory-bound work the size of the front). Returns the failing
 // elimination-order column, or -1.
-int FactorSupernode(const Plan& p, int t, double* x, std::vector<Update>& updates, UpdatePool& pool,
-                    std::vector<int>& position, int threads) {
+template <class Scalar>
+int FactorSupernode(const Plan& p, int t, Scalar* x, std::vector<Update<Scalar>>& updates,
+                    UpdatePool<Scalar>& pool, std::vector<int>& position, int threads) {
   const int width = p.columns(t), height = p.rows(t), off = height - width;
   const int* rows = p.s + p.pi[t];
   for (int k = 0; k < height; ++k)
     position[rows[k]] = k;
-  double* block = x + p.px[t];
+  Scalar* block = x + p.px[t];
   constexpr double kParallelFrom = 1 << 20; // entries of the front
   const int parts = double(height) * height >= kParallelFrom ? threads : 1;
   OverTriangleColumns(width, parts, [&](int c0, int c1) {
     for (int c = c0; c < c1; ++c) {
-      double* column = block + size_t(c) * height;
-      std::memset(column, 0, sizeof(double) * height);
+      Scalar* column = block + size_t(c) * height;
+      std::memset(column, 0, sizeof(Scalar) * height);
       const int k = p.super[t] + c;
       for (int q = p.entryStart[k]; q < p.entryStart[k + 1]; ++q)
-        column[position[p.entryRow[q]]] += p.entryValue[q];
+        column[position[p.entryRow[q]]] += static_cast<Scalar>(p.entryValue[q]);
     }
   });
   // A child's update columns landing in t's own columns come first (its rows are sorted).
@@ -203,7 +230,7 @@ int FactorSupernode(const Plan& p, int t, double* x, std::vector<Update>& update
     const int* childRows = p.s + p.pi[child] + p.columns(child);
     return int(std::lower_bound(childRows, childRows + childOff, p.super[t + 1]) - childRows);
   };
-  auto extendAdd = [&](int child, int b0, int b1, double* update) {
+  auto extendAdd = [&](int child, int b0, int b1, Scalar* update) {
     const int childOff = p.rows(child) - p.columns(child);
     const int ranges = double(childOff) * (b1 - b0) >= kParallelFrom ? parts : 1;
     OverTriangleColumns(b1 - b0, ranges, [&](int c0, int c1) {
@@ -214,26 +241,25 @@ int FactorSupernode(const Plan& p, int t, double* x, std::vector<Update>& update
   for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q)
     extendAdd(p.children[q], 0, childSplit(p.children[q]), nullptr);
   int info = 0;
-  dpotrf_("L", &width, block, &height, &info);
+  Potrf(width, block, height, info);
   if (info != 0)
     return p.super[t] + std::max(info, 1) - 1;
   if (off > 0) {
-    const double one = 1.0, minusOne = -1.0;
-    dtrsm_("R", "L", "T", "N", &off, &width, &one, block, &height, block + width, &height);
+    TrsmRightLowerTransposed<Scalar>(off, width, block, height, block + width, height);
     updates[t] = pool.take(size_t(off) * off);
-    double* update = updates[t].values.get();
+    Scalar* update = updates[t].values.get();
     // Single-threaded BLAS clears the update itself (beta = 0). With threaded BLAS (the top) it is
     // cleared here, on the same threads as the assembly: OpenBLAS's own threads would clear it
     // behind synchronisation that ThreadSanitizer cannot see, and it then reports every entry
     // the extend-add reads (suppressed as OpenBLAS's, but slowly enough to stall the TSan run).
-    double beta = 0.0;
+    Scalar beta = 0;
     if (threads > 1) {
       OverTriangleColumns(off, parts, [&](int c0, int c1) {
-        std::memset(update + size_t(c0) * off, 0, sizeof(double) * size_t(c1 - c0) * off);
+        std::memset(update + size_t(c0) * off, 0, sizeof(Scalar) * size_t(c1 - c0) * off);
       });
-      beta = 1.0;
+      beta = 1;
     }
-    dsyrk_("L", "N", &off, &width, &minusOne, block + width, &height, &beta, update, &off);
+    SyrkLowerMinus<Scalar>(off, width, block + width, height, beta, update, off);
     for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q) {
       const int child = p.children[q];
       extendAdd(child, childSplit(child), p.rows(child) - p.columns(child), update);
@@ -265,27 +291,17 @@ std::vector<char> MarkTop(const Plan& p, int threads) {
   return top;
 }
 
-} // namespace
-
-Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
-                             int threads, MultifrontalReport* report) {
-  if (!L || !common || !L->is_super || L->itype != CHOLMOD_INT)
-    return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
-  if (!upper.isCompressed() || upper.rows() != upper.cols() ||
-      static_cast<size_t>(upper.rows()) != L->n)
-    return Status::Error("internal: the matrix does not match the factor's analysis");
-  Plan p;
-  if (Status s = MakePlan(upper, *L, p); !s)
-    return s;
-  const size_t xsize = static_cast<size_t>(p.px[p.nsuper]);
-  if (!cholmod_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, L, common) || !L->x || L->xsize != xsize)
-    return Status::Error("CHOLMOD could not allocate the numeric factor (out of memory?)");
-  double* x = static_cast<double*>(L->x);
+// The numeric factorization into x (the plan's value layout), in Scalar precision: an error when
+// memory ran out in a task, else failedColumn is the elimination-order column where a pivot failed
+// or -1.
+template <class Scalar>
+Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumnOut,
+                        MultifrontalReport* report) {
   threads = std::max(1, threads);
   const std::vector<char> top = MarkTop(p, threads);
 
-  std::vector<Update> updates(p.nsuper);
-  UpdatePool pool;
+  std::vector<Update<Scalar>> updates(p.nsuper);
+  UpdatePool<Scalar> pool;
   std::atomic<int> failedColumn{-1};
   bool outOfMemory = false; // under the tasks' mutex while they run
   auto noteFailure = [&](int column) {
@@ -381,13 +397,55 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
     report->topFlopsShare = total > 0.0 ? topFlops / total : 0.0;
     report->threads = threads;
   }
+  failedColumnOut = failedColumn.load();
+  return Status::Ok();
+}
+
+Status NotPositiveDefinite(int column) {
+  return Status::Error("stiffness matrix is not positive definite (pivot failed at column " +
+                       std::to_string(column) + ")");
+}
+
+} // namespace
+
+Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
+                             int threads, MultifrontalReport* report) {
+  if (!L || !common || !L->is_super || L->itype != CHOLMOD_INT)
+    return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
+  if (!upper.isCompressed() || upper.rows() != upper.cols() ||
+      static_cast<size_t>(upper.rows()) != L->n)
+    return Status::Error("internal: the matrix does not match the factor's analysis");
+  Plan p;
+  if (Status s = MakePlan(upper, *L, p); !s)
+    return s;
+  const size_t xsize = static_cast<size_t>(p.px[p.nsuper]);
+  if (!cholmod_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, L, common) || !L->x || L->xsize != xsize)
+    return Status::Error("CHOLMOD could not allocate the numeric factor (out of memory?)");
+  int failedColumn = -1;
+  if (Status s = FactorizeNumeric(p, static_cast<double*>(L->x), threads, failedColumn, report); !s)
+    return s;
   if (failedColumn >= 0) {
-    L->minor = static_cast<size_t>(failedColumn.load());
-    return Status::Error("stiffness matrix is not positive definite (pivot failed at column " +
-                         std::to_string(failedColumn.load()) + ")");
+    L->minor = static_cast<size_t>(failedColumn);
+    return NotPositiveDefinite(failedColumn);
   }
   L->minor = L->n;
   return Status::Ok();
+}
+
+Status MultifrontalFactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
+                                   float* values, int threads, MultifrontalReport* report) {
+  if (!analysis.is_super || analysis.itype != CHOLMOD_INT || !values)
+    return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
+  if (!upper.isCompressed() || upper.rows() != upper.cols() ||
+      static_cast<size_t>(upper.rows()) != analysis.n)
+    return Status::Error("internal: the matrix does not match the factor's analysis");
+  Plan p;
+  if (Status s = MakePlan(upper, analysis, p); !s)
+    return s;
+  int failedColumn = -1;
+  if (Status s = FactorizeNumeric(p, values, threads, failedColumn, report); !s)
+    return s;
+  return failedColumn >= 0 ? NotPositiveDefinite(failedColumn) : Status::Ok();
 }
 
 } // namespace faceplan

@@ -8,6 +8,7 @@
 #include "Common/WorkerThreads.h"
 #include "SparseSolver/Blas.h"
 #include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/MultifrontalCholesky.h"
 #include "SparseSolver/SupernodalTree.h"
 
 #include <algorithm>
@@ -41,6 +42,9 @@ struct SinglePrecisionFactor::Impl {
   std::vector<int> topIndex;
   int topColumns = 0;
   bool split = false;
+
+  // The analysis's supernodes, row lists, value starts and ordering; values sized, not filled.
+  void adoptStructure(const cholmod_factor& L, const SupernodalStructure& tree);
 
   int columns(int k) const { return super[k + 1] - super[k]; }
   int rowsOf(int k) const { return pi[k + 1] - pi[k]; }
@@ -319,6 +323,23 @@ struct SinglePrecisionFactor::Impl {
 SinglePrecisionFactor::SinglePrecisionFactor() : impl_(std::make_unique<Impl>()) {}
 SinglePrecisionFactor::~SinglePrecisionFactor() = default;
 
+void SinglePrecisionFactor::Impl::adoptStructure(const cholmod_factor& L,
+                                                 const SupernodalStructure& tree) {
+  n = tree.n;
+  super.assign(tree.super, tree.super + tree.nsuper + 1);
+  pi.assign(tree.pi, tree.pi + tree.nsuper + 1);
+  s.assign(tree.s, tree.s + pi.back());
+  const int* starts = static_cast<const int*>(L.px);
+  px.assign(starts, starts + tree.nsuper + 1);
+  const int* order = static_cast<const int*>(L.Perm);
+  if (order)
+    perm.assign(order, order + n);
+  else
+    for (int k = 0; k < n; ++k)
+      perm.push_back(k);
+  values.resize(static_cast<size_t>(px.back()));
+}
+
 Status SinglePrecisionFactor::assign(const CholmodFactor& factor, int threads) {
   impl_ = std::make_unique<Impl>();
   const cholmod_factor_struct* L = factor.numericFactor();
@@ -329,21 +350,9 @@ Status SinglePrecisionFactor::assign(const CholmodFactor& factor, int threads) {
   if (!status)
     return status;
   Impl& d = *impl_;
-  d.n = tree.n;
-  d.super.assign(tree.super, tree.super + tree.nsuper + 1);
-  d.pi.assign(tree.pi, tree.pi + tree.nsuper + 1);
-  d.s.assign(tree.s, tree.s + d.pi.back());
-  const int* px = static_cast<const int*>(L->px);
-  d.px.assign(px, px + tree.nsuper + 1);
-  const int* perm = static_cast<const int*>(L->Perm);
-  if (perm)
-    d.perm.assign(perm, perm + d.n);
-  else
-    for (int k = 0; k < d.n; ++k)
-      d.perm.push_back(k);
+  d.adoptStructure(*L, tree);
   const double* x = static_cast<const double*>(L->x);
   // Rounded and checked in one pass, on the cores that first touch the new values' pages.
-  d.values.resize(static_cast<size_t>(d.px.back()));
   std::atomic<bool> fits{true};
   ParallelFor(static_cast<std::int64_t>(d.values.size()), 1 << 16,
               [&](std::int64_t begin, std::int64_t end) {
@@ -360,6 +369,37 @@ Status SinglePrecisionFactor::assign(const CholmodFactor& factor, int threads) {
   if (!fits) {
     impl_ = std::make_unique<Impl>();
     return Status::Error("the factor does not fit single precision");
+  }
+  if (threads > 1 && WorkerThreads(2) > 1)
+    d.chooseSplit(tree);
+  return Status::Ok();
+}
+
+Status SinglePrecisionFactor::factorize(const CholmodFactor& analysed, const SparseMatrix& upper,
+                                        int threads) {
+  impl_ = std::make_unique<Impl>();
+  const cholmod_factor_struct* L = analysed.analysis();
+  if (!L || !L->is_super || L->itype != CHOLMOD_INT)
+    return Status::Error("internal: a single-precision factorization needs a supernodal analysis");
+  if (upper.rows() != static_cast<Eigen::Index>(L->n) || upper.cols() != upper.rows())
+    return Status::Error("internal: the matrix does not match the analysis");
+  const double* entries = upper.valuePtr();
+  for (Eigen::Index k = 0; k < upper.nonZeros(); ++k)
+    if (!(std::abs(entries[k]) <= std::numeric_limits<float>::max()))
+      return Status::Error("the matrix does not fit single precision");
+  const SupernodalStructure tree{static_cast<int>(L->n), static_cast<int>(L->nsuper),
+                                 static_cast<const int*>(L->super), static_cast<const int*>(L->pi),
+                                 static_cast<const int*>(L->s)};
+  if (!tree.super || !tree.pi || !tree.s || !L->px)
+    return Status::Error("internal: the analysis has no supernodal structure");
+  Impl& d = *impl_;
+  d.adoptStructure(*L, tree);
+  // Each supernode's columns are written whole by the factorization, on the thread that factors
+  // it (which so first touches those pages).
+  if (Status status = MultifrontalFactorizeSingle(upper, *L, d.values.data(), WorkerThreads(16));
+      !status) {
+    impl_ = std::make_unique<Impl>();
+    return status;
   }
   if (threads > 1 && WorkerThreads(2) > 1)
     d.chooseSplit(tree);

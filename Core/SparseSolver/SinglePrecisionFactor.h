@@ -10,6 +10,7 @@
 // similar work below a small top part: each subtree's forward sweep accumulates its updates of the
 // top part privately, the top part runs alone, then the subtrees' backward sweeps run side by side.
 #include "Common/Status.h"
+#include "Element/StiffnessAssembly.h"
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -28,6 +29,12 @@ public:
 
   // Copies factor's numeric supernodal LL^T factor (fails for any other kind). threads: 1 or 2.
   Status assign(const CholmodFactor& factor, int threads = 2);
+  // Factors `upper` (a matrix with the pattern `analysed` was analysed for, upper triangle) in
+  // single precision directly, in `analysed`'s ordering and supernodes (multifrontal, as
+  // CholmodFactor::factorize; `analysed` need not be factorized and is only read). About half the
+  // time of factoring in double and copying. Fails where single precision's pivots break down, as
+  // they may on a matrix too ill-conditioned for it: the caller then factors in double and copies.
+  Status factorize(const CholmodFactor& analysed, const SparseMatrix& upper, int threads = 2);
   // x = (L L^T)^-1 b (the factored matrix's inverse applied to b, original numbering), in single
   // precision after scaling b to unit largest entry. Safe to call from several threads at once.
   Status solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;

@@ -2,7 +2,8 @@
 // SparseSolver/SinglePrecisionFactor: the single-precision substitutions with a copy of a
 // supernodal factor solve the factored matrix to single precision's accuracy (relative to the
 // double substitution), on one thread and split over two, the same either way; a factor that is
-// not numeric, or whose values a float cannot hold, is refused.
+// not numeric, or whose values a float cannot hold, is refused. Factored directly in single
+// precision, it solves as the copy does; where single precision breaks down it is refused.
 #include "CondensedFEM/CondensedSystem.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/SinglePrecisionFactor.h"
@@ -136,4 +137,69 @@ TEST(SinglePrecisionFactor, AFactorBeyondSinglePrecisionIsRefused) {
       EXPECT_TRUE(assigned.ok) << assigned.message;
     }
   }
+}
+
+TEST(SinglePrecisionFactor, FactoredDirectlyEqualsTheCopyOfTheDoubleFactor) {
+  Factored f;
+  Factor(f);
+  const SparseMatrix& k = f.system->kff;
+  CholmodFactor analysed; // analysed only: the single-precision factorization reads its structure
+  ASSERT_TRUE(analysed.analyze(k).ok);
+  ASSERT_FALSE(analysed.isFactorized());
+  Eigen::VectorXd b = Eigen::VectorXd::Random(k.rows());
+  Eigen::MatrixXd exact;
+  ASSERT_TRUE(f.factor.solve(b, exact).ok);
+  SinglePrecisionFactor copied;
+  ASSERT_TRUE(copied.assign(f.factor).ok);
+  Eigen::VectorXd fromCopy;
+  ASSERT_TRUE(copied.solve(b, fromCopy).ok);
+  for (int threads : {1, 2}) {
+    SinglePrecisionFactor direct;
+    const Status factored = direct.factorize(analysed, k, threads);
+    ASSERT_TRUE(factored.ok) << factored.message;
+    EXPECT_EQ(direct.valueBytes(), copied.valueBytes());
+    Eigen::VectorXd x;
+    ASSERT_TRUE(direct.solve(b, x).ok);
+    const double error = (x - exact.col(0)).norm() / exact.col(0).norm();
+    EXPECT_LT(error, 1e-4) << threads << " thread(s)";
+    EXPECT_GT(error, 1e-12) << "a double-precision solve, not a single-precision one";
+    EXPECT_LT((x - fromCopy).norm() / fromCopy.norm(), 1e-4);
+    const Eigen::VectorXd residual = k.selfadjointView<Eigen::Upper>() * x - b;
+    EXPECT_LT(residual.norm() / b.norm(), 1e-4);
+  }
+}
+
+TEST(SinglePrecisionFactor, ADirectFactorizationThatBreaksDownIsRefused) {
+  // [[1, 1 - 1e-9], [1 - 1e-9, 1]] is positive definite, but its off-diagonal rounds to 1 in single
+  // precision, where the matrix is singular.
+  SparseMatrix nearlySingular(2, 2);
+  nearlySingular.insert(0, 0) = 1.0;
+  nearlySingular.insert(0, 1) = 1.0 - 1e-9;
+  nearlySingular.insert(1, 1) = 1.0;
+  nearlySingular.makeCompressed();
+  CholmodFactor analysed;
+  ASSERT_TRUE(analysed.analyze(nearlySingular).ok);
+  SinglePrecisionFactor single;
+  Status factored = single.factorize(analysed, nearlySingular);
+  EXPECT_FALSE(factored.ok);
+  EXPECT_NE(factored.message.find("not positive definite"), std::string::npos) << factored.message;
+  EXPECT_EQ(single.valueBytes(), 0.0) << "nothing kept";
+  Eigen::VectorXd x;
+  EXPECT_FALSE(single.solve(Eigen::VectorXd::Ones(2), x).ok);
+  CholmodFactor inDouble;
+  ASSERT_TRUE(inDouble.analyze(nearlySingular).ok);
+  EXPECT_TRUE(inDouble.factorize(nearlySingular).ok) << "positive definite in double precision";
+
+  // Entries beyond a float's range, a matrix of another size, and no analysis.
+  SparseMatrix huge = nearlySingular;
+  huge.coeffRef(1, 1) = 1e80;
+  factored = single.factorize(analysed, huge);
+  EXPECT_FALSE(factored.ok);
+  EXPECT_NE(factored.message.find("single precision"), std::string::npos) << factored.message;
+  SparseMatrix other(3, 3);
+  other.setIdentity();
+  other.makeCompressed();
+  EXPECT_FALSE(single.factorize(analysed, other).ok);
+  CholmodFactor none;
+  EXPECT_FALSE(single.factorize(none, nearlySingular).ok);
 }
