@@ -81,10 +81,12 @@ struct PrecomputedLargeDeformationOptions {
   int refactorAfter = 40;
   // Also factor the tangent at the current state when the rate of the last iterations predicts
   // that finishing with the present factor takes longer than a factorization, which costs as much
-  // as refactorCostIterations iterations with the CPU's substitutions (15-25 measured on the
-  // 2-core and 16-core machines of BENCHMARKS.md) and refactorCostIterationsOnDevice with a
-  // backend's (whose iterations are 10-20 times quicker while the factorization stays on the CPU).
-  // A count rather than a timing: the same input gives the same result on every run.
+  // as refactorCostIterations iterations with the CPU's substitutions (15-25 with a double
+  // factorization on the 2-core and 16-core machines of BENCHMARKS.md; about 13 with the
+  // single-precision one, but counts of 8 and 13 made the osteotomies' full moves no quicker) and
+  // refactorCostIterationsOnDevice with a backend's (whose iterations are 10-20 times quicker while
+  // the factorization stays on the CPU). A count rather than a timing: the same input gives the
+  // same result on every run.
   bool adaptiveRefactorization = true;
   double refactorCostIterations = 20.0;
   double refactorCostIterationsOnDevice = 300.0;
