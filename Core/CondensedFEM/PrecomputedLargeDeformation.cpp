@@ -63,24 +63,26 @@ struct TangentBuffers {
   std::vector<double> packed;
 };
 
-// The movable nodes' DOFs, the only ones a target moves, and where their columns lie in every
-// tangent's values (all tangents share one pattern): per movable DOF k, entries[start[k] ...] as
-// (value index, the other DOF), each off-diagonal entry once for its column and once for its row.
-// The tangent's product with a move on these DOFs reads them alone, not every entry: the
-// yardstick |K_0 u_prescribed| of each solve and the predictor's K move for a bone's move.
-struct MovableColumns {
+// A set of DOFs and where their columns lie in every tangent's values (all tangents share one
+// pattern): per DOF k of the set, entries[start[k] ...] as (value index, the other DOF), each
+// off-diagonal entry once for its column and once for its row. Found in one pass over the upper
+// triangle, so that the columns are read without touching the rest:
+// - the movable nodes' DOFs, the only ones a target moves: the tangent's product with a move on
+//   them, for the yardstick |K_0 u_prescribed| of each solve and the predictor's K move;
+// - the lift-off DOFs released since a factor was made: their columns, for the Schur coupling.
+struct DofColumns {
   std::vector<int> dofs;
-  std::vector<char> isMovable; // per DOF
+  std::vector<char> has; // per DOF: in the set
   std::vector<int> start;
   std::vector<std::pair<int, int>> entries;
 
-  MovableColumns() = default;
-  MovableColumns(const SparseMatrix& upper, std::vector<int> movable) : dofs(std::move(movable)) {
-    isMovable.assign(static_cast<size_t>(upper.cols()), 0);
+  DofColumns() = default;
+  DofColumns(const SparseMatrix& upper, std::vector<int> set) : dofs(std::move(set)) {
+    has.assign(static_cast<size_t>(upper.cols()), 0);
     std::vector<int> column(static_cast<size_t>(upper.cols()), -1);
     for (size_t k = 0; k < dofs.size(); ++k) {
       column[dofs[k]] = static_cast<int>(k);
-      isMovable[dofs[k]] = 1;
+      has[dofs[k]] = 1;
     }
     std::vector<std::vector<std::pair<int, int>>> of(dofs.size());
     const int* outer = upper.outerIndexPtr();
@@ -101,7 +103,7 @@ struct MovableColumns {
   }
 
   // out = K v for the symmetric matrix whose upper triangle holds `values` in the shared pattern;
-  // only v's entries on the movable DOFs are read (the caller's v is zero elsewhere).
+  // only v's entries on the set's DOFs are read (the caller's v is zero elsewhere).
   void multiply(const double* values, const Eigen::VectorXd& v, Eigen::VectorXd& out) const {
     out.setZero(v.size());
     for (size_t k = 0; k < dofs.size(); ++k) {
@@ -111,6 +113,15 @@ struct MovableColumns {
       for (int e = start[k]; e < start[k + 1]; ++e)
         out[entries[e].second] += values[entries[e].first] * m;
     }
+  }
+
+  // The set's columns of the same matrix (n x dofs.size()).
+  Eigen::MatrixXd columns(const double* values, Eigen::Index n) const {
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(dofs.size()));
+    for (size_t k = 0; k < dofs.size(); ++k)
+      for (int e = start[k]; e < start[k + 1]; ++e)
+        out(entries[e].second, static_cast<Eigen::Index>(k)) += values[entries[e].first];
+    return out;
   }
 };
 
@@ -154,9 +165,9 @@ Status FactorTangent(const Structure& st, const CholmodFactor& analysis, Tangent
   // The single-precision factor straight from the tangent: about half the time of the double
   // factor and its copy. Where single precision breaks down on the tangent, from the double factor,
   // which also gives the message when the tangent is not positive definite.
-  Status status = singlePrecision ? made->single.factorize(analysis, pattern.upper)
-                                  : Status::Error("double precision asked for");
-  if (!status) {
+  const bool factoredSingle = singlePrecision && made->single.factorize(analysis, pattern.upper).ok;
+  Status status = Status::Ok();
+  if (!factoredSingle) {
     status = made->factor.analyzeLike(analysis);
     if (status)
       status = made->factor.factorize(pattern.upper);
@@ -210,7 +221,7 @@ public:
   // The tangent's ordering and symbolic analysis, made once: every factorization copies it (the
   // pattern never changes; the contact only zeroes rows and columns).
   CholmodFactor analysis;
-  MovableColumns movable;
+  DofColumns movable;
   // The rest state's factor, kept for solves that start from rest (a move back towards zero is
   // nearer the rest state than the last converged one).
   std::shared_ptr<const TangentFactor> restFactor;
@@ -416,7 +427,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   for (int node : request.sets.movable)
     for (int j = 0; j < 3; ++j)
       movableDofs.push_back(3 * node + j);
-  sys->movable = MovableColumns(factor->tangent, std::move(movableDofs));
+  sys->movable = DofColumns(factor->tangent, std::move(movableDofs));
   st.unitStrainForce = RestForceNorm(factor->tangent, LocalPositions(st));
   sys->restFactor = factor;
   sys->setFactor(std::move(factor));
@@ -574,28 +585,9 @@ private:
     if (dofs.empty() || static_cast<int>(dofs.size()) > sys_.options.maxCoupledReleases)
       return;
     const Eigen::Index n = pb_.prescribed.size(), k = static_cast<Eigen::Index>(dofs.size());
-    // The tangent's columns of R, in one pass over its upper triangle: entry (i, j) is in column j
-    // and, off the diagonal, in column i (a product with unit columns would do k passes).
-    Eigen::MatrixXd columns = Eigen::MatrixXd::Zero(n, k);
-    {
-      std::vector<int> index(static_cast<size_t>(n), -1);
-      for (Eigen::Index j = 0; j < k; ++j)
-        index[dofs[j]] = static_cast<int>(j);
-      const SparseMatrix& upper = factor_->tangent;
-      const int* outer = upper.outerIndexPtr();
-      const int* inner = upper.innerIndexPtr();
-      const double* values = upper.valuePtr();
-      for (Eigen::Index j = 0; j < upper.outerSize(); ++j) {
-        const int cj = index[j];
-        for (int q = outer[j]; q < outer[j + 1]; ++q) {
-          const int i = inner[q];
-          if (cj >= 0)
-            columns(i, cj) += values[q];
-          if (i != j && index[i] >= 0)
-            columns(j, index[i]) += values[q];
-        }
-      }
-    }
+    // The tangent's columns of R.
+    Eigen::MatrixXd columns =
+        DofColumns(factor_->tangent, dofs).columns(factor_->tangent.valuePtr(), n);
     Eigen::MatrixXd arr(k, k);
     for (Eigen::Index j = 0; j < k; ++j)
       for (Eigen::Index i = 0; i < k; ++i)
@@ -750,7 +742,7 @@ private:
     if (factor_->tangent.nonZeros() != sys_.restFactor->tangent.nonZeros())
       return false;
     for (Eigen::Index i = 0; i < move.size(); ++i)
-      if (move[i] != 0.0 && !sys_.movable.isMovable[i])
+      if (move[i] != 0.0 && !sys_.movable.has[i])
         return false;
     sys_.movable.multiply(factor_->tangent.valuePtr(), move, product);
     return true;

@@ -7,8 +7,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -53,6 +55,7 @@ struct Plan {
   std::vector<double> flops;                     // of each supernode's own factorization
   std::vector<int> entryStart, entryRow;         // permuted lower triangle, by column
   std::vector<double> entryValue;
+  bool fitsSingle = true; // every entry within a float's range (false for NaN)
 
   int columns(int t) const { return super[t + 1] - super[t]; }
   int rows(int t) const { return pi[t + 1] - pi[t]; }
@@ -110,8 +113,19 @@ Status MakePlan(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
       const int at = next[std::min(a, b)]++;
       p.entryRow[at] = std::max(a, b);
       p.entryValue[at] = value[q];
+      p.fitsSingle &= std::abs(value[q]) <= std::numeric_limits<float>::max();
     }
   return Status::Ok();
+}
+
+// The plan of factoring `upper` with the supernodal analysis L, once they are checked to match.
+Status PlanFor(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
+  if (!L.is_super || L.itype != CHOLMOD_INT)
+    return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
+  if (!upper.isCompressed() || upper.rows() != upper.cols() ||
+      static_cast<size_t>(upper.rows()) != L.n)
+    return Status::Error("internal: the matrix does not match the factor's analysis");
+  return MakePlan(upper, L, p);
 }
 
 // A supernode's update matrix (off x off, column-major, lower triangle meaningful).
@@ -410,13 +424,10 @@ Status NotPositiveDefinite(int column) {
 
 Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
                              int threads, MultifrontalReport* report) {
-  if (!L || !common || !L->is_super || L->itype != CHOLMOD_INT)
+  if (!L || !common)
     return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
-  if (!upper.isCompressed() || upper.rows() != upper.cols() ||
-      static_cast<size_t>(upper.rows()) != L->n)
-    return Status::Error("internal: the matrix does not match the factor's analysis");
   Plan p;
-  if (Status s = MakePlan(upper, *L, p); !s)
+  if (Status s = PlanFor(upper, *L, p); !s)
     return s;
   const size_t xsize = static_cast<size_t>(p.px[p.nsuper]);
   if (!cholmod_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, L, common) || !L->x || L->xsize != xsize)
@@ -434,14 +445,13 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
 
 Status MultifrontalFactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
                                    float* values, int threads, MultifrontalReport* report) {
-  if (!analysis.is_super || analysis.itype != CHOLMOD_INT || !values)
-    return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
-  if (!upper.isCompressed() || upper.rows() != upper.cols() ||
-      static_cast<size_t>(upper.rows()) != analysis.n)
-    return Status::Error("internal: the matrix does not match the factor's analysis");
+  if (!values)
+    return Status::Error("internal: no values to factor into");
   Plan p;
-  if (Status s = MakePlan(upper, analysis, p); !s)
+  if (Status s = PlanFor(upper, analysis, p); !s)
     return s;
+  if (!p.fitsSingle)
+    return Status::Error("the matrix does not fit single precision");
   int failedColumn = -1;
   if (Status s = FactorizeNumeric(p, values, threads, failedColumn, report); !s)
     return s;

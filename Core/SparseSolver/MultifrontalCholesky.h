@@ -43,8 +43,9 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
 // in CHOLMOD's supernodal layout), from `analysis`, a supernodal analysis of `upper`'s pattern
 // (symbolic or numeric; only its structure and ordering are read, so other threads may read it
 // meanwhile). Half the bytes moved and twice the BLAS's vector width of the double factorization.
-// Fails when a pivot is not positive in single precision (the matrix need not be indefinite:
-// single precision's rounding may break down on an ill-conditioned one).
+// Fails when an entry is beyond a float's range, or a pivot is not positive in single precision
+// (the matrix need not be indefinite: single precision's rounding may break down on an
+// ill-conditioned one).
 Status MultifrontalFactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
                                    float* values, int threads,
                                    MultifrontalReport* report = nullptr);

@@ -383,10 +383,6 @@ Status SinglePrecisionFactor::factorize(const CholmodFactor& analysed, const Spa
     return Status::Error("internal: a single-precision factorization needs a supernodal analysis");
   if (upper.rows() != static_cast<Eigen::Index>(L->n) || upper.cols() != upper.rows())
     return Status::Error("internal: the matrix does not match the analysis");
-  const double* entries = upper.valuePtr();
-  for (Eigen::Index k = 0; k < upper.nonZeros(); ++k)
-    if (!(std::abs(entries[k]) <= std::numeric_limits<float>::max()))
-      return Status::Error("the matrix does not fit single precision");
   const SupernodalStructure tree{static_cast<int>(L->n), static_cast<int>(L->nsuper),
                                  static_cast<const int*>(L->super), static_cast<const int*>(L->pi),
                                  static_cast<const int*>(L->s)};
