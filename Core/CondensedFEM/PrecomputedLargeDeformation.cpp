@@ -6,6 +6,7 @@
 #include "Common/ExceptionBoundary.h"
 #include "CondensedFEM/LargeDeformationProblem.h"
 #include "Mesh/InputValidation.h"
+#include "SparseSolver/Blas.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/FillReducingOrdering.h"
 #include "SparseSolver/SinglePrecisionFactor.h"
@@ -14,6 +15,8 @@
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <limits>
 #include <mutex>
@@ -53,6 +56,43 @@ struct TangentFactor {
   // The state it was made at, its contact and its internal force: a predictor may start there.
   Eigen::VectorXd state, force;
   std::vector<char> prescribed;
+};
+
+// The Schur coupling (see QuasiNewton::prepareReleased) of every lift-off DOF pinned in the rest
+// factor, made once on the worker thread after the precompute, so that a solve from rest couples
+// whichever of them it releases exactly without substituting their columns.
+struct RestReleases {
+  std::vector<int> column; // per DOF: its column in w and schur, or -1
+  Eigen::MatrixXf w;       // n x |L|: G A_L
+  Eigen::MatrixXd schur;   // A_LL - A_L^T W
+};
+
+// The released DOFs' Schur coupling in the form an iteration reads: W in single precision (it is
+// read twice per iteration, like the single-precision factor, and needs be no more accurate), and
+// S^-1.
+struct ReleaseCoupling {
+  std::vector<int> dofs; // empty: no coupling
+  Eigen::MatrixXf w;
+  Eigen::MatrixXd schurInverse;
+
+  // t = W^T b.
+  Eigen::VectorXd transposeProduct(const Eigen::VectorXd& b) const {
+    const int n = static_cast<int>(w.rows()), k = static_cast<int>(w.cols()), one = 1;
+    const float alpha = 1.0f, beta = 0.0f;
+    const Eigen::VectorXf bf = b.cast<float>();
+    Eigen::VectorXf t(k);
+    sgemv_("T", &n, &k, &alpha, w.data(), &n, bf.data(), &one, &beta, t.data(), &one);
+    return t.cast<double>();
+  }
+  // x -= W v.
+  void subtractProduct(const Eigen::VectorXd& v, Eigen::VectorXd& x) const {
+    const int n = static_cast<int>(w.rows()), k = static_cast<int>(w.cols()), one = 1;
+    const float alpha = 1.0f, beta = 0.0f;
+    const Eigen::VectorXf vf = v.cast<float>();
+    Eigen::VectorXf product(n);
+    sgemv_("N", &n, &k, &alpha, w.data(), &n, vf.data(), &one, &beta, product.data(), &one);
+    x -= product.cast<double>();
+  }
 };
 
 // What a factorization assembles into, kept from one to the next by each thread that factors: the
@@ -124,6 +164,50 @@ struct DofColumns {
     return out;
   }
 };
+
+// The factor state's tangent columns of `dofs` with the rows pinned in `prescribed` and the set's
+// own zeroed (columns), and their rows of the set (block).
+void ReleasedColumns(const TangentFactor& factor, const std::vector<char>& prescribed,
+                     const std::vector<int>& dofs, Eigen::MatrixXd& columns,
+                     Eigen::MatrixXd& block) {
+  const Eigen::Index n = factor.tangent.cols(), k = static_cast<Eigen::Index>(dofs.size());
+  columns = DofColumns(factor.tangent, dofs).columns(factor.tangent.valuePtr(), n);
+  block.resize(k, k);
+  for (Eigen::Index j = 0; j < k; ++j)
+    for (Eigen::Index i = 0; i < k; ++i)
+      block(i, j) = columns(dofs[i], j);
+  for (Eigen::Index j = 0; j < k; ++j) {
+    ZeroPrescribed(prescribed, columns.col(j));
+    for (int d : dofs)
+      columns(d, j) = 0.0;
+  }
+}
+
+// The coupling of every lift-off DOF pinned in `factor` (RestReleases), from one substitution of
+// all their columns at once. Null where it fails (a solve then couples a few DOFs at a time, as
+// with any other factor).
+std::shared_ptr<const RestReleases> MakeRestReleases(const TangentFactor& factor,
+                                                     const std::vector<int>& liftOff) {
+  std::vector<int> dofs;
+  for (int d : liftOff)
+    if (factor.prescribed[d])
+      dofs.push_back(d);
+  if (dofs.empty() || factor.single.rows() != factor.tangent.cols())
+    return nullptr;
+  Eigen::MatrixXd columns, block, w;
+  ReleasedColumns(factor, factor.prescribed, dofs, columns, block);
+  if (!factor.single.solve(columns, w))
+    return nullptr;
+  for (Eigen::Index j = 0; j < w.cols(); ++j)
+    ZeroPrescribed(factor.prescribed, w.col(j));
+  auto made = std::make_shared<RestReleases>();
+  made->column.assign(static_cast<size_t>(factor.tangent.cols()), -1);
+  for (size_t j = 0; j < dofs.size(); ++j)
+    made->column[dofs[j]] = static_cast<int>(j);
+  made->schur = block - columns.transpose() * w;
+  made->w = w.cast<float>();
+  return made;
+}
 
 // Assembles the tangent at u into `buffers` and factors it with the DOFs `prescribed` pinned, or,
 // given `contactAtU` (targets and loads at u), with the contact that Newton's rule gives at u from
@@ -202,10 +286,11 @@ public:
     {
       std::lock_guard<std::mutex> lock(mutex_);
       stop_ = true;
-      pending_ = false;
+      pending_ = releasesPending_ = false;
     }
     wake_.notify_all();
     idle_.notify_all();
+    releasesMade_.notify_all();
     if (worker_.joinable() && worker_.get_id() != std::this_thread::get_id())
       worker_.join();
   }
@@ -253,17 +338,14 @@ public:
       pendingAheadValues_ = std::move(aheadValues);
       pendingPrescribed_ = prescribed;
       pending_ = true;
-      if (!worker_.joinable()) {
-        workerBuffers_.pattern = solveBuffers.pattern; // copied here: the solve's thread writes it
-        worker_ = std::thread([this] { work(); });
-      }
+      startWorker();
     }
     wake_.notify_all();
   }
 
   void waitIdle() {
     std::unique_lock<std::mutex> lock(mutex_);
-    idle_.wait(lock, [this] { return (!pending_ && !busy_) || stop_; });
+    idle_.wait(lock, [this] { return (!pending_ && !releasesPending_ && !busy_) || stop_; });
   }
   int backgroundCount() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -274,17 +356,58 @@ public:
     return aheadFailures_;
   }
 
+  // Queues the rest factor's RestReleases.
+  void requestRestReleases() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (stop_)
+        return;
+      releasesPending_ = true;
+      startWorker();
+    }
+    wake_.notify_all();
+  }
+  // Waits for them if they are queued or being made, so that a solve's path does not depend on
+  // the worker's timing. Null where none were asked for or they could not be made.
+  std::shared_ptr<const RestReleases> restReleases() const {
+    std::unique_lock<std::mutex> lock(mutex_);
+    releasesMade_.wait(lock, [this] { return (!releasesPending_ && !makingReleases_) || stop_; });
+    return restReleases_;
+  }
+
   // What a synchronous refactorization assembles into (the solve's thread only).
   TangentBuffers solveBuffers;
 
 private:
+  // With mutex_ held.
+  void startWorker() {
+    if (worker_.joinable())
+      return;
+    workerBuffers_.pattern = solveBuffers.pattern; // copied here: the solve's thread writes it
+    worker_ = std::thread([this] { work(); });
+  }
+
   void work() {
     YieldToInteractiveWork();
     std::unique_lock<std::mutex> lock(mutex_);
     while (true) {
-      wake_.wait(lock, [this] { return stop_ || pending_; });
+      wake_.wait(lock, [this] { return stop_ || pending_ || releasesPending_; });
       if (stop_)
         return;
+      if (releasesPending_) {
+        releasesPending_ = false;
+        busy_ = makingReleases_ = true;
+        lock.unlock();
+        std::shared_ptr<const RestReleases> made =
+            MakeRestReleases(*restFactor, structure->liftOffDofs);
+        lock.lock();
+        restReleases_ = std::move(made);
+        busy_ = makingReleases_ = false;
+        releasesMade_.notify_all();
+        if (!pending_)
+          idle_.notify_all();
+        continue; // a refactorization queued meanwhile
+      }
       const Eigen::VectorXd u = std::move(pendingU_);
       const Eigen::VectorXd ahead = std::move(pendingAhead_);
       Problem aheadValues = std::move(pendingAheadValues_);
@@ -311,7 +434,7 @@ private:
         ++backgroundCount_;
       }
       busy_ = false;
-      if (!pending_)
+      if (!pending_ && !releasesPending_)
         idle_.notify_all();
     }
   }
@@ -324,7 +447,10 @@ private:
   Eigen::VectorXd pendingU_, pendingAhead_;
   Problem pendingAheadValues_;
   std::vector<char> pendingPrescribed_;
-  bool pending_ = false, busy_ = false, stop_ = false;
+  bool pending_ = false, busy_ = false, stop_ = false, releasesPending_ = false,
+       makingReleases_ = false;
+  mutable std::condition_variable releasesMade_;
+  std::shared_ptr<const RestReleases> restReleases_;
   int backgroundCount_ = 0;
   int aheadFailures_ = 0; // states ahead that could not be factored (the converged one was)
 };
@@ -431,6 +557,10 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   st.unitStrainForce = RestForceNorm(factor->tangent, LocalPositions(st));
   sys->restFactor = factor;
   sys->setFactor(std::move(factor));
+  // About as long again as the rest of the precompute: on the worker thread, which the first
+  // move from rest rarely overtakes (until it is made, the solve couples a few DOFs at a time).
+  if (!st.liftOffDofs.empty() && options.singlePrecisionFactor && options.coupleRestReleases)
+    sys->requestRestReleases();
   sys->timings[Stage::Total].ms = total.elapsedMs();
   out = std::move(sys);
   return Status::Ok();
@@ -539,13 +669,13 @@ private:
     return ok;
   }
 
-  // H0 r: P F^-1 P r, with the few DOFs that lift-off has freed since the factor was made
-  // coupled back in (see prepareReleased).
+  // H0 r: P F^-1 P r, with the DOFs that lift-off has freed since the factor was made coupled
+  // back in where there is a coupling (see prepareReleased).
   Eigen::VectorXd applyFactor(const Eigen::VectorXd& r) {
     prepareReleased();
-    if (released_.dofs.empty())
+    const ReleaseCoupling& c = released_.coupling;
+    if (c.dofs.empty())
       return substitute(r);
-    const ReleasedDofs& c = released_;
     Eigen::VectorXd b = r;
     for (int d : c.dofs)
       b[d] = 0.0;
@@ -555,21 +685,24 @@ private:
     Eigen::VectorXd xr(static_cast<Eigen::Index>(c.dofs.size()));
     for (size_t k = 0; k < c.dofs.size(); ++k)
       xr[k] = r[c.dofs[k]];
-    xr -= c.w.transpose() * b;
+    xr -= c.transposeProduct(b);
     xr = c.schurInverse * xr;
-    x -= c.w * xr;
+    c.subtractProduct(xr, x);
     for (size_t k = 0; k < c.dofs.size(); ++k)
       x[c.dofs[k]] = xr[k];
     return x;
   }
 
   // Lift-off DOFs free now but pinned in the factor (R) have only their diagonal there, decoupled
-  // from the rest: after a drag step releases a node, the initial Hessian would miss its coupling
-  // and L-BFGS would need several iterations to learn it. For a few such DOFs the inverse of the
-  // tangent with them free is exact through their Schur complement: with G = P F^-1 P and A_R the
-  // factor state's tangent columns of R (their pinned and R rows zeroed), W = G A_R and
-  // S = A_RR - A_R^T W, H0 [b; b_R] = [G b - W x_R; x_R] with x_R = S^-1 (b_R - W^T b). It costs
-  // a substitution of every column of A_R (all at once), once per contact change.
+  // from the rest: the initial Hessian would miss their coupling and L-BFGS would need many
+  // iterations to learn it. The inverse of the tangent with them free is exact through their
+  // Schur complement: with G = P F^-1 P and A_R the factor state's tangent columns of R (their
+  // pinned and R rows zeroed), W = G A_R and S = A_RR - A_R^T W, H0 [b; b_R] = [G b - W x_R; x_R]
+  // with x_R = S^-1 (b_R - W^T b). For the rest factor W and S of every lift-off DOF are made once
+  // (RestReleases): while the contact differs from the rest's by releases only, R's are their
+  // columns and block, whatever R is (the rows zeroed are the rest factor's pinned ones either
+  // way). With another factor R's columns are substituted (all at once) once per contact change,
+  // for a few DOFs only.
   void prepareReleased() {
     if (released_.factor == factor_.get() && released_.prescribed == pb_.prescribed)
       return;
@@ -582,32 +715,53 @@ private:
     for (int d : st_.liftOffDofs)
       if (factor_->prescribed[d] && !pb_.prescribed[d])
         dofs.push_back(d);
-    if (dofs.empty() || static_cast<int>(dofs.size()) > sys_.options.maxCoupledReleases)
+    if (dofs.empty())
       return;
     const Eigen::Index n = pb_.prescribed.size(), k = static_cast<Eigen::Index>(dofs.size());
-    // The tangent's columns of R.
-    Eigen::MatrixXd columns =
-        DofColumns(factor_->tangent, dofs).columns(factor_->tangent.valuePtr(), n);
-    Eigen::MatrixXd arr(k, k);
-    for (Eigen::Index j = 0; j < k; ++j)
-      for (Eigen::Index i = 0; i < k; ++i)
-        arr(i, j) = columns(dofs[i], j);
-    for (Eigen::Index j = 0; j < k; ++j) {
-      ZeroPrescribed(pb_.prescribed, columns.col(j));
-      for (int d : dofs)
-        columns(d, j) = 0.0;
+    Eigen::MatrixXd schur(k, k);
+    ReleaseCoupling& c = released_.coupling;
+    if (const std::shared_ptr<const RestReleases> rest = restReleasesFor(dofs)) {
+      c.w.resize(n, k);
+      for (Eigen::Index j = 0; j < k; ++j)
+        c.w.col(j) = rest->w.col(rest->column[dofs[j]]);
+      for (Eigen::Index j = 0; j < k; ++j)
+        for (Eigen::Index i = 0; i < k; ++i)
+          schur(i, j) = rest->schur(rest->column[dofs[i]], rest->column[dofs[j]]);
+    } else {
+      if (k > sys_.options.maxCoupledReleases)
+        return;
+      Eigen::MatrixXd columns, w;
+      ReleasedColumns(*factor_, pb_.prescribed, dofs, columns, schur);
+      if (!substituteMany(columns, w))
+        return;
+      schur -= columns.transpose() * w;
+      c.w = w.cast<float>();
     }
-    Eigen::MatrixXd w;
-    if (!substituteMany(columns, w))
-      return;
-    Eigen::MatrixXd schur = arr - columns.transpose() * w;
     schur = 0.5 * (schur + schur.transpose()).eval();
     Eigen::LLT<Eigen::MatrixXd> llt(schur);
-    if (llt.info() != Eigen::Success)
-      return; // not positive definite (the factor's state is far): the diagonal instead
-    released_.dofs = std::move(dofs);
-    released_.w = std::move(w);
-    released_.schurInverse = llt.solve(Eigen::MatrixXd::Identity(k, k));
+    if (llt.info() != Eigen::Success) {
+      c = ReleaseCoupling(); // not positive definite (the factor's state is far): the diagonal
+      return;
+    }
+    c.dofs = std::move(dofs);
+    c.schurInverse = llt.solve(Eigen::MatrixXd::Identity(k, k));
+  }
+
+  // The rest factor's RestReleases, when the factor is the rest factor, they are made, and the
+  // contact differs from the rest's by releases only.
+  std::shared_ptr<const RestReleases> restReleasesFor(const std::vector<int>& dofs) const {
+    if (factor_ != sys_.restFactor)
+      return nullptr;
+    std::shared_ptr<const RestReleases> rest = sys_.restReleases();
+    if (!rest)
+      return nullptr;
+    for (int d : dofs)
+      if (rest->column[d] < 0)
+        return nullptr;
+    for (size_t i = 0; i < pb_.prescribed.size(); ++i)
+      if (pb_.prescribed[i] && !factor_->prescribed[i])
+        return nullptr;
+    return rest;
   }
 
   // P F^-1 P r for every column r of `rhs`: from four columns on with the single-precision factor
@@ -785,15 +939,40 @@ private:
     return z;
   }
 
-  bool refactor(const Eigen::VectorXd& u) {
+  // Factors the tangent at u. With lift-off, the lift-off DOFs that Newton's rule releases at u
+  // (force: the internal force there) are released first and factored free: the contact found at
+  // the last settle is a looser state's, and a DOF it would release after the factorization would
+  // be pinned in the new factor. `released`: whether the contact changed (the caller's residual
+  // then changes too).
+  bool refactor(const Eigen::VectorXd& u, const Eigen::VectorXd& force, bool& released) {
+    released = false;
     if (report_.refactorizations >= sys_.options.maxRefactorizations)
       return false;
+    std::vector<char> prescribed = pb_.prescribed;
+    if (!st_.liftOffDofs.empty()) {
+      Problem rule = pb_;
+      if (UpdateContact(rule, u, 1.0, &force))
+        for (int d : st_.liftOffDofs)
+          if (prescribed[d] && !rule.prescribed[d]) {
+            prescribed[d] = 0;
+            released = true;
+          }
+    }
     std::shared_ptr<TangentFactor> made;
-    if (!FactorTangent(st_, sys_.analysis, sys_.solveBuffers, u, pb_.prescribed, nullptr,
-                       sys_.options.singlePrecisionFactor, sys_.backend.get(), made, &timings_))
+    const bool factored =
+        FactorTangent(st_, sys_.analysis, sys_.solveBuffers, u, prescribed, nullptr,
+                      sys_.options.singlePrecisionFactor, sys_.backend.get(), made, &timings_)
+            .ok;
+    if (!factored) {
+      released = false;
       return false;
+    }
     factor_ = std::move(made);
     ++report_.refactorizations;
+    if (released) {
+      pb_.prescribed = std::move(prescribed);
+      ++report_.contactUpdates;
+    }
     return true;
   }
 
@@ -856,9 +1035,14 @@ private:
       const bool pays = !due && refactorPays(b.residualNorm, tolerance * b.scale);
       if (due || pays) {
         sinceFactor_ = 0;
-        if (refactor(u))
+        bool released = false;
+        if (refactor(u, ev.force, released)) {
           clearHistory();
-        else if (pays)
+          if (released) {
+            b = BalanceOf(pb_, ev, u, 1.0);
+            phase_.assign(1, b.residualNorm);
+          }
+        } else if (pays)
           adaptiveFailed_ = true; // not positive definite here: the present factor goes on
       }
       bool accepted = false;
@@ -933,9 +1117,7 @@ private:
   struct ReleasedDofs {
     const TangentFactor* factor = nullptr;
     std::vector<char> prescribed; // the contact it was prepared for
-    std::vector<int> dofs;        // empty: no correction
-    Eigen::MatrixXd w;
-    Eigen::MatrixXd schurInverse; // S^-1 (k x k, k small)
+    ReleaseCoupling coupling;
   } released_;
   int sinceFactor_ = 0;
   std::vector<double> phase_; // residual norms since the history was last cleared

@@ -30,14 +30,18 @@
 // the residual that decides convergence is evaluated in double precision.
 //
 // Lift-off (unilateral contact): the factor is made with the contact of its state pinned. A DOF
-// free now but pinned in the factor is coupled back in through its Schur complement when there are
-// few such DOFs (a drag step releasing a node or two), else it gets the factor's diagonal (its row
-// decoupled); a DOF
-// pinned now but free in the factor is projected out (the initial inverse Hessian is P F^-1 P, P
-// zeroing the pinned DOFs), which stays symmetric positive definite on the free DOFs, so L-BFGS
-// minimises the energy over exactly the free DOFs. The active set is updated with Newton's rule
-// (UpdateContact) on states converged to `settleTolerance` and the final state is converged to the
-// tolerance with no change left: the constrained equilibrium Newton finds (the tests compare them).
+// free now but pinned in the factor is coupled back in through its Schur complement: with the rest
+// factor any number of them (the coupling of every lift-off DOF is made once, on the worker thread
+// after the precompute: a move from rest releases the lips' nodes layer after layer, tens of DOFs
+// at a time), with another factor a few (a drag step releasing a node or two); beyond that it gets
+// the factor's diagonal (its row decoupled). A DOF pinned now but free in the factor is projected
+// out (the initial inverse Hessian is P F^-1 P, P zeroing the pinned DOFs), which stays symmetric
+// positive definite on the free DOFs, so L-BFGS minimises the energy over exactly the free DOFs.
+// The active set is updated with Newton's rule (UpdateContact) on states converged to
+// `settleTolerance`, and before a refactorization within a solve (its releases only, so that the
+// new factor has the DOFs free that the tighter state releases), and the final state is converged
+// to the tolerance with no change left: the constrained equilibrium Newton finds (the tests compare
+// them).
 //
 // Warm start: a solve may start from the last converged state (only the prescribed values or
 // loads changed); the prescribed values and loads then go from that state's to the new ones. A
@@ -81,14 +85,14 @@ struct PrecomputedLargeDeformationOptions {
   int refactorAfter = 40;
   // Also factor the tangent at the current state when the rate of the last iterations predicts
   // that finishing with the present factor takes longer than a factorization, which costs as much
-  // as refactorCostIterations iterations with the CPU's substitutions (15-25 with a double
-  // factorization on the 2-core and 16-core machines of BENCHMARKS.md; about 13 with the
-  // single-precision one, but counts of 8 and 13 made the osteotomies' full moves no quicker) and
-  // refactorCostIterationsOnDevice with a backend's (whose iterations are 10-20 times quicker while
-  // the factorization stays on the CPU). A count rather than a timing: the same input gives the
-  // same result on every run.
+  // as refactorCostIterations iterations with the CPU's substitutions (the single-precision
+  // factorization, its tangent and assembly take 11-15 iterations' time on the 2-core machine of
+  // BENCHMARKS.md; the rate's prediction errs on the slow side, as contact changes slow the
+  // iterations that follow, hence a little less) and refactorCostIterationsOnDevice with a
+  // backend's (whose iterations are 10-20 times quicker while the factorization stays on the CPU).
+  // A count rather than a timing: the same input gives the same result on every run.
   bool adaptiveRefactorization = true;
-  double refactorCostIterations = 20.0;
+  double refactorCostIterations = 10.0;
   double refactorCostIterationsOnDevice = 300.0;
   int maxRefactorizations = 4; // per solve
   int maxSubstepHalvings = 8;
@@ -109,9 +113,14 @@ struct PrecomputedLargeDeformationOptions {
   // the node back in and iterate again. The contact updates still decide the final contact.
   bool predictContactAhead = true;
   // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
-  // through their Schur complement, when there are at most this many (their columns substituted
-  // at once, once per contact change; each iteration then reads them twice).
+  // through their Schur complement: any number of them with the rest factor (whose coupling of
+  // every lift-off DOF is made once, after the precompute), at most this many with another factor
+  // (their columns substituted at once, once per contact change). Each iteration reads their
+  // coupling twice.
   int maxCoupledReleases = 8;
+  // Make the rest factor's coupling of every lift-off DOF (with singlePrecisionFactor; false: a
+  // move from rest couples at most maxCoupledReleases DOFs, as with any factor).
+  bool coupleRestReleases = true;
   // The initial inverse Hessian from a factor in single precision (about half the factorization's
   // time and half the bytes a substitution reads); the residual, and so the result, stay double
   // precision. False: a double-precision factor.

@@ -299,6 +299,45 @@ TEST(PrecomputedLargeDeformation, NodesReleasedInADragAreCoupledBackIntoTheIniti
       << "coupled: " << drag[1].iterations << " iterations, diagonal only: " << drag[0].iterations;
 }
 
+TEST(PrecomputedLargeDeformation, AMoveFromRestCouplesEveryNodeItReleases) {
+  // Pulled up from rest, the whole floor lifts off: more DOFs than a factor made in a solve couples
+  // (none here). The rest factor's coupling of every lift-off DOF couples them all; the solve then
+  // takes fewer iterations than with their diagonal alone, and both are Newton's equilibrium. A
+  // tilt releases part of the floor, a subset of the coupling's DOFs.
+  const FloorBlock b = BlockOnFloor();
+  for (const auto& top :
+       {Tilt(0.25), std::function<Eigen::RowVector3d(const Eigen::RowVector3d&)>(
+                        [](const Eigen::RowVector3d&) { return Eigen::RowVector3d(0, 0, 3.0); })}) {
+    const SolveInput input = b.input(top);
+    LargeDeformationReport newtonReport;
+    const SolveResult newton = Newton(b.request, input, true, &newtonReport);
+    PrecomputedLargeDeformationReport reports[2];
+    for (int coupled = 0; coupled < 2; ++coupled) {
+      PrecomputedLargeDeformationOptions options;
+      options.slidingLiftOff = true;
+      options.maxCoupledReleases = 0;
+      options.adaptiveRefactorization = false;
+      options.refactorAfter = 0; // the rest factor throughout
+      options.coupleRestReleases = coupled == 1;
+      auto system = Precomputed(b.request, options);
+      ASSERT_TRUE(system);
+      SolveResult result;
+      PrecomputedLargeDeformationReport& report = reports[coupled];
+      const Status s = SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report);
+      ASSERT_TRUE(s.ok) << s.message;
+      EXPECT_FALSE(report.fellBack) << report.fallbackReason;
+      EXPECT_EQ(report.refactorizations, 0);
+      EXPECT_EQ(report.liftedNodes, newtonReport.liftedNodes);
+      EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement),
+                kAgreement)
+          << "coupled " << coupled;
+    }
+    EXPECT_GT(reports[1].liftedNodes, 8);
+    EXPECT_LT(reports[1].iterations, reports[0].iterations)
+        << "coupled: " << reports[1].iterations << ", diagonal only: " << reports[0].iterations;
+  }
+}
+
 TEST(PrecomputedLargeDeformation, TheContactPredictedAheadSparesTheDragsContactChanges) {
   // The same drag with the factor made ahead taking the contact predicted there: the nodes that a
   // step lifts off are free in its factor already, so the steps change the contact less often and
