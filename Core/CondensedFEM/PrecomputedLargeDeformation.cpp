@@ -4,6 +4,7 @@
 #include "Backend/ComputeBackend.h"
 #include "Common/BlasThreads.h"
 #include "Common/ExceptionBoundary.h"
+#include "Common/HelperThreads.h"
 #include "CondensedFEM/LargeDeformationProblem.h"
 #include "Mesh/InputValidation.h"
 #include "SparseSolver/Blas.h"
@@ -15,8 +16,6 @@
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
-#include <cstdio>
-#include <cstdlib>
 #include <deque>
 #include <limits>
 #include <mutex>
@@ -77,21 +76,45 @@ struct ReleaseCoupling {
 
   // t = W^T b.
   Eigen::VectorXd transposeProduct(const Eigen::VectorXd& b) const {
-    const int n = static_cast<int>(w.rows()), k = static_cast<int>(w.cols()), one = 1;
-    const float alpha = 1.0f, beta = 0.0f;
+    const int k = static_cast<int>(w.cols());
     const Eigen::VectorXf bf = b.cast<float>();
-    Eigen::VectorXf t(k);
-    sgemv_("T", &n, &k, &alpha, w.data(), &n, bf.data(), &one, &beta, t.data(), &one);
-    return t.cast<double>();
+    Eigen::MatrixXf parts = Eigen::MatrixXf::Zero(k, kParts);
+    byRows([&](int part, int first, int rows) {
+      const int lda = static_cast<int>(w.rows()), one = 1;
+      const float alpha = 1.0f, beta = 0.0f;
+      sgemv_("T", &rows, &k, &alpha, w.data() + first, &lda, bf.data() + first, &one, &beta,
+             parts.col(part).data(), &one);
+    });
+    return parts.rowwise().sum().cast<double>();
   }
   // x -= W v.
   void subtractProduct(const Eigen::VectorXd& v, Eigen::VectorXd& x) const {
-    const int n = static_cast<int>(w.rows()), k = static_cast<int>(w.cols()), one = 1;
-    const float alpha = 1.0f, beta = 0.0f;
+    const int k = static_cast<int>(w.cols());
     const Eigen::VectorXf vf = v.cast<float>();
-    Eigen::VectorXf product(n);
-    sgemv_("N", &n, &k, &alpha, w.data(), &n, vf.data(), &one, &beta, product.data(), &one);
+    Eigen::VectorXf product(w.rows());
+    byRows([&](int, int first, int rows) {
+      const int lda = static_cast<int>(w.rows()), one = 1;
+      const float alpha = 1.0f, beta = 0.0f;
+      sgemv_("N", &rows, &k, &alpha, w.data() + first, &lda, vf.data(), &one, &beta,
+             product.data() + first, &one);
+    });
     x -= product.cast<double>();
+  }
+
+private:
+  // W is read from memory each time (tens of megabytes with many DOFs released): its rows in two
+  // halves, one per core, each with single-threaded BLAS (OpenBLAS's own threads would wait for
+  // each other beside the solve's helpers).
+  static constexpr int kParts = 2;
+  template <class Work> void byRows(const Work& work) const {
+    const int n = static_cast<int>(w.rows());
+    ScopedBlasThreads serial(1, BlasScope::Pinned);
+    RunOnHelpers(kParts, [&](int part) {
+      const int first = static_cast<int>(std::int64_t(n) * part / kParts);
+      const int last = static_cast<int>(std::int64_t(n) * (part + 1) / kParts);
+      if (last > first)
+        work(part, first, last - first);
+    });
   }
 };
 
