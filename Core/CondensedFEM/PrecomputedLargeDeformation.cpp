@@ -965,8 +965,11 @@ private:
   // Factors the tangent at u. With lift-off, the lift-off DOFs that Newton's rule releases at u
   // (force: the internal force there) are released first and factored free: the contact found at
   // the last settle is a looser state's, and a DOF it would release after the factorization would
-  // be pinned in the new factor. `released`: whether the contact changed (the caller's residual
-  // then changes too).
+  // be pinned in the new factor. The first time in a solve that the present factor is the rest
+  // factor, whose coupling takes any release exactly, the release is made without the
+  // factorization: the slow convergence may have been the contact's, and the rate is measured
+  // again. True when the factor or the contact changed; `released`: whether the contact changed
+  // (the caller's residual then changes too).
   bool refactor(const Eigen::VectorXd& u, const Eigen::VectorXd& force, bool& released) {
     released = false;
     if (report_.refactorizations >= sys_.options.maxRefactorizations)
@@ -980,6 +983,13 @@ private:
             prescribed[d] = 0;
             released = true;
           }
+    }
+    if (released && !releasedInsteadOfFactoring_ && factor_ == sys_.restFactor &&
+        sys_.restReleases()) {
+      releasedInsteadOfFactoring_ = true;
+      pb_.prescribed = std::move(prescribed);
+      ++report_.contactUpdates;
+      return true;
     }
     std::shared_ptr<TangentFactor> made;
     const bool factored =
@@ -1143,7 +1153,8 @@ private:
     ReleaseCoupling coupling;
   } released_;
   int sinceFactor_ = 0;
-  std::vector<double> phase_; // residual norms since the history was last cleared
+  bool releasedInsteadOfFactoring_ = false; // see refactor()
+  std::vector<double> phase_;               // residual norms since the history was last cleared
   bool adaptiveFailed_ = false;
   bool forcesFailed_ = false;
   double lastResidual_ = 0.0;
