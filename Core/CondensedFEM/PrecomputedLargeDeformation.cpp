@@ -207,15 +207,19 @@ void ReleasedColumns(const TangentFactor& factor, const std::vector<char>& presc
 }
 
 // The coupling of every lift-off DOF pinned in `factor` (RestReleases), from one substitution of
-// all their columns at once. Null where it fails (a solve then couples a few DOFs at a time, as
-// with any other factor).
+// all their columns at once. Null where it fails or would be too large (more than `most` DOFs, or
+// its two n x |L| matrices of doubles above 512 MB): a solve then couples a few DOFs at a time, as
+// with any other factor.
 std::shared_ptr<const RestReleases> MakeRestReleases(const TangentFactor& factor,
-                                                     const std::vector<int>& liftOff) {
+                                                     const std::vector<int>& liftOff, int most) {
+  constexpr double kMostBytes = 512e6;
   std::vector<int> dofs;
   for (int d : liftOff)
     if (factor.prescribed[d])
       dofs.push_back(d);
-  if (dofs.empty() || factor.single.rows() != factor.tangent.cols())
+  const double bytes = 2.0 * 8.0 * double(dofs.size()) * double(factor.tangent.cols());
+  if (dofs.empty() || dofs.size() > static_cast<size_t>(most) || bytes > kMostBytes ||
+      factor.single.rows() != factor.tangent.cols())
     return nullptr;
   Eigen::MatrixXd columns, block, w;
   ReleasedColumns(factor, factor.prescribed, dofs, columns, block);
@@ -422,7 +426,7 @@ private:
         busy_ = makingReleases_ = true;
         lock.unlock();
         std::shared_ptr<const RestReleases> made =
-            MakeRestReleases(*restFactor, structure->liftOffDofs);
+            MakeRestReleases(*restFactor, structure->liftOffDofs, options.maxRestReleases);
         lock.lock();
         restReleases_ = std::move(made);
         busy_ = makingReleases_ = false;
@@ -488,8 +492,8 @@ Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
   if (!(o.tolerance > 0.0) || !(o.settleTolerance > 0.0) || !(o.refactorCostIterations >= 0.0) ||
       !(o.refactorCostIterationsOnDevice >= 0.0) || o.historySize < 0 || o.maxIterations < 1 ||
       o.refactorAfter < 0 || o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 ||
-      o.maxContactUpdates < 0 || o.maxCoupledReleases < 0 || o.factorAheadOrder < 1 ||
-      o.factorAheadOrder > 2)
+      o.maxContactUpdates < 0 || o.maxCoupledReleases < 0 || o.maxRestReleases < 0 ||
+      o.factorAheadOrder < 1 || o.factorAheadOrder > 2)
     return Status::Error("invalid large-deformation options");
   return Status::Ok();
 }
@@ -581,7 +585,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   sys->restFactor = factor;
   sys->setFactor(std::move(factor));
   // About as long again as the rest of the precompute: on the worker thread, which the first
-  // move from rest rarely overtakes (until it is made, the solve couples a few DOFs at a time).
+  // move from rest rarely overtakes (a solve that needs it waits for it).
   if (!st.liftOffDofs.empty() && options.singlePrecisionFactor && options.coupleRestReleases)
     sys->requestRestReleases();
   sys->timings[Stage::Total].ms = total.elapsedMs();

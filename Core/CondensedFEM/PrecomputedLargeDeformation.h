@@ -119,8 +119,12 @@ struct PrecomputedLargeDeformationOptions {
   // coupling twice.
   int maxCoupledReleases = 8;
   // Make the rest factor's coupling of every lift-off DOF (with singlePrecisionFactor; false: a
-  // move from rest couples at most maxCoupledReleases DOFs, as with any factor).
+  // move from rest couples at most maxCoupledReleases DOFs, as with any factor), where there are at
+  // most maxRestReleases of them (its making holds two n x |L| matrices and the worker thread for
+  // |L| substitutions' worth of work; the face's scenes have 79-182) and those matrices stay
+  // under 512 MB.
   bool coupleRestReleases = true;
+  int maxRestReleases = 1024;
   // The initial inverse Hessian from a factor in single precision (about half the factorization's
   // time and half the bytes a substitution reads); the residual, and so the result, stay double
   // precision. False: a double-precision factor.

@@ -164,6 +164,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // Read last, so that the corpus's earlier bytes keep their meaning.
   quasiNewton.adaptiveRefactorization = in.flag();
   quasiNewton.coupleRestReleases = !in.flag(); // past the end: the default (on)
+  quasiNewton.maxRestReleases = 1024 - in.range(0, 1024); // past the end: the default
   quasiNewton.settleTolerance = std::pow(10.0, -in.range(1, 9));
   quasiNewton.predictContactAhead = in.flag();
   if (precomputed)

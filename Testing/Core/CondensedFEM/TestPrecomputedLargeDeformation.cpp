@@ -303,7 +303,8 @@ TEST(PrecomputedLargeDeformation, AMoveFromRestCouplesEveryNodeItReleases) {
   // Pulled up from rest, the whole floor lifts off: more DOFs than a factor made in a solve couples
   // (none here). The rest factor's coupling of every lift-off DOF couples them all; the solve then
   // takes fewer iterations than with their diagonal alone, and both are Newton's equilibrium. A
-  // tilt releases part of the floor, a subset of the coupling's DOFs.
+  // tilt releases part of the floor, a subset of the coupling's DOFs. With fewer lift-off DOFs
+  // allowed than the floor has, there is no coupling: the diagonal's iterations.
   const FloorBlock b = BlockOnFloor();
   for (const auto& top :
        {Tilt(0.25), std::function<Eigen::RowVector3d(const Eigen::RowVector3d&)>(
@@ -311,14 +312,16 @@ TEST(PrecomputedLargeDeformation, AMoveFromRestCouplesEveryNodeItReleases) {
     const SolveInput input = b.input(top);
     LargeDeformationReport newtonReport;
     const SolveResult newton = Newton(b.request, input, true, &newtonReport);
-    PrecomputedLargeDeformationReport reports[2];
-    for (int coupled = 0; coupled < 2; ++coupled) {
+    PrecomputedLargeDeformationReport reports[3];
+    for (int coupled = 0; coupled < 3; ++coupled) {
       PrecomputedLargeDeformationOptions options;
       options.slidingLiftOff = true;
       options.maxCoupledReleases = 0;
       options.adaptiveRefactorization = false;
       options.refactorAfter = 0; // the rest factor throughout
-      options.coupleRestReleases = coupled == 1;
+      options.coupleRestReleases = coupled >= 1;
+      if (coupled == 2)
+        options.maxRestReleases = static_cast<int>(b.floor.size()) - 1;
       auto system = Precomputed(b.request, options);
       ASSERT_TRUE(system);
       SolveResult result;
@@ -335,6 +338,7 @@ TEST(PrecomputedLargeDeformation, AMoveFromRestCouplesEveryNodeItReleases) {
     EXPECT_GT(reports[1].liftedNodes, 8);
     EXPECT_LT(reports[1].iterations, reports[0].iterations)
         << "coupled: " << reports[1].iterations << ", diagonal only: " << reports[0].iterations;
+    EXPECT_EQ(reports[2].iterations, reports[0].iterations) << "too many for the coupling";
   }
 }
 
@@ -637,6 +641,9 @@ TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   options = {};
   options.refactorCostIterationsOnDevice = std::nan("");
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options = {};
+  options.maxRestReleases = -1;
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   PrecomputeRequest broken = request;
   broken.mesh.tets(0, 0) = -1;
