@@ -38,16 +38,21 @@ def main():
     for row, (case, title) in enumerate(cases):
         for col, scene in enumerate(scenes):
             ax = axes[row][col]
+            times = []
             for solver, colour in (("Precomputed", "tab:blue"), ("Newton", "tab:red")):
                 points = series.get((scene, case, solver))
                 if not points:
                     continue
                 t = [p[0] for p in points]
+                times += t
                 r = [max(p[1], 1e-16) for p in points]
                 ax.semilogy(t, r, marker="o", markersize=3, color=colour,
                             label="%s (%d iterates)" % (solver, len(points) - 1))
             ax.axhline(TOLERANCE, color="gray", linestyle=":", linewidth=1)
-            ax.set_xscale("log")
+            # A logarithmic time axis only where the times span a decade or more: within one, its
+            # labels are mantissa-and-exponent clutter.
+            if times and min(times) > 0.0 and max(times) >= 10.0 * min(times):
+                ax.set_xscale("log")
             ax.set_title("%s: %s" % (scene, title), fontsize=9)
             ax.set_xlabel("time since the solve started (ms)", fontsize=8)
             if col == 0:
