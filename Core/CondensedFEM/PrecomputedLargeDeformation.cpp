@@ -988,8 +988,11 @@ private:
             released = true;
           }
     }
-    if (released && !releasedInsteadOfFactoring_ && factor_ == sys_.restFactor &&
-        sys_.restReleases()) {
+    std::vector<int> freed; // free then, pinned in the present factor
+    for (int d : st_.liftOffDofs)
+      if (factor_->prescribed[d] && !prescribed[d])
+        freed.push_back(d);
+    if (released && !releasedInsteadOfFactoring_ && restReleasesFor(freed)) {
       releasedInsteadOfFactoring_ = true;
       pb_.prescribed = std::move(prescribed);
       ++report_.contactUpdates;
