@@ -10,6 +10,7 @@
 #include "SparseSolver/Blas.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/FillReducingOrdering.h"
+#include "SparseSolver/MultifrontalWorkspace.h"
 #include "SparseSolver/SinglePrecisionFactor.h"
 
 #include <Eigen/Cholesky>
@@ -124,6 +125,11 @@ private:
 struct TangentBuffers {
   AssemblyPattern pattern;
   std::vector<double> packed;
+  // Kept from one factorization on this thread to the next (the tangents share one pattern), and
+  // the factors' values, kept when a factor is gone for the next (shared by the solve's and the
+  // worker's buffers).
+  MultifrontalWorkspace workspace;
+  std::shared_ptr<FactorValueBin> values;
 };
 
 // A set of DOFs and where their columns lie in every tangent's values (all tangents share one
@@ -276,7 +282,9 @@ Status FactorTangent(const Structure& st, const CholmodFactor& analysis, Tangent
   // The single-precision factor straight from the tangent: about half the time of the double
   // factor and its copy. Where single precision breaks down on the tangent, from the double factor,
   // which also gives the message when the tangent is not positive definite.
-  const bool factoredSingle = singlePrecision && made->single.factorize(analysis, pattern.upper).ok;
+  const bool factoredSingle =
+      singlePrecision &&
+      made->single.factorize(analysis, pattern.upper, 2, &buffers.workspace, buffers.values).ok;
   Status status = Status::Ok();
   if (!factoredSingle) {
     status = made->factor.analyzeLike(analysis);
@@ -411,6 +419,7 @@ private:
     if (worker_.joinable())
       return;
     workerBuffers_.pattern = solveBuffers.pattern; // copied here: the solve's thread writes it
+    workerBuffers_.values = solveBuffers.values;
     worker_ = std::thread([this] { work(); });
   }
 
@@ -546,6 +555,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   if (options.useBackend && options.singlePrecisionFactor && request.options.backend)
     sys->backend = request.options.backend;
   sys->options = options;
+  sys->solveBuffers.values = std::make_shared<FactorValueBin>();
   sys->structure = std::make_shared<Structure>();
   Structure& st = *sys->structure;
   status = MakeStructure(sys->request, options.slidingLiftOff, st);

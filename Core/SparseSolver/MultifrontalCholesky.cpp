@@ -47,15 +47,15 @@ void SyrkLowerMinus(int n, int k, const Scalar* a, int lda, Scalar beta, Scalar*
 }
 
 // The factor's supernodal structure and tree, and the matrix's entries grouped by the
-// elimination-order column they land in (the lower triangle of P A P^T).
+// elimination-order column they land in (the lower triangle of P A P^T): each entry's row there and
+// its index in the matrix's values, which `values` points to for the factorization at hand.
 struct Plan {
   int n = 0, nsuper = 0;
   const int *super = nullptr, *pi = nullptr, *px = nullptr, *s = nullptr;
-  std::vector<int> parent, childStart, children; // children in ascending order
-  std::vector<double> flops;                     // of each supernode's own factorization
-  std::vector<int> entryStart, entryRow;         // permuted lower triangle, by column
-  std::vector<double> entryValue;
-  bool fitsSingle = true; // every entry within a float's range (false for NaN)
+  std::vector<int> parent, childStart, children;      // children in ascending order
+  std::vector<double> flops;                          // of each supernode's own factorization
+  std::vector<int> entryStart, entryRow, entrySource; // permuted lower triangle, by column
+  const double* values = nullptr;
 
   int columns(int t) const { return super[t + 1] - super[t]; }
   int rows(int t) const { return pi[t + 1] - pi[t]; }
@@ -97,7 +97,6 @@ Status MakePlan(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
   // Entries of the upper triangle, each moved to (max, min) of its permuted row and column.
   const int* start = upper.outerIndexPtr();
   const int* row = upper.innerIndexPtr();
-  const double* value = upper.valuePtr();
   p.entryStart.assign(p.n + 1, 0);
   for (int j = 0; j < p.n; ++j)
     for (int q = start[j]; q < start[j + 1]; ++q)
@@ -105,27 +104,35 @@ Status MakePlan(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
   for (int c = 0; c < p.n; ++c)
     p.entryStart[c + 1] += p.entryStart[c];
   p.entryRow.resize(p.entryStart[p.n]);
-  p.entryValue.resize(p.entryStart[p.n]);
+  p.entrySource.resize(p.entryStart[p.n]);
   std::vector<int> next(p.entryStart.begin(), p.entryStart.end() - 1);
   for (int j = 0; j < p.n; ++j)
     for (int q = start[j]; q < start[j + 1]; ++q) {
       const int a = pinv[row[q]], b = pinv[j];
       const int at = next[std::min(a, b)]++;
       p.entryRow[at] = std::max(a, b);
-      p.entryValue[at] = value[q];
-      p.fitsSingle &= std::abs(value[q]) <= std::numeric_limits<float>::max();
+      p.entrySource[at] = q;
     }
   return Status::Ok();
 }
 
-// The plan of factoring `upper` with the supernodal analysis L, once they are checked to match.
-Status PlanFor(const SparseMatrix& upper, const cholmod_factor& L, Plan& p) {
+// Checks that `upper` can be factored with the supernodal analysis L.
+Status CheckMatch(const SparseMatrix& upper, const cholmod_factor& L) {
   if (!L.is_super || L.itype != CHOLMOD_INT)
     return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
   if (!upper.isCompressed() || upper.rows() != upper.cols() ||
       static_cast<size_t>(upper.rows()) != L.n)
     return Status::Error("internal: the matrix does not match the factor's analysis");
-  return MakePlan(upper, L, p);
+  return Status::Ok();
+}
+
+// Whether every value of `upper` is within a float's range (false for NaN).
+bool FitsSingle(const SparseMatrix& upper) {
+  const double* v = upper.valuePtr();
+  bool fits = true;
+  for (Eigen::Index k = 0; k < upper.nonZeros(); ++k)
+    fits &= std::abs(v[k]) <= std::numeric_limits<float>::max();
+  return fits;
 }
 
 // A supernode's update matrix (off x off, column-major, lower triangle meaningful).
@@ -137,7 +144,8 @@ template <class Scalar> struct Update {
 // Buffers for the update matrices, reused: over one factorization they add up to several times
 // the factor, most in blocks large enough for malloc to map fresh pages for each, which the kernel
 // zero-fills on first touch (a visible part of a precompute's CPU time). A released buffer serves
-// a later request of between half its size and its size.
+// a later request of between half its size and its size. A pool kept across factorizations
+// (MultifrontalWorkspace) is trimmed after each to the most it lent at once.
 template <class Scalar> class UpdatePool {
 public:
   Update<Scalar> take(size_t size) {
@@ -147,22 +155,52 @@ public:
       if (it != free_.end() && it->first <= 2 * size + 512) {
         Update<Scalar> u{std::move(it->second), it->first};
         free_.erase(it);
+        lent(u.capacity);
         return u;
       }
     }
-    return Update<Scalar>{std::unique_ptr<Scalar[]>(new Scalar[std::max<size_t>(size, 1)]), size};
+    Update<Scalar> u{std::unique_ptr<Scalar[]>(new Scalar[std::max<size_t>(size, 1)]), size};
+    std::lock_guard<std::mutex> lock(mutex_);
+    lent(u.capacity);
+    return u;
   }
   void give(Update<Scalar>& u) {
     if (!u.values)
       return;
     std::lock_guard<std::mutex> lock(mutex_);
+    lentNow_ -= u.capacity;
     free_.emplace(u.capacity, std::move(u.values));
     u.capacity = 0;
   }
+  // Frees the smallest kept buffers until those kept hold no more than the most lent at once since
+  // the last trim (all are back after a factorization).
+  void trim() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    size_t kept = 0;
+    for (const auto& entry : free_)
+      kept += entry.first;
+    while (kept > mostLent_ && !free_.empty()) {
+      kept -= free_.begin()->first;
+      free_.erase(free_.begin());
+    }
+    mostLent_ = lentNow_;
+  }
+  double keptBytes() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    double bytes = 0.0;
+    for (const auto& entry : free_)
+      bytes += double(entry.first) * sizeof(Scalar);
+    return bytes;
+  }
 
 private:
-  std::mutex mutex_;
+  void lent(size_t capacity) {
+    lentNow_ += capacity;
+    mostLent_ = std::max(mostLent_, lentNow_);
+  }
+  mutable std::mutex mutex_;
   std::multimap<size_t, std::unique_ptr<Scalar[]>> free_;
+  size_t lentNow_ = 0, mostLent_ = 0;
 };
 
 // Adds a child's update columns [b0, b1) into supernode t's front: columns that land in t's own
@@ -235,7 +273,7 @@ int FactorSupernode(const Plan& p, int t, Scalar* x, std::vector<Update<Scalar>>
       std::memset(column, 0, sizeof(Scalar) * height);
       const int k = p.super[t] + c;
       for (int q = p.entryStart[k]; q < p.entryStart[k + 1]; ++q)
-        column[position[p.entryRow[q]]] += static_cast<Scalar>(p.entryValue[q]);
+        column[position[p.entryRow[q]]] += static_cast<Scalar>(p.values[p.entrySource[q]]);
     }
   });
   // A child's update columns landing in t's own columns come first (its rows are sorted).
@@ -310,12 +348,11 @@ std::vector<char> MarkTop(const Plan& p, int threads) {
 // or -1.
 template <class Scalar>
 Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumnOut,
-                        MultifrontalReport* report) {
+                        MultifrontalReport* report, UpdatePool<Scalar>& pool) {
   threads = std::max(1, threads);
   const std::vector<char> top = MarkTop(p, threads);
 
   std::vector<Update<Scalar>> updates(p.nsuper);
-  UpdatePool<Scalar> pool;
   std::atomic<int> failedColumn{-1};
   bool outOfMemory = false; // under the tasks' mutex while they run
   auto noteFailure = [&](int column) {
@@ -411,6 +448,8 @@ Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumn
     report->topFlopsShare = total > 0.0 ? topFlops / total : 0.0;
     report->threads = threads;
   }
+  for (Update<Scalar>& u : updates) // those a failure left unread
+    pool.give(u);
   failedColumnOut = failedColumn.load();
   return Status::Ok();
 }
@@ -422,18 +461,105 @@ Status NotPositiveDefinite(int column) {
 
 } // namespace
 
+struct MultifrontalWorkspace::Impl {
+  // The plan and what it was made for: the analysis (its address and its structure's arrays) and
+  // the matrix's pattern.
+  Plan plan;
+  bool planned = false;
+  const cholmod_factor* analysis = nullptr;
+  const void *super = nullptr, *s = nullptr, *perm = nullptr;
+  std::vector<int> outer, inner;
+  int plansReused = 0;
+  UpdatePool<float> single;
+  UpdatePool<double> twice;
+
+  bool planFits(const SparseMatrix& upper, const cholmod_factor& L) const {
+    const Eigen::Index columns = upper.cols() + 1;
+    return planned && analysis == &L && super == L.super && s == L.s && perm == L.Perm &&
+           static_cast<Eigen::Index>(outer.size()) == columns &&
+           static_cast<Eigen::Index>(inner.size()) == upper.nonZeros() &&
+           std::equal(outer.begin(), outer.end(), upper.outerIndexPtr()) &&
+           std::equal(inner.begin(), inner.end(), upper.innerIndexPtr());
+  }
+};
+
+MultifrontalWorkspace::MultifrontalWorkspace() : impl(std::make_unique<Impl>()) {}
+MultifrontalWorkspace::~MultifrontalWorkspace() = default;
+
+double MultifrontalWorkspace::keptBytes() const {
+  return impl->single.keptBytes() + impl->twice.keptBytes();
+}
+
+int MultifrontalWorkspace::plansReused() const {
+  return impl->plansReused;
+}
+
+namespace {
+
+// The plan for `upper` with L, from the workspace when it has the plan for both, else made (and
+// kept there). `local` holds a plan made without a workspace.
+Status PlanFor(const SparseMatrix& upper, const cholmod_factor& L, MultifrontalWorkspace* workspace,
+               Plan& local, const Plan*& plan) {
+  if (Status s = CheckMatch(upper, L); !s)
+    return s;
+  if (!workspace) {
+    if (Status s = MakePlan(upper, L, local); !s)
+      return s;
+    local.values = upper.valuePtr();
+    plan = &local;
+    return Status::Ok();
+  }
+  MultifrontalWorkspace::Impl& w = *workspace->impl;
+  if (w.planFits(upper, L)) {
+    ++w.plansReused;
+  } else {
+    w.planned = false;
+    if (Status s = MakePlan(upper, L, w.plan); !s)
+      return s;
+    w.analysis = &L;
+    w.super = L.super;
+    w.s = L.s;
+    w.perm = L.Perm;
+    w.outer.assign(upper.outerIndexPtr(), upper.outerIndexPtr() + upper.cols() + 1);
+    w.inner.assign(upper.innerIndexPtr(), upper.innerIndexPtr() + upper.nonZeros());
+    w.planned = true;
+  }
+  w.plan.values = upper.valuePtr();
+  plan = &w.plan;
+  return Status::Ok();
+}
+
+template <class Scalar>
+Status Factorize(const Plan& p, Scalar* x, int threads, int& failedColumn,
+                 MultifrontalReport* report, UpdatePool<Scalar>* kept) {
+  if (kept) {
+    const Status s = FactorizeNumeric(p, x, threads, failedColumn, report, *kept);
+    kept->trim();
+    return s;
+  }
+  UpdatePool<Scalar> pool;
+  return FactorizeNumeric(p, x, threads, failedColumn, report, pool);
+}
+
+} // namespace
+
 Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
-                             int threads, MultifrontalReport* report) {
+                             int threads, MultifrontalReport* report,
+                             MultifrontalWorkspace* workspace) {
   if (!L || !common)
     return Status::Error("internal: multifrontal factorization needs a supernodal analysis");
-  Plan p;
-  if (Status s = PlanFor(upper, *L, p); !s)
+  Plan local;
+  const Plan* plan = nullptr;
+  if (Status s = PlanFor(upper, *L, workspace, local, plan); !s)
     return s;
+  const Plan& p = *plan;
   const size_t xsize = static_cast<size_t>(p.px[p.nsuper]);
   if (!cholmod_change_factor(CHOLMOD_REAL, 1, 1, 1, 1, L, common) || !L->x || L->xsize != xsize)
     return Status::Error("CHOLMOD could not allocate the numeric factor (out of memory?)");
   int failedColumn = -1;
-  if (Status s = FactorizeNumeric(p, static_cast<double*>(L->x), threads, failedColumn, report); !s)
+  if (Status s = Factorize(p, static_cast<double*>(L->x), threads, failedColumn, report,
+                           workspace ? &workspace->impl->twice : nullptr);
+      !s)
     return s;
   if (failedColumn >= 0) {
     L->minor = static_cast<size_t>(failedColumn);
@@ -444,16 +570,20 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
 }
 
 Status MultifrontalFactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
-                                   float* values, int threads, MultifrontalReport* report) {
+                                   float* values, int threads, MultifrontalReport* report,
+                                   MultifrontalWorkspace* workspace) {
   if (!values)
     return Status::Error("internal: no values to factor into");
-  Plan p;
-  if (Status s = PlanFor(upper, analysis, p); !s)
+  Plan local;
+  const Plan* plan = nullptr;
+  if (Status s = PlanFor(upper, analysis, workspace, local, plan); !s)
     return s;
-  if (!p.fitsSingle)
+  if (!FitsSingle(upper))
     return Status::Error("the matrix does not fit single precision");
   int failedColumn = -1;
-  if (Status s = FactorizeNumeric(p, values, threads, failedColumn, report); !s)
+  if (Status s = Factorize(*plan, values, threads, failedColumn, report,
+                           workspace ? &workspace->impl->single : nullptr);
+      !s)
     return s;
   return failedColumn >= 0 ? NotPositiveDefinite(failedColumn) : Status::Ok();
 }

@@ -17,6 +17,7 @@
 // For .cpp files only (CHOLMOD is a private dependency of FacePlanSparseSolver).
 #include "Common/Status.h"
 #include "Element/StiffnessAssembly.h"
+#include "SparseSolver/MultifrontalWorkspace.h"
 
 #include <cholmod.h>
 
@@ -37,7 +38,8 @@ struct MultifrontalReport {
 // subtrees run in parallel) or memory runs out in a task; callers that report the failing column
 // should factor again with CHOLMOD, as CholmodFactor does.
 Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholmod_common* common,
-                             int threads, MultifrontalReport* report = nullptr);
+                             int threads, MultifrontalReport* report = nullptr,
+                             MultifrontalWorkspace* workspace = nullptr);
 
 // The same factorization computed in single precision into `values` (analysis.px[nsuper] floats
 // in CHOLMOD's supernodal layout), from `analysis`, a supernodal analysis of `upper`'s pattern
@@ -47,7 +49,7 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
 // (the matrix need not be indefinite: single precision's rounding may break down on an
 // ill-conditioned one).
 Status MultifrontalFactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
-                                   float* values, int threads,
-                                   MultifrontalReport* report = nullptr);
+                                   float* values, int threads, MultifrontalReport* report = nullptr,
+                                   MultifrontalWorkspace* workspace = nullptr);
 
 } // namespace faceplan

@@ -15,6 +15,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <vector>
 
 namespace faceplan {
@@ -31,7 +32,48 @@ constexpr int kRightHandSides = 32;
 
 } // namespace
 
+struct FactorValueBin::Impl {
+  mutable std::mutex mutex;
+  std::vector<UninitializedVector<float>> kept;
+
+  UninitializedVector<float> take(size_t size) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (auto it = kept.begin(); it != kept.end(); ++it)
+      if (it->size() == size) {
+        UninitializedVector<float> out = std::move(*it);
+        kept.erase(it);
+        return out;
+      }
+    return {};
+  }
+  void give(UninitializedVector<float>&& values) {
+    if (values.empty())
+      return;
+    std::lock_guard<std::mutex> lock(mutex);
+    constexpr size_t kMost = 2;
+    if (kept.size() == kMost)
+      kept.erase(kept.begin()); // the oldest
+    kept.push_back(std::move(values));
+  }
+};
+
+FactorValueBin::FactorValueBin() : impl(std::make_unique<Impl>()) {}
+FactorValueBin::~FactorValueBin() = default;
+
+double FactorValueBin::keptBytes() const {
+  std::lock_guard<std::mutex> lock(impl->mutex);
+  double bytes = 0.0;
+  for (const auto& v : impl->kept)
+    bytes += 4.0 * double(v.size());
+  return bytes;
+}
+
 struct SinglePrecisionFactor::Impl {
+  ~Impl() {
+    if (const std::shared_ptr<FactorValueBin> to = bin.lock())
+      to->impl->give(std::move(values));
+  }
+  std::weak_ptr<FactorValueBin> bin; // where the values go when this factor is gone
   int n = 0;
   std::vector<int> super, pi, s, perm;
   std::vector<std::int64_t> px;
@@ -376,8 +418,9 @@ Status SinglePrecisionFactor::assign(const CholmodFactor& factor, int threads) {
 }
 
 Status SinglePrecisionFactor::factorize(const CholmodFactor& analysed, const SparseMatrix& upper,
-                                        int threads) {
-  impl_ = std::make_unique<Impl>();
+                                        int threads, MultifrontalWorkspace* workspace,
+                                        const std::shared_ptr<FactorValueBin>& bin) {
+  impl_ = std::make_unique<Impl>(); // the previous values, if any, go to their bin
   const cholmod_factor_struct* L = analysed.analysis();
   if (!L || !L->is_super || L->itype != CHOLMOD_INT)
     return Status::Error("internal: a single-precision factorization needs a supernodal analysis");
@@ -389,10 +432,15 @@ Status SinglePrecisionFactor::factorize(const CholmodFactor& analysed, const Spa
   if (!tree.super || !tree.pi || !tree.s || !L->px)
     return Status::Error("internal: the analysis has no supernodal structure");
   Impl& d = *impl_;
+  if (bin) {
+    d.values = bin->impl->take(static_cast<size_t>(static_cast<const int*>(L->px)[L->nsuper]));
+    d.bin = bin;
+  }
   d.adoptStructure(*L, tree);
   // Each supernode's columns are written whole by the factorization, on the thread that factors
-  // it (which so first touches those pages).
-  if (Status status = MultifrontalFactorizeSingle(upper, *L, d.values.data(), WorkerThreads(16));
+  // it (which so first touches those pages, where they are fresh).
+  if (Status status = MultifrontalFactorizeSingle(upper, *L, d.values.data(), WorkerThreads(16),
+                                                  nullptr, workspace);
       !status) {
     impl_ = std::make_unique<Impl>();
     return status;

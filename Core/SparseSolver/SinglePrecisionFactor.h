@@ -19,6 +19,23 @@
 namespace faceplan {
 
 class CholmodFactor;
+class MultifrontalWorkspace;
+
+// The value buffers of single-precision factors that are gone, kept for the next factorization of
+// the same size: a fresh buffer is mapped and page-faulted in, zero-filled by the kernel, on each
+// factorization (a sixth of its time on the face's tangent). Holds at most two. A factor returns
+// its buffer when it is destroyed, on whichever thread; the bin may go first.
+class FactorValueBin {
+public:
+  FactorValueBin();
+  ~FactorValueBin();
+  FactorValueBin(const FactorValueBin&) = delete;
+  FactorValueBin& operator=(const FactorValueBin&) = delete;
+  double keptBytes() const;
+
+  struct Impl;
+  std::unique_ptr<Impl> impl;
+};
 
 class SinglePrecisionFactor {
 public:
@@ -34,7 +51,12 @@ public:
   // CholmodFactor::factorize; `analysed` need not be factorized and is only read). About half the
   // time of factoring in double and copying. Fails where single precision's pivots break down, as
   // they may on a matrix too ill-conditioned for it: the caller then factors in double and copies.
-  Status factorize(const CholmodFactor& analysed, const SparseMatrix& upper, int threads = 2);
+  // With a workspace (for successive factorizations on one thread) its plan and update buffers are
+  // reused, and with a bin this factor's values come from it when it holds a buffer of their size
+  // and go back to it when this factor is destroyed or factored again.
+  Status factorize(const CholmodFactor& analysed, const SparseMatrix& upper, int threads = 2,
+                   MultifrontalWorkspace* workspace = nullptr,
+                   const std::shared_ptr<FactorValueBin>& bin = nullptr);
   // x = (L L^T)^-1 b (the factored matrix's inverse applied to b, original numbering), in single
   // precision after scaling b to unit largest entry. Safe to call from several threads at once.
   Status solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;

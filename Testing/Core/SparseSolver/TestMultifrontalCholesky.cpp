@@ -102,6 +102,71 @@ TEST(MultifrontalCholesky, SameBitsOnEveryRun) {
   cholmod_free_factor(&L, &quiet.common);
 }
 
+// Bytes of every supernode's update matrix in double precision at once.
+double UpdateBytes(const cholmod_factor& L) {
+  double bytes = 0.0;
+  const int* super = static_cast<const int*>(L.super);
+  const int* pi = static_cast<const int*>(L.pi);
+  for (size_t t = 0; t < L.nsuper; ++t) {
+    const double off = (pi[t + 1] - pi[t]) - (super[t + 1] - super[t]);
+    bytes += off * off * sizeof(double);
+  }
+  return bytes;
+}
+
+// A workspace keeps the plan and the update buffers from one factorization to the next. The factor
+// is the same bits as without it; the plan is reused for the same pattern only; and what it keeps
+// stays within one factorization's update matrices, however many factorizations it serves, and
+// shrinks to a smaller matrix's.
+TEST(MultifrontalCholesky, AWorkspaceGivesTheSameFactor) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  QuietCholmodCommon quiet;
+  cholmod_factor* L = Analysed(*system, system->kff, quiet.common);
+  ASSERT_TRUE(L);
+  const double updateBytes = UpdateBytes(*L);
+  // Another pattern: an off-diagonal entry v at (i, j) (and any stored zero) fewer, with |v| added
+  // to both diagonals so that the matrix stays positive definite (the change is
+  // |v| (e_i - sign(v) e_j)(e_i - sign(v) e_j)^T).
+  SparseMatrix pruned = system->kff;
+  const int j = static_cast<int>(pruned.cols()) / 2;
+  for (int q = pruned.outerIndexPtr()[j]; q < pruned.outerIndexPtr()[j + 1]; ++q)
+    if (const int i = pruned.innerIndexPtr()[q]; i != j && pruned.valuePtr()[q] != 0.0) {
+      const double v = std::abs(pruned.valuePtr()[q]);
+      pruned.valuePtr()[q] = 0.0;
+      pruned.coeffRef(i, i) += v;
+      pruned.coeffRef(j, j) += v;
+      break;
+    }
+  pruned.prune(0.0, 0.0);
+  ASSERT_LT(pruned.nonZeros(), system->kff.nonZeros());
+  const SparseMatrix scaled = 2.0 * system->kff;
+  MultifrontalWorkspace workspace;
+  int reused = 0;
+  const std::vector<const SparseMatrix*> matrices = {&system->kff, &scaled, &system->kff, &pruned,
+                                                     &scaled};
+  for (const SparseMatrix* m : matrices) {
+    ASSERT_TRUE(MultifrontalFactorize(*m, L, &quiet.common, 4).ok);
+    const std::vector<double> without = Values(L);
+    ASSERT_TRUE(MultifrontalFactorize(*m, L, &quiet.common, 4, nullptr, &workspace).ok);
+    EXPECT_EQ(Values(L), without);
+    EXPECT_GT(workspace.keptBytes(), 0.0);
+    EXPECT_LE(workspace.keptBytes(), updateBytes);
+    reused = workspace.plansReused();
+  }
+  EXPECT_EQ(reused, 2) << "the same pattern after the first and the third; then made again twice";
+  cholmod_free_factor(&L, &quiet.common);
+
+  std::shared_ptr<const CondensedSystem> small;
+  ASSERT_TRUE(Precompute(ShellRequest(4, 2), small).ok);
+  cholmod_factor* smallL = Analysed(*small, small->kff, quiet.common);
+  ASSERT_TRUE(smallL);
+  ASSERT_LT(UpdateBytes(*smallL), 0.1 * updateBytes);
+  ASSERT_TRUE(MultifrontalFactorize(small->kff, smallL, &quiet.common, 4, nullptr, &workspace).ok);
+  EXPECT_LE(workspace.keptBytes(), UpdateBytes(*smallL));
+  cholmod_free_factor(&smallL, &quiet.common);
+}
+
 TEST(MultifrontalCholesky, RefusesAMatrixThatIsNotPositiveDefinite) {
   const auto system = ShellSystem();
   ASSERT_TRUE(system);

@@ -3,9 +3,11 @@
 // supernodal factor solve the factored matrix to single precision's accuracy (relative to the
 // double substitution), on one thread and split over two, the same either way; a factor that is
 // not numeric, or whose values a float cannot hold, is refused. Factored directly in single
-// precision, it solves as the copy does; where single precision breaks down it is refused.
+// precision, it solves as the copy does; where single precision breaks down it is refused. Values
+// recycled through a bin are all overwritten.
 #include "CondensedFEM/CondensedSystem.h"
 #include "SparseSolver/CholmodFactor.h"
+#include "SparseSolver/MultifrontalWorkspace.h"
 #include "SparseSolver/SinglePrecisionFactor.h"
 #include "Support/FEMTestScenes.h"
 
@@ -202,4 +204,51 @@ TEST(SinglePrecisionFactor, ADirectFactorizationThatBreaksDownIsRefused) {
   EXPECT_FALSE(single.factorize(analysed, other).ok);
   CholmodFactor none;
   EXPECT_FALSE(single.factorize(none, nearlySingular).ok);
+}
+
+// Factors made with a bin give their values back when they are gone, and the next factorization
+// of that size takes them. The recycled values held another matrix's factor: every one of them must
+// be overwritten, so the factor solves exactly as a fresh one does. A factor may outlive its bin.
+TEST(SinglePrecisionFactor, ABinPassesTheValuesOfAFactorThatIsGoneToTheNext) {
+  Factored f;
+  Factor(f);
+  const SparseMatrix& k = f.system->kff;
+  CholmodFactor analysed;
+  ASSERT_TRUE(analysed.analyze(k).ok);
+  const SparseMatrix other = 3.0 * k; // the same pattern, other values
+  const Eigen::VectorXd b = Eigen::VectorXd::Random(k.rows());
+  Eigen::VectorXd fresh;
+  {
+    SinglePrecisionFactor plain;
+    ASSERT_TRUE(plain.factorize(analysed, k).ok);
+    ASSERT_TRUE(plain.solve(b, fresh).ok);
+  }
+  auto bin = std::make_shared<FactorValueBin>();
+  MultifrontalWorkspace workspace;
+  double bytes = 0.0;
+  {
+    SinglePrecisionFactor first;
+    ASSERT_TRUE(first.factorize(analysed, other, 2, &workspace, bin).ok);
+    bytes = first.valueBytes();
+    EXPECT_EQ(bin->keptBytes(), 0.0);
+  }
+  EXPECT_EQ(bin->keptBytes(), bytes) << "the values of the factor that is gone";
+  SinglePrecisionFactor second;
+  ASSERT_TRUE(second.factorize(analysed, k, 2, &workspace, bin).ok);
+  EXPECT_EQ(bin->keptBytes(), 0.0) << "taken by the next factorization";
+  EXPECT_EQ(workspace.plansReused(), 1);
+  Eigen::VectorXd x;
+  ASSERT_TRUE(second.solve(b, x).ok);
+  EXPECT_TRUE(x == fresh) << "differs from a fresh factor's solution by "
+                          << (x - fresh).norm() / fresh.norm();
+  // Factored again, it gives its values back first and takes them again.
+  ASSERT_TRUE(second.factorize(analysed, other, 2, &workspace, bin).ok);
+  ASSERT_TRUE(second.factorize(analysed, k, 2, &workspace, bin).ok);
+  EXPECT_EQ(bin->keptBytes(), 0.0);
+  ASSERT_TRUE(second.solve(b, x).ok);
+  EXPECT_TRUE(x == fresh);
+  // A factor that outlives its bin frees its values itself.
+  SinglePrecisionFactor last;
+  ASSERT_TRUE(last.factorize(analysed, k, 2, &workspace, bin).ok);
+  bin.reset();
 }
