@@ -498,11 +498,12 @@ namespace {
 constexpr double kSteadyDrag = 0.1;
 
 Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
-  if (!(o.tolerance > 0.0) || !(o.settleTolerance > 0.0) || !(o.refactorCostIterations >= 0.0) ||
-      !(o.refactorCostIterationsOnDevice >= 0.0) || o.historySize < 0 || o.maxIterations < 1 ||
-      o.refactorAfter < 0 || o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 ||
-      o.maxContactUpdates < 0 || o.maxCoupledReleases < 0 || o.maxRestReleases < 0 ||
-      o.factorAheadOrder < 1 || o.factorAheadOrder > 2)
+  if (!(o.tolerance > 0.0) || !(o.settleTolerance > 0.0) || !(o.recheckTolerance >= 0.0) ||
+      !(o.refactorCostIterations >= 0.0) || !(o.refactorCostIterationsOnDevice >= 0.0) ||
+      o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
+      o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
+      o.maxCoupledReleases < 0 || o.maxRestReleases < 0 || o.factorAheadOrder < 1 ||
+      o.factorAheadOrder > 2)
     return Status::Error("invalid large-deformation options");
   return Status::Ok();
 }
@@ -645,6 +646,7 @@ public:
     const double tight = sys_.options.tolerance;
     const double settle = sys_.options.settleTolerance;
     double tolerance = liftOff ? std::max(tight, settle) : tight;
+    refactorGoal_ = 1.0;
     int updates = 0;
     while (true) {
       const Failure f = minimise(u, tolerance);
@@ -669,8 +671,11 @@ public:
           }
         clearHistory();
         tolerance = std::max(tight, settle);
+        refactorGoal_ = 1.0;
       } else {
-        tolerance = tight;
+        const double recheck = sys_.options.recheckTolerance;
+        tolerance = (recheck > tight && tolerance > recheck) ? recheck : tight;
+        refactorGoal_ = tolerance == recheck ? tight : 1.0;
       }
       if (!moved) { // the converged evaluation still holds at u
         cached_.energy = lastEnergy_;
@@ -1082,7 +1087,8 @@ private:
       phase_.push_back(b.residualNorm);
       const bool due =
           sys_.options.refactorAfter > 0 && ++sinceFactor_ >= sys_.options.refactorAfter;
-      const bool pays = !due && refactorPays(b.residualNorm, tolerance * b.scale);
+      const bool pays =
+          !due && refactorPays(b.residualNorm, std::min(tolerance, refactorGoal_) * b.scale);
       if (due || pays) {
         sinceFactor_ = 0;
         bool released = false;
@@ -1176,6 +1182,9 @@ private:
   bool forcesFailed_ = false;
   double lastResidual_ = 0.0;
   Evaluation cached_; // the predictor's accepted state
+  // The relative residual against which refactorPays judges a factorization, when below the
+  // minimisation's tolerance (the contact's recheck: the solve goes on to the tolerance).
+  double refactorGoal_ = 1.0;
   bool haveCached_ = false;
   const Eigen::VectorXd* startForce_ = nullptr;
   double lastEnergy_ = 0.0;   // at the last converged state

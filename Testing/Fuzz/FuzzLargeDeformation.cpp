@@ -163,10 +163,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   // Read last, so that the corpus's earlier bytes keep their meaning.
   quasiNewton.adaptiveRefactorization = in.flag();
-  quasiNewton.coupleRestReleases = !in.flag(); // past the end: the default (on)
+  quasiNewton.coupleRestReleases = !in.flag();            // past the end: the default (on)
   quasiNewton.maxRestReleases = 1024 - in.range(0, 1024); // past the end: the default
   quasiNewton.settleTolerance = std::pow(10.0, -in.range(1, 9));
   quasiNewton.predictContactAhead = in.flag();
+  quasiNewton.recheckTolerance = in.flag() ? 0.0 : 1e-6; // past the end: the default
   if (precomputed)
     PrecomputedSolve(request, input, quasiNewton, limit, drag);
 

@@ -637,6 +637,11 @@ TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
   options.settleTolerance = std::nan("");
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   options = {};
+  options.recheckTolerance = -1e-6;
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options.recheckTolerance = std::nan("");
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options = {};
   options.refactorCostIterations = -1.0;
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   options = {};
