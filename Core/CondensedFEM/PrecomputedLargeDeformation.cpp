@@ -894,12 +894,28 @@ private:
     }
     Evaluation ev;
     const Eigen::VectorXd* force = &ev.force;
-    if (startForce_ && startForce_->size() == n) {
+    const bool known = startForce_ && startForce_->size() == n;
+    if (known) {
       force = startForce_; // the converged state's own
     } else if (!evaluate(u, ev)) {
       return false;
     }
     startForce_ = nullptr;
+    // A start that is already the equilibrium of these targets and loads (an update that changed
+    // nothing the solve reads) stays where it is: a step from it would move it within the
+    // tolerance, and the same input would give another result each time.
+    if (largestMove == 0.0) {
+      Evaluation at;
+      at.force = *force; // the residual's; the energy is not read here
+      const Balance b = BalanceOf(pb_, at, u, 1.0);
+      if (b.residualNorm <= sys_.options.tolerance * b.scale) {
+        if (!known) {
+          cached_ = std::move(ev);
+          haveCached_ = true;
+        }
+        return true;
+      }
+    }
     // From a factor made where the drag leads, the prescribed values are already at their targets
     // to round-off: the tangent's product with that move is skipped (the move itself is applied;
     // the predictor only starts the iterations, whose residual decides convergence).

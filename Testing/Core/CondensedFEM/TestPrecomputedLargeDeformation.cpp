@@ -243,6 +243,34 @@ TEST(PrecomputedLargeDeformation, WarmStartsEqualColdSolvesAndTheActiveSetChange
   EXPECT_GT(BackgroundRefactorizations(*system), 0);
 }
 
+// An update that changes nothing the solve reads (the same targets and loads, warm-started from
+// their converged state) returns that state as it is, with no iteration: a step from it would move
+// it within the tolerance, and the same input would give another result each time.
+TEST(PrecomputedLargeDeformation, AnUnchangedInputReturnsItsConvergedState) {
+  const FloorBlock b = BlockOnFloor();
+  PrecomputedLargeDeformationOptions options;
+  options.slidingLiftOff = true;
+  auto system = Precomputed(b.request, options);
+  ASSERT_TRUE(system);
+  const SolveInput input = b.input(Tilt(0.2));
+  SolveResult first, again;
+  PrecomputedLargeDeformationReport firstReport, againReport;
+  LargeDeformationState state, next;
+  ASSERT_TRUE(
+      SolvePrecomputedLargeDeformation(*system, input, nullptr, first, firstReport, &state).ok);
+  ASSERT_GT(firstReport.iterations, 0);
+  ASSERT_GT(firstReport.liftedNodes, 0) << "a state with lift-off's contact";
+  WaitForRefactorization(*system); // the factor of the converged state, as after a pause
+  for (int repeat = 0; repeat < 2; ++repeat) {
+    ASSERT_TRUE(
+        SolvePrecomputedLargeDeformation(*system, input, &state, again, againReport, &next).ok);
+    EXPECT_TRUE(againReport.warmStarted);
+    EXPECT_EQ(againReport.iterations, 0);
+    EXPECT_TRUE(again.allDisplacement == first.allDisplacement) << "repeat " << repeat;
+    state = next;
+  }
+}
+
 // The block pressed onto the floor, then tilted more and more, step after step with each
 // refactorization awaited: the floor unloads row by row from one side, so nodes lift off on the
 // way. Every step equals the cold solve. Sums the iterations and contact updates of the steps
