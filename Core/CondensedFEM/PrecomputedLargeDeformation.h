@@ -44,8 +44,9 @@
 // equilibrium Newton finds (the tests compare them).
 //
 // Warm start: a solve may start from the last converged state (only the prescribed values or
-// loads changed); the prescribed values and loads then go from that state's to the new ones. A
-// move back towards rest starts from rest with the rest factor instead. A sub-step that inverts a
+// loads changed); the prescribed values and loads then go from that state's to the new ones (and
+// where they are that state's own, it is returned as it is). A move back towards rest starts from
+// rest with the rest factor instead. A sub-step that inverts a
 // cell or does not converge is halved. When the solve does not converge within its bounds it falls
 // back to Newton (SolveLargeDeformation) and says so in the report; it never returns an unconverged
 // answer unless the caller set an iteration limit, and then it says so.
