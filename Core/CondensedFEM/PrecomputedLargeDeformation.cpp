@@ -646,10 +646,10 @@ public:
     const double tight = sys_.options.tolerance;
     const double settle = sys_.options.settleTolerance;
     double tolerance = liftOff ? std::max(tight, settle) : tight;
-    refactorGoal_ = 1.0;
+    bool rechecking = false; // at recheckTolerance, on the way to the tolerance
     int updates = 0;
     while (true) {
-      const Failure f = minimise(u, tolerance);
+      const Failure f = minimise(u, tolerance, rechecking ? tight : tolerance);
       if (f != Failure::None)
         return f;
 
@@ -671,11 +671,11 @@ public:
           }
         clearHistory();
         tolerance = std::max(tight, settle);
-        refactorGoal_ = 1.0;
+        rechecking = false;
       } else {
         const double recheck = sys_.options.recheckTolerance;
-        tolerance = (recheck > tight && tolerance > recheck) ? recheck : tight;
-        refactorGoal_ = tolerance == recheck ? tight : 1.0;
+        rechecking = recheck > tight && tolerance > recheck;
+        tolerance = rechecking ? recheck : tight;
       }
       if (!moved) { // the converged evaluation still holds at u
         cached_.energy = lastEnergy_;
@@ -753,10 +753,7 @@ private:
     released_.prescribed = pb_.prescribed;
     if (factor_->prescribed.size() != pb_.prescribed.size())
       return;
-    std::vector<int> dofs;
-    for (int d : st_.liftOffDofs)
-      if (factor_->prescribed[d] && !pb_.prescribed[d])
-        dofs.push_back(d);
+    std::vector<int> dofs = freedSinceFactor(pb_.prescribed);
     if (dofs.empty())
       return;
     const Eigen::Index n = pb_.prescribed.size(), k = static_cast<Eigen::Index>(dofs.size());
@@ -787,6 +784,15 @@ private:
     }
     c.dofs = std::move(dofs);
     c.schurInverse = llt.solve(Eigen::MatrixXd::Identity(k, k));
+  }
+
+  // The lift-off DOFs free in `prescribed` but pinned in the present factor.
+  std::vector<int> freedSinceFactor(const std::vector<char>& prescribed) const {
+    std::vector<int> freed;
+    for (int d : st_.liftOffDofs)
+      if (factor_->prescribed[d] && !prescribed[d])
+        freed.push_back(d);
+    return freed;
   }
 
   // The rest factor's RestReleases, when the factor is the rest factor, they are made, and the
@@ -1019,11 +1025,7 @@ private:
             released = true;
           }
     }
-    std::vector<int> freed; // free then, pinned in the present factor
-    for (int d : st_.liftOffDofs)
-      if (factor_->prescribed[d] && !prescribed[d])
-        freed.push_back(d);
-    if (released && !releasedInsteadOfFactoring_ && restReleasesFor(freed)) {
+    if (released && !releasedInsteadOfFactoring_ && restReleasesFor(freedSinceFactor(prescribed))) {
       releasedInsteadOfFactoring_ = true;
       pb_.prescribed = std::move(prescribed);
       ++report_.contactUpdates;
@@ -1069,8 +1071,9 @@ private:
     return left - kAfterFactor > cost;
   }
 
-  // L-BFGS on the free DOFs with the current contact, to `tolerance`.
-  Failure minimise(Eigen::VectorXd& u, double tolerance) {
+  // L-BFGS on the free DOFs with the current contact, to `tolerance`; whether a refactorization
+  // pays is judged against reaching `goal` (the tolerance the solve goes on to).
+  Failure minimise(Eigen::VectorXd& u, double tolerance, double goal) {
     Evaluation ev;
     if (haveCached_) {
       ev = std::move(cached_);
@@ -1103,8 +1106,7 @@ private:
       phase_.push_back(b.residualNorm);
       const bool due =
           sys_.options.refactorAfter > 0 && ++sinceFactor_ >= sys_.options.refactorAfter;
-      const bool pays =
-          !due && refactorPays(b.residualNorm, std::min(tolerance, refactorGoal_) * b.scale);
+      const bool pays = !due && refactorPays(b.residualNorm, goal * b.scale);
       if (due || pays) {
         sinceFactor_ = 0;
         bool released = false;
@@ -1198,9 +1200,6 @@ private:
   bool forcesFailed_ = false;
   double lastResidual_ = 0.0;
   Evaluation cached_; // the predictor's accepted state
-  // The relative residual against which refactorPays judges a factorization, when below the
-  // minimisation's tolerance (the contact's recheck: the solve goes on to the tolerance).
-  double refactorGoal_ = 1.0;
   bool haveCached_ = false;
   const Eigen::VectorXd* startForce_ = nullptr;
   double lastEnergy_ = 0.0;   // at the last converged state

@@ -462,10 +462,9 @@ Status NotPositiveDefinite(int column) {
 } // namespace
 
 struct MultifrontalWorkspace::Impl {
-  // The plan and what it was made for: the analysis (its address and its structure's arrays) and
-  // the matrix's pattern.
+  // The plan and what it was made for: the analysis (its address, null while there is no plan, and
+  // its structure's arrays) and the matrix's pattern.
   Plan plan;
-  bool planned = false;
   const cholmod_factor* analysis = nullptr;
   const void *super = nullptr, *s = nullptr, *perm = nullptr;
   std::vector<int> outer, inner;
@@ -475,7 +474,7 @@ struct MultifrontalWorkspace::Impl {
 
   bool planFits(const SparseMatrix& upper, const cholmod_factor& L) const {
     const Eigen::Index columns = upper.cols() + 1;
-    return planned && analysis == &L && super == L.super && s == L.s && perm == L.Perm &&
+    return analysis == &L && super == L.super && s == L.s && perm == L.Perm &&
            static_cast<Eigen::Index>(outer.size()) == columns &&
            static_cast<Eigen::Index>(inner.size()) == upper.nonZeros() &&
            std::equal(outer.begin(), outer.end(), upper.outerIndexPtr()) &&
@@ -513,16 +512,15 @@ Status PlanFor(const SparseMatrix& upper, const cholmod_factor& L, MultifrontalW
   if (w.planFits(upper, L)) {
     ++w.plansReused;
   } else {
-    w.planned = false;
+    w.analysis = nullptr;
     if (Status s = MakePlan(upper, L, w.plan); !s)
       return s;
-    w.analysis = &L;
     w.super = L.super;
     w.s = L.s;
     w.perm = L.Perm;
     w.outer.assign(upper.outerIndexPtr(), upper.outerIndexPtr() + upper.cols() + 1);
     w.inner.assign(upper.innerIndexPtr(), upper.innerIndexPtr() + upper.nonZeros());
-    w.planned = true;
+    w.analysis = &L; // last: the plan is whole
   }
   w.plan.values = upper.valuePtr();
   plan = &w.plan;
