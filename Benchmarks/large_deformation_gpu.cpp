@@ -135,8 +135,9 @@ Run Measure(PrecomputeRequest request, std::shared_ptr<ComputeBackend> backend, 
     state = next;
     run.steps.push_back(StepOf(ms, result, report));
     if (std::getenv("FACEPLAN_PRINT_CONVERGENCE")) {
-      std::printf("    background factors so far %d (%d ahead refused); residuals:",
-                  BackgroundRefactorizations(*system), FactorsAheadRefused(*system));
+      std::printf("    background factors so far %d (%d ahead refused, %d corrected); residuals:",
+                  BackgroundRefactorizations(*system), FactorsAheadRefused(*system),
+                  FactorsAheadCorrected(*system));
       for (const auto& [at, residual] : report.convergence)
         std::printf(" %.1e (%.1f ms)", residual, at);
       std::printf("; solve total %.1f ms\n", result.timings[Stage::Total].ms);

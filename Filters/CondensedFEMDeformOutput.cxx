@@ -93,6 +93,7 @@ void AddFieldData(const SolveOutcome& outcome, const Settings& settings,
     } else {
       const PrecomputedLargeDeformationReport& report = outcome.precomputedReport;
       AddScalar(fd, "QuasiNewtonIterations", report.iterations);
+      AddScalar(fd, "ForceEvaluations", report.evaluations);
       AddScalar(fd, "FactorSolves", report.factorSolves);
       AddScalar(fd, "Refactorizations", report.refactorizations);
       AddScalar(fd, "WarmStarted", report.warmStarted ? 1.0 : 0.0);

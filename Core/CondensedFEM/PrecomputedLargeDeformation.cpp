@@ -6,6 +6,7 @@
 #include "Common/ExceptionBoundary.h"
 #include "Common/HelperThreads.h"
 #include "CondensedFEM/LargeDeformationProblem.h"
+#include "CondensedFEM/LbfgsHistory.h"
 #include "Mesh/InputValidation.h"
 #include "SparseSolver/Blas.h"
 #include "SparseSolver/CholmodFactor.h"
@@ -15,9 +16,9 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
-#include <deque>
 #include <limits>
 #include <mutex>
 #include <thread>
@@ -309,7 +310,53 @@ Status FactorTangent(const Structure& st, const CholmodFactor& analysis, Tangent
   return Status::Ok();
 }
 
+// The state ahead of a drag corrected by one Newton step with the factor made there (`ahead`,
+// whose state, force and contact are the extrapolated state's; `values`: the targets and loads
+// extrapolated there), and the tangent factored again where that step leads. The predictor of the
+// next drag step is a Newton step from the factor's state: from the corrected state its residual is
+// about the square of the extrapolation's. False (ahead stays) when the step does not lower the
+// residual, inverts a cell, or the tangent there is not positive definite.
+Status CorrectAhead(const Structure& st, const CholmodFactor& analysis, TangentBuffers& buffers,
+                    const TangentFactor& ahead, Problem values, bool contact, bool singlePrecision,
+                    ComputeBackend* backend, std::shared_ptr<TangentFactor>& out) {
+  values.prescribed = ahead.prescribed;
+  Evaluation at;
+  at.force = ahead.force;
+  const Balance before = BalanceOf(values, at, ahead.state, 1.0);
+  Eigen::VectorXd step;
+  Status solved = Status::Error("no factor");
+  if (singlePrecision) {
+    solved = ahead.single.solve(before.residual, step);
+  } else {
+    Eigen::MatrixXd x;
+    solved = ahead.factor.solve(before.residual, x);
+    if (solved)
+      step = x.col(0);
+  }
+  if (!solved)
+    return solved;
+  ZeroPrescribed(ahead.prescribed, step);
+  const Eigen::VectorXd next = ahead.state - step;
+  std::shared_ptr<TangentFactor> made;
+  if (Status s =
+          FactorTangent(st, analysis, buffers, next, ahead.prescribed, contact ? &values : nullptr,
+                        singlePrecision, backend, made, nullptr);
+      !s)
+    return s;
+  values.prescribed = made->prescribed;
+  at.force = made->force;
+  if (!(BalanceOf(values, at, next, 1.0).residualNorm < before.residualNorm))
+    return Status::Error("the Newton step from the state ahead did not lower its residual");
+  out = std::move(made);
+  return Status::Ok();
+}
+
 } // namespace
+
+// How long the worker waits, once it has factored the tangent ahead of a drag, for the next edit
+// before it corrects that state (PrecomputedLargeDeformationOptions::correctAhead): longer than the
+// gap between two updates of a continuous drag in the GUI (about 0.1 s), shorter than a pause.
+constexpr std::chrono::milliseconds kCorrectionPause(200);
 
 class LargeDeformationSystem {
 public:
@@ -363,7 +410,7 @@ public:
   // drag whose next step lifts a node off (or puts one back) finds it already in the factor.
   void requestRefactorization(const Eigen::VectorXd& u, const std::vector<char>& prescribed,
                               Eigen::VectorXd ahead = Eigen::VectorXd(),
-                              Problem aheadValues = Problem()) {
+                              Problem aheadValues = Problem(), bool contactAhead = false) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (stop_)
@@ -371,6 +418,7 @@ public:
       pendingU_ = u;
       pendingAhead_ = std::move(ahead);
       pendingAheadValues_ = std::move(aheadValues);
+      pendingContactAhead_ = contactAhead;
       pendingPrescribed_ = prescribed;
       pending_ = true;
       startWorker();
@@ -389,6 +437,10 @@ public:
   int aheadFailures() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return aheadFailures_;
+  }
+  int correctedCount() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return correctedCount_;
   }
 
   // Queues the rest factor's RestReleases.
@@ -447,6 +499,7 @@ private:
       const Eigen::VectorXd u = std::move(pendingU_);
       const Eigen::VectorXd ahead = std::move(pendingAhead_);
       Problem aheadValues = std::move(pendingAheadValues_);
+      const bool contactAhead = pendingContactAhead_;
       const std::vector<char> prescribed = std::move(pendingPrescribed_);
       pending_ = false;
       busy_ = true;
@@ -456,8 +509,8 @@ private:
       Status status = Status::Error("no state ahead");
       if (ahead.size() == u.size())
         status = FactorTangent(*structure, analysis, workerBuffers_, ahead, prescribed,
-                               aheadValues.st ? &aheadValues : nullptr,
-                               options.singlePrecisionFactor, backend.get(), made, nullptr);
+                               contactAhead ? &aheadValues : nullptr, options.singlePrecisionFactor,
+                               backend.get(), made, nullptr);
       const bool refusedAhead = ahead.size() == u.size() && !status.ok;
       if (!status)
         status = FactorTangent(*structure, analysis, workerBuffers_, u, prescribed, nullptr,
@@ -466,8 +519,30 @@ private:
       if (refusedAhead)
         ++aheadFailures_;
       if (status) {
-        factor_ = std::move(made);
+        factor_ = made;
         ++backgroundCount_;
+      }
+      // The state ahead corrected by a Newton step and factored again, in a pause: a drag that
+      // goes on takes the factor just made (on two cores the correction beside the next edits'
+      // solves and rendering cost the GUI's drag a fifth of its updates), and a surgeon who
+      // pauses gets the next step's predictor from the corrected state.
+      const bool correct = status && ahead.size() == u.size() && !refusedAhead &&
+                           options.correctAhead && aheadValues.st;
+      if (correct)
+        wake_.wait_for(lock, kCorrectionPause,
+                       [this] { return stop_ || pending_ || releasesPending_; });
+      if (correct && !pending_ && !releasesPending_ && !stop_) {
+        lock.unlock();
+        std::shared_ptr<TangentFactor> corrected;
+        const bool ok =
+            CorrectAhead(*structure, analysis, workerBuffers_, *made, aheadValues, contactAhead,
+                         options.singlePrecisionFactor, backend.get(), corrected)
+                .ok;
+        lock.lock();
+        if (ok && !pending_) {
+          factor_ = std::move(corrected);
+          ++correctedCount_;
+        }
       }
       busy_ = false;
       if (!pending_ && !releasesPending_)
@@ -482,13 +557,15 @@ private:
   TangentBuffers workerBuffers_; // the worker's only
   Eigen::VectorXd pendingU_, pendingAhead_;
   Problem pendingAheadValues_;
+  bool pendingContactAhead_ = false;
   std::vector<char> pendingPrescribed_;
   bool pending_ = false, busy_ = false, stop_ = false, releasesPending_ = false,
        makingReleases_ = false;
   mutable std::condition_variable releasesMade_;
   std::shared_ptr<const RestReleases> restReleases_;
   int backgroundCount_ = 0;
-  int aheadFailures_ = 0; // states ahead that could not be factored (the converged one was)
+  int aheadFailures_ = 0;  // states ahead that could not be factored (the converged one was)
+  int correctedCount_ = 0; // states ahead corrected by a Newton step
 };
 
 namespace {
@@ -604,24 +681,6 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   return Status::Ok();
 }
 
-// The L-BFGS pair s = x1 - x0, y = r1 - r0 and its products s.y, s.s and y.y, in one pass.
-void NewPair(const Eigen::VectorXd& x1, const Eigen::VectorXd& x0, const Eigen::VectorXd& r1,
-             const Eigen::VectorXd& r0, Eigen::VectorXd& s, Eigen::VectorXd& y, double& sy,
-             double& ss, double& yy) {
-  const Eigen::Index n = x1.size();
-  s.resize(n);
-  y.resize(n);
-  sy = ss = yy = 0.0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double si = x1[i] - x0[i], yi = r1[i] - r0[i];
-    s[i] = si;
-    y[i] = yi;
-    sy += si * yi;
-    ss += si * si;
-    yy += yi * yi;
-  }
-}
-
 // Why a sub-step failed: a smaller one may mend it, or the solve falls back.
 enum class Failure { None, Smaller, Fallback, Stopped };
 
@@ -630,7 +689,7 @@ public:
   QuasiNewton(LargeDeformationSystem& sys, Problem& pb, PrecomputedLargeDeformationReport& report,
               StageTimings& timings, std::shared_ptr<const TangentFactor> factor)
       : sys_(sys), st_(*sys.structure), pb_(pb), report_(report), timings_(timings),
-        factor_(std::move(factor)) {}
+        factor_(std::move(factor)), history_(sys.options.historySize) {}
 
   std::string why;        // set with Failure::Fallback
   int iterationLimit = 0; // > 0: Failure::Stopped when reached
@@ -977,30 +1036,8 @@ private:
   }
 
   void clearHistory() {
-    s_.clear();
-    y_.clear();
-    rho_.clear();
+    history_.clear();
     phase_.clear();
-  }
-
-  Eigen::VectorXd direction(const Eigen::VectorXd& r) {
-    Eigen::VectorXd& q = directionScratch_; // kept: a fresh vector per iteration costs page faults
-    q = r;
-    const int k = static_cast<int>(s_.size());
-    std::vector<double> a(static_cast<size_t>(k));
-    for (int i = k - 1; i >= 0; --i) {
-      a[i] = rho_[i] * s_[i].dot(q);
-      q -= a[i] * y_[i];
-    }
-    Eigen::VectorXd z = applyFactor(q);
-    if (z.size() == 0)
-      return z;
-    for (int i = 0; i < k; ++i) {
-      const double b = rho_[i] * y_[i].dot(z);
-      z += (a[i] - b) * s_[i];
-    }
-    z = -z;
-    return z;
   }
 
   // Factors the tangent at u. With lift-off, the lift-off DOFs that Newton's rule releases at u
@@ -1084,7 +1121,7 @@ private:
     Balance b = BalanceOf(pb_, ev, u, 1.0);
     // The trial state, its evaluation and balance, and the new L-BFGS pair: their memory is kept
     // from iteration to iteration (swapped with the accepted state's, the oldest pair's reused).
-    Eigen::VectorXd trial, sk, yk;
+    Eigen::VectorXd trial, d;
     Evaluation tev;
     Balance tb;
     while (true) {
@@ -1121,7 +1158,8 @@ private:
       }
       bool accepted = false;
       for (int attempt = 0; attempt < 2 && !accepted; ++attempt) {
-        const Eigen::VectorXd d = direction(b.residual);
+        history_.direction(
+            b.residual, [this](const Eigen::VectorXd& q) { return applyFactor(q); }, d);
         if (d.size() == 0 || !d.allFinite()) {
           why = "a substitution with the factor failed";
           return Failure::Fallback;
@@ -1138,23 +1176,7 @@ private:
           BalanceInto(pb_, tev, trial, 1.0, tb);
           if (tb.potential <= b.potential + 1e-4 * alpha * slope ||
               tb.residualNorm < b.residualNorm) {
-            double sy = 0.0, ss = 0.0, yy = 0.0;
-            NewPair(trial, u, tb.residual, b.residual, sk, yk, sy, ss, yy);
-            if (sys_.options.historySize > 0 && sy > 1e-14 * std::sqrt(ss) * std::sqrt(yy)) {
-              Eigen::VectorXd oldS, oldY;
-              if (static_cast<int>(s_.size()) == sys_.options.historySize) {
-                oldS = std::move(s_.front());
-                oldY = std::move(y_.front());
-                s_.pop_front();
-                y_.pop_front();
-                rho_.pop_front();
-              }
-              s_.push_back(std::move(sk));
-              y_.push_back(std::move(yk));
-              rho_.push_back(1.0 / sy);
-              sk = std::move(oldS);
-              yk = std::move(oldY);
-            }
+            history_.add(trial, u, tb.residual, b.residual);
             u.swap(trial);
             std::swap(b, tb);
             std::swap(ev, tev);
@@ -1185,9 +1207,7 @@ private:
   StageTimings& timings_;
   std::shared_ptr<const TangentFactor> factor_;
   EvaluationScratch scratch_;
-  Eigen::VectorXd directionScratch_;
-  std::deque<Eigen::VectorXd> s_, y_;
-  std::deque<double> rho_;
+  LbfgsHistory history_;
   struct ReleasedDofs {
     const TangentFactor* factor = nullptr;
     std::vector<char> prescribed; // the contact it was prepared for
@@ -1390,14 +1410,16 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
                       : Eigen::VectorXd(2.0 * now - before);
       };
       Eigen::VectorXd ahead = extrapolate(u, warm->u, warm->before);
+      const bool contactAhead = !st.liftOffDofs.empty() && sys.options.predictContactAhead;
       Problem aheadValues;
-      if (!st.liftOffDofs.empty() && sys.options.predictContactAhead) {
+      if (contactAhead || sys.options.correctAhead) {
         aheadValues.st = pb.st;
         aheadValues.target = extrapolate(fullTarget, warm->target, warm->targetBefore);
         aheadValues.externalLoad = fullLoad;
         aheadValues.linearForce = pb.linearForce;
       }
-      sys.requestRefactorization(u, pb.prescribed, std::move(ahead), std::move(aheadValues));
+      sys.requestRefactorization(u, pb.prescribed, std::move(ahead), std::move(aheadValues),
+                                 contactAhead);
     } else {
       sys.requestRefactorization(u, pb.prescribed);
     }
@@ -1460,6 +1482,10 @@ std::string DescribeFactorOnDevice(const LargeDeformationSystem& system) {
 
 int BackgroundRefactorizations(const LargeDeformationSystem& system) {
   return system.backgroundCount();
+}
+
+int FactorsAheadCorrected(const LargeDeformationSystem& system) {
+  return system.correctedCount();
 }
 
 int FactorsAheadRefused(const LargeDeformationSystem& system) {

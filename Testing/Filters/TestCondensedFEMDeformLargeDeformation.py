@@ -68,7 +68,7 @@ check(f.get("Model") == "NeoHookean" and f.get("Method") == "LargeDeformationPre
       "field data Model/Method say NeoHookean/LargeDeformationPrecomputed (%s, %s)" % (f.get("Model"), f.get("Method")))
 check(f.get("LargeDeformationSolver") == "Precomputed" and "SolverNote" not in f,
       "LargeDeformationSolver Precomputed ran (%s)" % f.get("LargeDeformationSolver"))
-for name in ("QuasiNewtonIterations", "FactorSolves", "SmallestVolumeRatio", "RelativeResidual", "ModelNote"):
+for name in ("QuasiNewtonIterations", "ForceEvaluations", "FactorSolves", "SmallestVolumeRatio", "RelativeResidual", "ModelNote"):
     check(name in f, "field data %s present" % name)
 check(float(f["RelativeResidual"]) <= 1e-9, "converged (%s)" % f["RelativeResidual"])
 d_small = rel(u_small, u_linear)

@@ -421,18 +421,21 @@ TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations)
   // The same change of the move, step after step, each refactorization awaited: with the tangent
   // factored where the next step would lead (and the predictor starting there) every step equals
   // the cold solve and the steps after the first take fewer iterations than with the tangent
-  // factored at the converged state, and fewer again when a steady drag is extrapolated to second
-  // order (the parabola through the last three states) rather than along the line.
+  // factored at the converged state, fewer again when a steady drag is extrapolated to second
+  // order (the parabola through the last three states) rather than along the line, and fewer
+  // again when that state is corrected by a Newton step before the tangent is factored there.
   const PrecomputeRequest request = ShellRequest(4, 2);
   PrecomputedLargeDeformationOptions coldOptions;
   coldOptions.backgroundRefactorization = false;
   auto coldSystem = Precomputed(request, coldOptions);
   ASSERT_TRUE(coldSystem);
-  int iterations[3] = {0, 0, 0};
-  for (int ahead = 0; ahead < 3; ++ahead) { // at the state; ahead, first order; second order
+  int iterations[4] = {0, 0, 0, 0};
+  // At the state; ahead, first order; second order; second order, corrected.
+  for (int ahead = 0; ahead < 4; ++ahead) {
     PrecomputedLargeDeformationOptions options;
     options.factorAhead = ahead > 0;
     options.factorAheadOrder = ahead == 1 ? 1 : 2;
+    options.correctAhead = ahead == 3;
     auto system = Precomputed(request, options);
     ASSERT_TRUE(system);
     LargeDeformationState state;
@@ -452,6 +455,8 @@ TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations)
       << "factored ahead: " << iterations[1] << " iterations, at the state: " << iterations[0];
   EXPECT_LT(iterations[2], iterations[1])
       << "second order: " << iterations[2] << " iterations, first order: " << iterations[1];
+  EXPECT_LT(iterations[3], iterations[2])
+      << "corrected: " << iterations[3] << " iterations, second order: " << iterations[2];
 }
 
 TEST(PrecomputedLargeDeformation, AMoveThatMustInvertCellsIsAClearError) {
