@@ -313,9 +313,9 @@ Status FactorTangent(const Structure& st, const CholmodFactor& analysis, Tangent
 // The state ahead of a drag corrected by one Newton step with the factor made there (`ahead`,
 // whose state, force and contact are the extrapolated state's; `values`: the targets and loads
 // extrapolated there), and the tangent factored again where that step leads. The predictor of the
-// next drag step is a Newton step from the factor's state: from the corrected state its residual is
-// about the square of the extrapolation's. False (ahead stays) when the step does not lower the
-// residual, inverts a cell, or the tangent there is not positive definite.
+// next drag step is a Newton step from the factor's state, which starts nearer the equilibrium from
+// the corrected state. False (ahead stays) when the step does not lower the residual, inverts a
+// cell, or the tangent there is not positive definite.
 Status CorrectAhead(const Structure& st, const CholmodFactor& analysis, TangentBuffers& buffers,
                     const TangentFactor& ahead, Problem values, bool contact, bool singlePrecision,
                     ComputeBackend* backend, std::shared_ptr<TangentFactor>& out) {

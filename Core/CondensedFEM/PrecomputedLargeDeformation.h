@@ -124,10 +124,10 @@ struct PrecomputedLargeDeformationOptions {
   // Once the factor ahead is made (and taken by the solves), if no solve asks for another
   // refactorization within 0.2 s (a pause in the drag), the state ahead is corrected by one Newton
   // step with it (with the targets and loads extrapolated there) and the tangent factored again
-  // where that step leads:
-  // the next drag step's predictor, a Newton step from the factor's state, then starts with about
-  // the square of the extrapolation's residual. A second factorization on the worker thread, in the
-  // surgeon's pause between two edits.
+  // where that step leads. The next drag step's predictor, a Newton step from the factor's state,
+  // then starts nearer its equilibrium: on the osteotomy demos and a rigid segment the predictor
+  // alone converges, on a shell's bending field the steps take 2-6 iterations instead of 6-9
+  // (BENCHMARKS.md). A second factorization on the worker thread, in the surgeon's pause.
   bool correctAhead = true;
   // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
   // through their Schur complement: any number of them with the rest factor (whose coupling of
