@@ -3,8 +3,9 @@
 // L-BFGS's pairs and its direction with a given initial inverse Hessian H0 (the precomputed large
 // deformation's factor), in the compact form of the two-loop recursion: the recursion's scalars
 // come from the products s_i.y_j of the kept pairs (kept as pairs are added), so that a direction
-// reads the pairs in four passes, each over all of them at once, instead of one pass per pair and
-// loop. The same vector as the two-loop recursion, to round-off (the tests compare them).
+// is four passes, each over all the pairs at once, instead of two per pair. The same vector as the
+// two-loop recursion, to round-off (the tests compare them), in the same time on the machines of
+// BENCHMARKS.md: either reads every pair twice, and reading them is what a direction costs.
 //
 // The passes go over the DOFs by blocks, their sums added block by block in order.
 #include <Eigen/Core>
