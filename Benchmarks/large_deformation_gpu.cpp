@@ -10,7 +10,7 @@
 // FACEPLAN_PRINT_CONVERGENCE=1 prints each step's residuals and their times.
 // build/bin/large_deformation_gpu [--subdivisions S] [--layers L] [--amplitude A] [--step D]
 //                                 [--steps N] [--single-precision-factor 0|1]
-//                                 [--factor-ahead 0|1|2] [--correct-ahead 0|1] [--rigid 0|1]
+//                                 [--factor-ahead 0|1|2] [--ahead-corrections N] [--rigid 0|1]
 //                                 [--cpu 0|1] [--json FILE]
 #include "Common/RelativeDifference.h"
 #include "Common/StageTimings.h"
@@ -207,8 +207,8 @@ int main(int argc, char** argv) {
     else if (a == "--factor-ahead") { // 0: at the converged state; 1 or 2: the order ahead
       options.factorAhead = std::atoi(argv[i + 1]) > 0;
       options.factorAheadOrder = std::max(1, std::min(2, std::atoi(argv[i + 1])));
-    } else if (a == "--correct-ahead")
-      options.correctAhead = std::atoi(argv[i + 1]) != 0;
+    } else if (a == "--ahead-corrections")
+      options.aheadCorrections = std::atoi(argv[i + 1]);
     else if (a == "--rigid")
       rigidMove = std::atoi(argv[i + 1]) != 0;
     else if (a == "--cpu" && std::atoi(argv[i + 1]) == 0)

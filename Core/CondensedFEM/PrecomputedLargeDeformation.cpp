@@ -354,8 +354,8 @@ Status CorrectAhead(const Structure& st, const CholmodFactor& analysis, TangentB
 } // namespace
 
 // How long the worker waits, once it has factored the tangent ahead of a drag, for the next edit
-// before it corrects that state (PrecomputedLargeDeformationOptions::correctAhead): longer than the
-// gap between two updates of a continuous drag in the GUI (about 0.1 s), shorter than a pause.
+// before it corrects that state (PrecomputedLargeDeformationOptions::aheadCorrections): longer than
+// the gap between two updates of a continuous drag in the GUI (about 0.1 s), shorter than a pause.
 constexpr std::chrono::milliseconds kCorrectionPause(200);
 
 class LargeDeformationSystem {
@@ -522,16 +522,20 @@ private:
         factor_ = made;
         ++backgroundCount_;
       }
-      // The state ahead corrected by a Newton step and factored again, in a pause: a drag that
+      // The state ahead corrected by Newton steps and factored again, in a pause: a drag that
       // goes on takes the factor just made (on two cores the correction beside the next edits'
       // solves and rendering cost the GUI's drag a fifth of its updates), and a surgeon who
       // pauses gets the next step's predictor from the corrected state.
       const bool correct = status && ahead.size() == u.size() && !refusedAhead &&
-                           options.correctAhead && aheadValues.st;
+                           options.aheadCorrections > 0 && aheadValues.st;
       if (correct)
         wake_.wait_for(lock, kCorrectionPause,
                        [this] { return stop_ || pending_ || releasesPending_; });
-      if (correct && !pending_ && !releasesPending_ && !stop_) {
+      // Each correction takes a Newton step from the last factor's state and factors there; the
+      // next edit, or a step that does not lower the residual, ends them.
+      for (int round = 0;
+           round < options.aheadCorrections && correct && !pending_ && !releasesPending_ && !stop_;
+           ++round) {
         lock.unlock();
         std::shared_ptr<TangentFactor> corrected;
         const bool ok =
@@ -539,10 +543,11 @@ private:
                          options.singlePrecisionFactor, backend.get(), corrected)
                 .ok;
         lock.lock();
-        if (ok && !pending_) {
-          factor_ = std::move(corrected);
-          ++correctedCount_;
-        }
+        if (!ok || pending_)
+          break;
+        made = corrected;
+        factor_ = std::move(corrected);
+        ++correctedCount_;
       }
       busy_ = false;
       if (!pending_ && !releasesPending_)
@@ -580,7 +585,7 @@ Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
       o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
       o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
       o.maxCoupledReleases < 0 || o.maxRestReleases < 0 || o.factorAheadOrder < 1 ||
-      o.factorAheadOrder > 2)
+      o.factorAheadOrder > 2 || o.aheadCorrections < 0)
     return Status::Error("invalid large-deformation options");
   return Status::Ok();
 }
@@ -1412,7 +1417,7 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
       Eigen::VectorXd ahead = extrapolate(u, warm->u, warm->before);
       const bool contactAhead = !st.liftOffDofs.empty() && sys.options.predictContactAhead;
       Problem aheadValues;
-      if (contactAhead || sys.options.correctAhead) {
+      if (contactAhead || sys.options.aheadCorrections > 0) {
         aheadValues.st = pb.st;
         aheadValues.target = extrapolate(fullTarget, warm->target, warm->targetBefore);
         aheadValues.externalLoad = fullLoad;

@@ -18,8 +18,8 @@
 // little), one step ahead, where the same change again would lead: at 2 u - u_before, or after two
 // equal changes at the parabola through the last three states, 3 (u - u_before) + u_2before, with
 // the contact that Newton's rule gives there (predictContactAhead); that state is then corrected
-// by a Newton step with the factor made there and the tangent factored again where the step leads
-// (correctAhead), unless the next edit came first. A solve whose targets are
+// by Newton steps, the tangent factored again where each leads (aheadCorrections), unless the next
+// edit comes first. A solve whose targets are
 // nearer the factor's state than its start starts there, with that contact, so its predictor is
 // Newton's own step at the state the factor was made at and the drag's next step converges in a
 // couple of iterations. Within a solve, the current tangent is factored (modified Newton with a
@@ -122,13 +122,14 @@ struct PrecomputedLargeDeformationOptions {
   // the node back in and iterate again. The contact updates still decide the final contact.
   bool predictContactAhead = true;
   // Once the factor ahead is made (and taken by the solves), if no solve asks for another
-  // refactorization within 0.2 s (a pause in the drag), the state ahead is corrected by one Newton
-  // step with it (with the targets and loads extrapolated there) and the tangent factored again
-  // where that step leads. The next drag step's predictor, a Newton step from the factor's state,
-  // then starts nearer its equilibrium: on the osteotomy demos and a rigid segment the predictor
-  // alone converges, on a shell's bending field the steps take 2-6 iterations instead of 6-9
-  // (BENCHMARKS.md). A second factorization on the worker thread, in the surgeon's pause.
-  bool correctAhead = true;
+  // refactorization within 0.2 s (a pause in the drag), the state ahead is corrected by up to this
+  // many Newton steps (with the targets and loads extrapolated there), each with the last factor,
+  // the tangent factored again where each leads. The next drag step's predictor, a Newton step
+  // from the factor's state, then starts nearer its equilibrium: on the osteotomy demos and a
+  // rigid segment one correction lets the predictor alone converge; on a shell's bending field the
+  // steady steps take 6-9 iterations with none, 2-6 with one, 0-3 with two (BENCHMARKS.md). Each
+  // is a factorization on the worker thread, in the surgeon's pause; the next edit ends them.
+  int aheadCorrections = 2;
   // Lift-off DOFs freed since the factor was made are coupled back into the initial Hessian
   // through their Schur complement: any number of them with the rest factor (whose coupling of
   // every lift-off DOF is made once, after the precompute), at most this many with another factor
@@ -239,7 +240,7 @@ int BackgroundRefactorizations(const LargeDeformationSystem& system);
 // States ahead of a drag whose tangent could not be factored (a cell inverted there, or the
 // tangent not positive definite), so that the converged state's was factored instead.
 int FactorsAheadRefused(const LargeDeformationSystem& system);
-// States ahead of a drag corrected by a Newton step and factored again (correctAhead).
+// Newton steps that corrected a state ahead of a drag, each factored again (aheadCorrections).
 int FactorsAheadCorrected(const LargeDeformationSystem& system);
 
 } // namespace faceplan

@@ -168,6 +168,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   quasiNewton.settleTolerance = std::pow(10.0, -in.range(1, 9));
   quasiNewton.predictContactAhead = in.flag();
   quasiNewton.recheckTolerance = in.flag() ? 0.0 : 1e-6; // past the end: the default
+  quasiNewton.aheadCorrections = 2 - in.range(0, 2);     // past the end: the default
   if (precomputed)
     PrecomputedSolve(request, input, quasiNewton, limit, drag);
 

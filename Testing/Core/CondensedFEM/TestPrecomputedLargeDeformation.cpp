@@ -435,7 +435,7 @@ TEST(PrecomputedLargeDeformation, ADragFactoredOneStepAheadTakesFewerIterations)
     PrecomputedLargeDeformationOptions options;
     options.factorAhead = ahead > 0;
     options.factorAheadOrder = ahead == 1 ? 1 : 2;
-    options.correctAhead = ahead == 3;
+    options.aheadCorrections = ahead == 3 ? 1 : 0;
     auto system = Precomputed(request, options);
     ASSERT_TRUE(system);
     LargeDeformationState state;
@@ -682,6 +682,9 @@ TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   options = {};
   options.maxRestReleases = -1;
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options = {};
+  options.aheadCorrections = -1;
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   PrecomputeRequest broken = request;
   broken.mesh.tets(0, 0) = -1;
