@@ -59,6 +59,20 @@ struct TangentFactor {
   std::vector<char> prescribed;
 };
 
+// x = F^-1 b on the CPU with the factor in the precision it was made in (singlePrecision: the
+// options'); pinned DOFs are the caller's. Safe beside other threads' solves with the same factor
+// (the worker's corrections read a factor the solves already use).
+Status SolveOnCpu(const TangentFactor& f, bool singlePrecision, const Eigen::VectorXd& b,
+                  Eigen::VectorXd& x) {
+  if (singlePrecision)
+    return f.single.solve(b, x);
+  Eigen::MatrixXd column;
+  const Status solved = f.factor.solveConcurrently(b, column);
+  if (solved)
+    x = column.col(0);
+  return solved;
+}
+
 // The Schur coupling (see QuasiNewton::prepareReleased) of every lift-off DOF pinned in the rest
 // factor, made once on the worker thread after the precompute, so that a solve from rest couples
 // whichever of them it releases exactly without substituting their columns.
@@ -324,16 +338,7 @@ Status CorrectAhead(const Structure& st, const CholmodFactor& analysis, TangentB
   at.force = ahead.force;
   const Balance before = BalanceOf(values, at, ahead.state, 1.0);
   Eigen::VectorXd step;
-  Status solved = Status::Error("no factor");
-  if (singlePrecision) {
-    solved = ahead.single.solve(before.residual, step);
-  } else {
-    Eigen::MatrixXd x;
-    solved = ahead.factor.solve(before.residual, x);
-    if (solved)
-      step = x.col(0);
-  }
-  if (!solved)
+  if (Status solved = SolveOnCpu(ahead, singlePrecision, before.residual, step); !solved)
     return solved;
   ZeroPrescribed(ahead.prescribed, step);
   const Eigen::VectorXd next = ahead.state - step;
@@ -916,16 +921,11 @@ private:
     } else if (sys_.backend) {
       noteDevice("the substitutions: " + factor_->deviceError);
     }
-    if (!solved && sys_.options.singlePrecisionFactor) {
-      solved = factor_->single.solve(r, out);
-    } else if (!solved) {
-      Eigen::MatrixXd x;
+    if (!solved) {
       // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
       // whose thread hand-offs cost more than they save (most of all on a loaded machine).
       ScopedBlasThreads serial(1, BlasScope::Pinned);
-      solved = factor_->factor.solveConcurrently(r, x);
-      if (solved)
-        out = x.col(0);
+      solved = SolveOnCpu(*factor_, sys_.options.singlePrecisionFactor, r, out);
     }
     ++report_.factorSolves;
     timings_[Stage::Solve].ms += clock.lapMs();

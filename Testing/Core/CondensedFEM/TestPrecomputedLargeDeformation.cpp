@@ -95,6 +95,13 @@ void AwaitedDragStep(LargeDeformationSystem& system, LargeDeformationSystem& col
             kAgreement);
 }
 
+// The precomputed solve with lift-off's unilateral contact, the other options their defaults.
+PrecomputedLargeDeformationOptions LiftOffOptions() {
+  PrecomputedLargeDeformationOptions options;
+  options.slidingLiftOff = true;
+  return options;
+}
+
 SolveResult Newton(const PrecomputeRequest& request, const SolveInput& input, bool liftOff,
                    LargeDeformationReport* out = nullptr) {
   LargeDeformationOptions options;
@@ -183,9 +190,7 @@ TEST(PrecomputedLargeDeformation, AgreesWithNewton) {
 TEST(PrecomputedLargeDeformation, LiftOffAgreesWithNewton) {
   // Pulled up, the block leaves the floor; tilted, part of it does: the constrained equilibrium.
   const FloorBlock b = BlockOnFloor();
-  PrecomputedLargeDeformationOptions options;
-  options.slidingLiftOff = true;
-  auto system = Precomputed(b.request, options);
+  auto system = Precomputed(b.request, LiftOffOptions());
   ASSERT_TRUE(system);
   for (const auto& top :
        {Tilt(0.25), std::function<Eigen::RowVector3d(const Eigen::RowVector3d&)>(
@@ -209,9 +214,7 @@ TEST(PrecomputedLargeDeformation, WarmStartsEqualColdSolvesAndTheActiveSetChange
   // The tilt dragged from 0 in small steps, each step warm-started from the last: at first every
   // floor node stays down, then more and more lift off. Each step equals a cold solve and Newton.
   const FloorBlock b = BlockOnFloor();
-  PrecomputedLargeDeformationOptions options;
-  options.slidingLiftOff = true;
-  auto system = Precomputed(b.request, options);
+  auto system = Precomputed(b.request, LiftOffOptions());
   ASSERT_TRUE(system);
   LargeDeformationState state;
   std::vector<int> lifted;
@@ -248,9 +251,7 @@ TEST(PrecomputedLargeDeformation, WarmStartsEqualColdSolvesAndTheActiveSetChange
 // it within the tolerance, and the same input would give another result each time.
 TEST(PrecomputedLargeDeformation, AnUnchangedInputReturnsItsConvergedState) {
   const FloorBlock b = BlockOnFloor();
-  PrecomputedLargeDeformationOptions options;
-  options.slidingLiftOff = true;
-  auto system = Precomputed(b.request, options);
+  auto system = Precomputed(b.request, LiftOffOptions());
   ASSERT_TRUE(system);
   const SolveInput input = b.input(Tilt(0.2));
   SolveResult first, again;
@@ -280,8 +281,7 @@ struct TiltDrag {
 };
 void DragTheTilt(const PrecomputedLargeDeformationOptions& options, TiltDrag& out) {
   const FloorBlock b = BlockOnFloor();
-  PrecomputedLargeDeformationOptions coldOptions;
-  coldOptions.slidingLiftOff = true;
+  PrecomputedLargeDeformationOptions coldOptions = LiftOffOptions();
   coldOptions.backgroundRefactorization = false;
   auto coldSystem = Precomputed(b.request, coldOptions);
   ASSERT_TRUE(coldSystem);
@@ -316,8 +316,7 @@ TEST(PrecomputedLargeDeformation, NodesReleasedInADragAreCoupledBackIntoTheIniti
   // iterations than with their diagonal alone.
   TiltDrag drag[2];
   for (int coupled = 0; coupled < 2; ++coupled) {
-    PrecomputedLargeDeformationOptions options;
-    options.slidingLiftOff = true;
+    PrecomputedLargeDeformationOptions options = LiftOffOptions();
     options.predictContactAhead = false;
     options.maxCoupledReleases = coupled ? 8 : 0;
     ASSERT_NO_FATAL_FAILURE(DragTheTilt(options, drag[coupled]));
@@ -342,8 +341,7 @@ TEST(PrecomputedLargeDeformation, AMoveFromRestCouplesEveryNodeItReleases) {
     const SolveResult newton = Newton(b.request, input, true, &newtonReport);
     PrecomputedLargeDeformationReport reports[3];
     for (int coupled = 0; coupled < 3; ++coupled) {
-      PrecomputedLargeDeformationOptions options;
-      options.slidingLiftOff = true;
+      PrecomputedLargeDeformationOptions options = LiftOffOptions();
       options.maxCoupledReleases = 0;
       options.adaptiveRefactorization = false;
       options.refactorAfter = 0; // the rest factor throughout
@@ -376,8 +374,7 @@ TEST(PrecomputedLargeDeformation, TheContactPredictedAheadSparesTheDragsContactC
   // iterate less, and still equal the cold solve (DragTheTilt).
   TiltDrag drag[2];
   for (int predicted = 0; predicted < 2; ++predicted) {
-    PrecomputedLargeDeformationOptions options;
-    options.slidingLiftOff = true;
+    PrecomputedLargeDeformationOptions options = LiftOffOptions();
     options.predictContactAhead = predicted == 1;
     ASSERT_NO_FATAL_FAILURE(DragTheTilt(options, drag[predicted]));
   }
