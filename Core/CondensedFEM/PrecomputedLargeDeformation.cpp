@@ -65,8 +65,11 @@ struct TangentFactor {
 Status SolveOnCpu(const TangentFactor& f, bool singlePrecision, const Eigen::VectorXd& b,
                   Eigen::VectorXd& x) {
   if (singlePrecision)
-    return f.single.solve(b, x);
+    return f.single.solve(b, x); // with one BLAS thread, as below
   Eigen::MatrixXd column;
+  // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS, whose
+  // thread hand-offs cost more than they save (most of all on a loaded machine).
+  ScopedBlasThreads serial(1, BlasScope::Pinned);
   const Status solved = f.factor.solveConcurrently(b, column);
   if (solved)
     x = column.col(0);
@@ -921,12 +924,8 @@ private:
     } else if (sys_.backend) {
       noteDevice("the substitutions: " + factor_->deviceError);
     }
-    if (!solved) {
-      // One right-hand side: its supernodes' triangular solves are too small for threaded BLAS,
-      // whose thread hand-offs cost more than they save (most of all on a loaded machine).
-      ScopedBlasThreads serial(1, BlasScope::Pinned);
+    if (!solved)
       solved = SolveOnCpu(*factor_, sys_.options.singlePrecisionFactor, r, out);
-    }
     ++report_.factorSolves;
     timings_[Stage::Solve].ms += clock.lapMs();
     if (!solved)
