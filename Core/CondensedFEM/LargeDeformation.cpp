@@ -140,9 +140,12 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
 }
 
 void ZeroPrescribed(const std::vector<char>& prescribed, Eigen::Ref<Eigen::VectorXd> v) {
+  // A select and a store for every entry: the prescribed DOFs lie among the free ones without a
+  // pattern, and a branch on each would be mispredicted about as often as taken.
+  double* x = v.data();
+  const char* pinned = prescribed.data();
   for (Eigen::Index i = 0; i < v.size(); ++i)
-    if (prescribed[i])
-      v[i] = 0.0;
+    x[i] = pinned[i] ? 0.0 : x[i];
 }
 
 void FindPinnedEntries(const SparseMatrix& upper, const std::vector<char>& prescribed,

@@ -162,6 +162,10 @@ struct DofColumns {
   std::vector<char> has; // per DOF: in the set
   std::vector<int> start;
   std::vector<std::pair<int, int>> entries;
+  // The rows that the set's columns reach, and per entry its row's place among them: a product's
+  // norm from these rows alone (a few thousand, where the product has every DOF's).
+  std::vector<int> rowPlace;
+  int rowCount = 0;
 
   DofColumns() = default;
   DofColumns(const SparseMatrix& upper, std::vector<int> set) : dofs(std::move(set)) {
@@ -187,6 +191,26 @@ struct DofColumns {
       entries.insert(entries.end(), list.begin(), list.end());
       start.push_back(static_cast<int>(entries.size()));
     }
+    std::vector<int> place(static_cast<size_t>(upper.cols()), -1);
+    rowPlace.reserve(entries.size());
+    for (const auto& [q, row] : entries) {
+      if (place[row] < 0)
+        place[row] = rowCount++;
+      rowPlace.push_back(place[row]);
+    }
+  }
+
+  // |K v| for the same K and v as multiply().
+  double productNorm(const double* values, const Eigen::VectorXd& v) const {
+    Eigen::VectorXd out = Eigen::VectorXd::Zero(rowCount);
+    for (size_t k = 0; k < dofs.size(); ++k) {
+      const double m = v[dofs[k]];
+      if (m == 0.0)
+        continue;
+      for (int e = start[k]; e < start[k + 1]; ++e)
+        out[rowPlace[e]] += values[entries[e].first] * m;
+    }
+    return out.norm();
   }
 
   // out = K v for the symmetric matrix whose upper triangle holds `values` in the shared pattern;
@@ -940,11 +964,17 @@ private:
   bool predict(Eigen::VectorXd& u) {
     if (factor_->state.size() == u.size() && sameExceptLiftOff(factor_->prescribed)) {
       double fromU = 0.0, fromFactor = 0.0;
-      for (Eigen::Index i = 0; i < u.size(); ++i)
-        if (pb_.prescribed[i] || factor_->prescribed[i]) {
-          fromU += (pb_.target[i] - u[i]) * (pb_.target[i] - u[i]);
-          fromFactor += (pb_.target[i] - factor_->state[i]) * (pb_.target[i] - factor_->state[i]);
-        }
+      const double* target = pb_.target.data();
+      const double* from = u.data();
+      const double* state = factor_->state.data();
+      const char* pinned = pb_.prescribed.data();
+      const char* pinnedThere = factor_->prescribed.data();
+      for (Eigen::Index i = 0; i < u.size(); ++i) { // selects, not branches (see the move below)
+        const double du = target[i] - from[i], df = target[i] - state[i];
+        const bool read = pinned[i] || pinnedThere[i];
+        fromU += read ? du * du : 0.0;
+        fromFactor += read ? df * df : 0.0;
+      }
       // From the factor's state with the factor's contact (the contact predicted there, for a
       // factor made ahead): the contact updates that follow settle whatever it got wrong.
       if (fromFactor < fromU) {
@@ -956,10 +986,21 @@ private:
     const Eigen::Index n = u.size();
     Eigen::VectorXd move(n);
     double largestMove = 0.0, largestTarget = 0.0;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      move[i] = pb_.prescribed[i] ? pb_.target[i] - u[i] : 0.0;
-      largestMove = std::max(largestMove, std::abs(move[i]));
-      largestTarget = std::max(largestTarget, std::abs(pb_.target[i]));
+    {
+      // Every operand read whatever the mask, so that the mask selects instead of branching (the
+      // prescribed DOFs lie among the free ones without a pattern a branch predictor could learn).
+      const double* target = pb_.target.data();
+      const double* from = u.data();
+      const char* pinned = pb_.prescribed.data();
+      double* to = move.data();
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const double d = target[i] - from[i];
+        const double m = pinned[i] ? d : 0.0;
+        const double am = std::abs(m), at = std::abs(target[i]);
+        to[i] = m;
+        largestMove = am > largestMove ? am : largestMove;
+        largestTarget = at > largestTarget ? at : largestTarget;
+      }
     }
     Evaluation ev;
     const Eigen::VectorXd* force = &ev.force;
@@ -1000,7 +1041,8 @@ private:
     Eigen::VectorXd rhs(n);
     for (Eigen::Index i = 0; i < n; ++i) {
       const double r = (*force)[i] - pb_.externalLoad[i];
-      rhs[i] = pb_.prescribed[i] ? 0.0 : -(product.size() ? r + product[i] : r);
+      const double free = -(product.size() ? r + product[i] : r);
+      rhs[i] = pb_.prescribed[i] ? 0.0 : free;
     }
     Eigen::VectorXd follow = applyFactor(rhs);
     if (follow.size() == 0 || !follow.allFinite())
@@ -1254,13 +1296,12 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   Status status = SetValues(request, input, pb);
   if (!status)
     return status;
-  Eigen::VectorXd fullTarget = pb.target, fullLoad = pb.externalLoad; // moved out at the end
+  // pb holds the whole move's targets and loads; a copy of them is made only for a sub-step short
+  // of the whole move (each copy is a pass over the state's length).
+  Eigen::VectorXd fullTarget, fullLoad;
+  bool whole = true; // whether pb's targets and loads are the whole move's
   // The yardstick |K_0 u_prescribed| (the targets are zero off the movable nodes' DOFs).
-  {
-    Eigen::VectorXd product;
-    sys.movable.multiply(sys.restFactor->tangent.valuePtr(), fullTarget, product);
-    pb.linearForce = product.norm();
-  }
+  pb.linearForce = sys.movable.productNorm(sys.restFactor->tangent.valuePtr(), pb.target);
 
   Eigen::VectorXd u, rest;
   report.warmStarted = warm && warm->system == &sys && warm->u.size() == 3 * st.n &&
@@ -1270,8 +1311,8 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   if (report.warmStarted) {
     double target = 0.0, targetChange = 0.0, load = 0.0, loadChange = 0.0; // squared norms
     for (Eigen::Index i = 0; i < 3 * st.n; ++i) {
-      const double t = fullTarget[i], dt = t - warm->target[i];
-      const double l = fullLoad[i], dl = l - warm->load[i];
+      const double t = pb.target[i], dt = t - warm->target[i];
+      const double l = pb.externalLoad[i], dl = l - warm->load[i];
       target += t * t;
       targetChange += dt * dt;
       load += l * l;
@@ -1305,11 +1346,19 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   while (reached < 1.0) {
     const double to = std::min(1.0, reached + step);
     if (to == 1.0) {
-      pb.target = fullTarget;
-      pb.externalLoad = fullLoad;
+      if (!whole) {
+        pb.target = fullTarget;
+        pb.externalLoad = fullLoad;
+        whole = true;
+      }
     } else {
+      if (fullTarget.size() == 0) {
+        fullTarget = pb.target;
+        fullLoad = pb.externalLoad;
+      }
       pb.target = fromTarget + to * (fullTarget - fromTarget);
       pb.externalLoad = fromLoad + to * (fullLoad - fromLoad);
+      whole = false;
     }
     Eigen::VectorXd trial = u;
     const std::vector<char> contact = pb.prescribed;
@@ -1397,29 +1446,52 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   // itself. Its next edit is most likely the same change again, so the tangent is factored there,
   // one step ahead, where the next solve's iterates will be (any positive definite factor serves
   // as the initial Hessian; this one is the nearest to the next solve's).
-  const bool drag = report.warmStarted && fullLoad == warm->load &&
-                    (fullTarget - warm->target).norm() <= fullTarget.norm();
+  const Eigen::VectorXd& target = pb.target; // the whole move's (reached is 1)
+  const Eigen::Index n = u.size();
+  bool drag = false, steady = false;
+  if (report.warmStarted) {
+    // In one pass: whether the loads are the same, the change's size against the move's, and
+    // whether the change repeats the one before (a steady drag; without a state before it the
+    // comparison reads the last targets twice and is not used).
+    const bool twoBefore = sys.options.factorAheadOrder >= 2 && warm->before.size() == n &&
+                           warm->targetBefore.size() == n;
+    const double* last = warm->target.data();
+    const double* lastButOne = twoBefore ? warm->targetBefore.data() : last;
+    bool sameLoad = true;
+    double change2 = 0.0, target2 = 0.0, repeat2 = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      sameLoad = sameLoad && pb.externalLoad[i] == warm->load[i];
+      const double c = target[i] - last[i], r = last[i] - lastButOne[i] - c;
+      change2 += c * c;
+      target2 += target[i] * target[i];
+      repeat2 += r * r;
+    }
+    drag = sameLoad && change2 <= target2;
+    steady = twoBefore && repeat2 <= kSteadyDrag * kSteadyDrag * change2;
+  }
   if (sys.options.backgroundRefactorization) {
     if (drag && sys.options.factorAhead) {
       // Where the same change again leads. After two equal changes (a steady drag) the parabola
       // through the last three states: its error is third order in the step where the line's is
       // second, and the next predictor's Newton step from there lands that much nearer.
-      const Eigen::VectorXd change = fullTarget - warm->target;
-      const bool steady =
-          sys.options.factorAheadOrder >= 2 && warm->before.size() == u.size() &&
-          (warm->target - warm->targetBefore - change).norm() <= kSteadyDrag * change.norm();
-      auto extrapolate = [steady](const Eigen::VectorXd& now, const Eigen::VectorXd& before,
-                                  const Eigen::VectorXd& twoBefore) {
-        return steady ? Eigen::VectorXd(3.0 * (now - before) + twoBefore)
-                      : Eigen::VectorXd(2.0 * now - before);
+      auto extrapolate = [steady, n](const Eigen::VectorXd& now, const Eigen::VectorXd& before,
+                                     const Eigen::VectorXd& twoBefore) {
+        Eigen::VectorXd out(n);
+        if (steady)
+          for (Eigen::Index i = 0; i < n; ++i)
+            out[i] = 3.0 * (now[i] - before[i]) + twoBefore[i];
+        else
+          for (Eigen::Index i = 0; i < n; ++i)
+            out[i] = 2.0 * now[i] - before[i];
+        return out;
       };
       Eigen::VectorXd ahead = extrapolate(u, warm->u, warm->before);
       const bool contactAhead = !st.liftOffDofs.empty() && sys.options.predictContactAhead;
       Problem aheadValues;
       if (contactAhead || sys.options.aheadCorrections > 0) {
         aheadValues.st = pb.st;
-        aheadValues.target = extrapolate(fullTarget, warm->target, warm->targetBefore);
-        aheadValues.externalLoad = fullLoad;
+        aheadValues.target = extrapolate(target, warm->target, warm->targetBefore);
+        aheadValues.externalLoad = pb.externalLoad;
         aheadValues.linearForce = pb.linearForce;
       }
       sys.requestRefactorization(u, pb.prescribed, std::move(ahead), std::move(aheadValues),
@@ -1432,8 +1504,8 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     converged->system = &sys;
     converged->u = std::move(u);
     converged->prescribed = pb.prescribed;
-    converged->target = std::move(fullTarget);
-    converged->load = std::move(fullLoad);
+    converged->target = std::move(pb.target);
+    converged->load = std::move(pb.externalLoad);
     converged->force = solver.takeLastForce();
     if (drag) {
       converged->before = warm->u;
