@@ -162,10 +162,10 @@ struct DofColumns {
   std::vector<char> has; // per DOF: in the set
   std::vector<int> start;
   std::vector<std::pair<int, int>> entries;
-  // The rows that the set's columns reach, and per entry its row's place among them: a product's
-  // norm from these rows alone (a few thousand, where the product has every DOF's).
+  // The rows that the set's columns reach (a few thousand, where a product has every DOF's), and
+  // per entry its row's place among them.
+  std::vector<int> rowOf;
   std::vector<int> rowPlace;
-  int rowCount = 0;
 
   DofColumns() = default;
   DofColumns(const SparseMatrix& upper, std::vector<int> set) : dofs(std::move(set)) {
@@ -194,15 +194,19 @@ struct DofColumns {
     std::vector<int> place(static_cast<size_t>(upper.cols()), -1);
     rowPlace.reserve(entries.size());
     for (const auto& [q, row] : entries) {
-      if (place[row] < 0)
-        place[row] = rowCount++;
+      if (place[row] < 0) {
+        place[row] = static_cast<int>(rowOf.size());
+        rowOf.push_back(row);
+      }
       rowPlace.push_back(place[row]);
     }
   }
 
-  // |K v| for the same K and v as multiply().
-  double productNorm(const double* values, const Eigen::VectorXd& v) const {
-    Eigen::VectorXd out = Eigen::VectorXd::Zero(rowCount);
+  // K v on the rows the set's columns reach (rowOf), for the symmetric matrix whose upper triangle
+  // holds `values` in the shared pattern; only v's entries on the set's DOFs are read (the
+  // caller's v is zero elsewhere).
+  Eigen::VectorXd reachedProduct(const double* values, const Eigen::VectorXd& v) const {
+    Eigen::VectorXd out = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rowOf.size()));
     for (size_t k = 0; k < dofs.size(); ++k) {
       const double m = v[dofs[k]];
       if (m == 0.0)
@@ -210,20 +214,20 @@ struct DofColumns {
       for (int e = start[k]; e < start[k + 1]; ++e)
         out[rowPlace[e]] += values[entries[e].first] * m;
     }
-    return out.norm();
+    return out;
   }
 
-  // out = K v for the symmetric matrix whose upper triangle holds `values` in the shared pattern;
-  // only v's entries on the set's DOFs are read (the caller's v is zero elsewhere).
+  // |K v|, for the same K and v.
+  double productNorm(const double* values, const Eigen::VectorXd& v) const {
+    return reachedProduct(values, v).norm();
+  }
+
+  // out = K v on every row, for the same K and v.
   void multiply(const double* values, const Eigen::VectorXd& v, Eigen::VectorXd& out) const {
+    const Eigen::VectorXd reached = reachedProduct(values, v);
     out.setZero(v.size());
-    for (size_t k = 0; k < dofs.size(); ++k) {
-      const double m = v[dofs[k]];
-      if (m == 0.0)
-        continue;
-      for (int e = start[k]; e < start[k + 1]; ++e)
-        out[entries[e].second] += values[entries[e].first] * m;
-    }
+    for (size_t p = 0; p < rowOf.size(); ++p)
+      out[rowOf[p]] = reached[static_cast<Eigen::Index>(p)];
   }
 
   // The set's columns of the same matrix (n x dofs.size()).
@@ -1299,7 +1303,6 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   // pb holds the whole move's targets and loads; a copy of them is made only for a sub-step short
   // of the whole move (each copy is a pass over the state's length).
   Eigen::VectorXd fullTarget, fullLoad;
-  bool whole = true; // whether pb's targets and loads are the whole move's
   // The yardstick |K_0 u_prescribed| (the targets are zero off the movable nodes' DOFs).
   pb.linearForce = sys.movable.productNorm(sys.restFactor->tangent.valuePtr(), pb.target);
 
@@ -1346,10 +1349,9 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   while (reached < 1.0) {
     const double to = std::min(1.0, reached + step);
     if (to == 1.0) {
-      if (!whole) {
+      if (fullTarget.size() != 0) { // after a sub-step short of the whole move
         pb.target = fullTarget;
         pb.externalLoad = fullLoad;
-        whole = true;
       }
     } else {
       if (fullTarget.size() == 0) {
@@ -1358,7 +1360,6 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
       }
       pb.target = fromTarget + to * (fullTarget - fromTarget);
       pb.externalLoad = fromLoad + to * (fullLoad - fromLoad);
-      whole = false;
     }
     Eigen::VectorXd trial = u;
     const std::vector<char> contact = pb.prescribed;
@@ -1452,7 +1453,8 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
   if (report.warmStarted) {
     // In one pass: whether the loads are the same, the change's size against the move's, and
     // whether the change repeats the one before (a steady drag; without a state before it the
-    // comparison reads the last targets twice and is not used).
+    // comparison reads the last targets twice and is not used). A pass apart from the warm-start
+    // test's, which reads fewer vectors: one pass over all of them ran slower than the two.
     const bool twoBefore = sys.options.factorAheadOrder >= 2 && warm->before.size() == n &&
                            warm->targetBefore.size() == n;
     const double* last = warm->target.data();
