@@ -304,42 +304,86 @@ struct SinglePrecisionFactor::Impl {
         children[parent[k]].push_back(k);
       }
     }
-    std::vector<char> inTop(ns, 0);
+    // The candidate roots in ascending order of their subtree's work (ties by index), the heaviest
+    // last: kept sorted as the heaviest moves to the top and its children come in, rather than
+    // sorted afresh at each step (a factor whose analysis leaves pinned DOFs uncoupled has a root
+    // for each, a thousand on the face's scenes).
+    auto lighter = [&](int a, int b) {
+      return subtree[a] < subtree[b] || (subtree[a] == subtree[b] && a > b);
+    };
+    // Roots of at most `light` work are not placed one by one while the split is searched: their
+    // sum goes to the lighter side, as placing them would about do.
+    const double light = total / 65536.0;
+    std::vector<char> bestTop(ns, 0);
     std::vector<int> candidates;
-    double topWork = 0.0;
-    for (int k = 0; k < ns; ++k)
-      if (parent[k] < 0)
-        candidates.push_back(k);
-    double best = total;
-    std::vector<char> bestTop;
-    std::vector<int> bestSide; // per candidate root: 0 or 1, as bestRoots
-    std::vector<int> bestRoots;
-    for (int step = 0; step < 256 && !candidates.empty() && topWork < best; ++step) {
-      std::sort(candidates.begin(), candidates.end(),
-                [&](int a, int b) { return subtree[a] > subtree[b]; });
+    double lightWork = 0.0; // of the candidates of at most `light` work
+    auto start = [&] {
+      candidates.clear();
+      lightWork = 0.0;
+      for (int k = 0; k < ns; ++k)
+        if (parent[k] < 0) {
+          candidates.push_back(k);
+          lightWork += subtree[k] <= light ? subtree[k] : 0.0;
+        }
+      std::sort(candidates.begin(), candidates.end(), lighter);
+    };
+    auto raise = [&] { // the heaviest candidate to the top
+      const int heaviest = candidates.back();
+      candidates.pop_back();
+      bestTop[heaviest] = 1;
+      lightWork -= subtree[heaviest] <= light ? subtree[heaviest] : 0.0;
+      for (int c : children[heaviest]) {
+        candidates.insert(std::upper_bound(candidates.begin(), candidates.end(), c, lighter), c);
+        lightWork += subtree[c] <= light ? subtree[c] : 0.0;
+      }
+      return heaviest;
+    };
+    // The roots to two sides, heaviest first, each to the lighter side; the larger side's work
+    // (-1 where a side is empty). With `sideOf`, every root placed; else the light ones summed.
+    auto sides = [&](std::vector<int>* sideOf) {
       double bin[2] = {0.0, 0.0};
-      std::vector<int> side(candidates.size());
-      for (size_t c = 0; c < candidates.size(); ++c) {
+      if (sideOf)
+        sideOf->assign(candidates.size(), 0);
+      size_t c = candidates.size();
+      for (; c-- > 0;) {
+        if (!sideOf && subtree[candidates[c]] <= light)
+          break;
         const int b = bin[0] <= bin[1] ? 0 : 1;
-        side[c] = b;
+        if (sideOf)
+          (*sideOf)[c] = b;
         bin[b] += subtree[candidates[c]];
       }
-      const double makespan = topWork + std::max(bin[0], bin[1]);
-      if (makespan < best && std::min(bin[0], bin[1]) > 0.0) {
-        best = makespan;
-        bestTop = inTop;
-        bestRoots = candidates;
-        bestSide = side;
+      if (!sideOf && lightWork > 0.0) {
+        const double gap = std::abs(bin[0] - bin[1]);
+        bin[bin[0] <= bin[1] ? 0 : 1] += std::min(gap, lightWork);
+        bin[0] += 0.5 * (lightWork - std::min(gap, lightWork));
+        bin[1] += 0.5 * (lightWork - std::min(gap, lightWork));
       }
-      const int heaviest = candidates.front();
-      candidates.erase(candidates.begin());
-      inTop[heaviest] = 1;
-      topWork += work[heaviest];
-      for (int c : children[heaviest])
-        candidates.push_back(c);
+      return std::min(bin[0], bin[1]) > 0.0 ? std::max(bin[0], bin[1]) : -1.0;
+    };
+    // Each step's makespan, then the best step replayed.
+    start();
+    double best = total, topWork = 0.0;
+    int bestStep = -1;
+    for (int step = 0; step < 256 && !candidates.empty() && topWork < best; ++step) {
+      const double larger = sides(nullptr);
+      if (larger >= 0.0 && topWork + larger < best) {
+        best = topWork + larger;
+        bestStep = step;
+      }
+      topWork += work[raise()];
     }
+    std::fill(bestTop.begin(), bestTop.end(), 0);
+    std::vector<int> bestSide; // per candidate root: 0 or 1
+    if (bestStep >= 0) {
+      start();
+      for (int step = 0; step < bestStep; ++step)
+        raise();
+      sides(&bestSide);
+    }
+    const std::vector<int>& bestRoots = candidates;
     // Two threads only where they save a tenth of the work.
-    split = !bestTop.empty() && best < 0.9 * total;
+    split = bestStep >= 0 && best < 0.9 * total;
     if (!split)
       return;
     std::vector<int> owner(ns, -1); // -1: top
