@@ -24,6 +24,30 @@
 namespace faceplan {
 namespace large_deformation {
 
+namespace {
+
+// A cell's packed tangent (global frame) turned into its nodes' frames: Q_a^T K_ab Q_b.
+void ToNodeFrames(const Structure& st, const int* node, double* packed) {
+  ElementMatrix k;
+  const double* in = packed;
+  for (int p = 0; p < 12; ++p)
+    for (int q = p; q < 12; ++q)
+      k(p, q) = k(q, p) = *in++;
+  for (int a = 0; a < 4; ++a) {
+    const int fa = st.frameOf[node[a]];
+    if (fa >= 0) {
+      const Eigen::Matrix3d& Q = st.frames[fa];
+      k.middleRows<3>(3 * a) = (Q.transpose() * k.middleRows<3>(3 * a)).eval();
+      k.middleCols<3>(3 * a) = (k.middleCols<3>(3 * a) * Q).eval();
+    }
+  }
+  for (int p = 0; p < 12; ++p)
+    for (int q = p; q < 12; ++q)
+      *packed++ = k(p, q);
+}
+
+} // namespace
+
 bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
               std::vector<double>* packed, EvaluationScratch* scratch) {
   const TetMesh& mesh = *st.mesh;
@@ -45,6 +69,7 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
     CornerDisplacements corner;
     ElementMatrix tangent;
     NeoHookeanTetLanes lanes;
+    double laneTangents[kPackedElementSize][kTetLanes];
     for (std::int64_t r = firstRange; r < lastRange; ++r) {
       Eigen::VectorXd& force = buffers.force[r];
       force.setZero(3 * st.n);
@@ -58,8 +83,8 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
       };
       const std::int64_t begin = m * r / ranges, end = m * (r + 1) / ranges;
       for (std::int64_t e = begin; e < end;) {
-        // Forces alone, four neo-Hookean cells at a time.
-        if (!packed && e + kTetLanes <= end &&
+        // Four neo-Hookean cells at a time: their forces, and their tangents when asked for.
+        if (e + kTetLanes <= end &&
             std::none_of(st.smallStrain.begin() + e, st.smallStrain.begin() + e + kTetLanes,
                          [](char c) { return c != 0; })) {
           int nodes[kTetLanes][4];
@@ -77,7 +102,8 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
             lanes.mu[l] = st.materials[e + l].mu;
             lanes.kappa[l] = st.materials[e + l].kappa;
           }
-          if (!NeoHookeanTetForces(lanes)) {
+          if (!(packed ? NeoHookeanTetForcesAndTangents(lanes, laneTangents)
+                       : NeoHookeanTetForces(lanes))) {
             buffers.valid[r] = 0;
             break;
           }
@@ -87,6 +113,13 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
               add(nodes[l], a,
                   Eigen::Vector3d(lanes.force[a][0][l], lanes.force[a][1][l],
                                   lanes.force[a][2][l]));
+            if (packed) {
+              double* o = packed->data() + static_cast<size_t>(e + l) * kPackedElementSize;
+              for (int k = 0; k < kPackedElementSize; ++k)
+                o[k] = laneTangents[k][l];
+              if (std::any_of(nodes[l], nodes[l] + 4, [&](int n) { return st.frameOf[n] >= 0; }))
+                ToNodeFrames(st, nodes[l], o);
+            }
           }
           e += kTetLanes;
           continue;

@@ -133,12 +133,11 @@ bool NeoHookeanTetState(const TetReference& reference, const NeoHookeanParameter
   return true;
 }
 
-// Four-wide AVX2 where the CPU has it (the build's baseline is SSE2's two), chosen at load time.
-// Without FMA contraction, so that both versions give the same bits.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-bool NeoHookeanTetForces(NeoHookeanTetLanes& b) {
+namespace {
+
+// The four-lane kernel: forces, and with Tangent each lane's packed upper tangent as well.
+template <bool Tangent>
+[[gnu::always_inline]] inline bool TetLanes(NeoHookeanTetLanes& b, double (*tangent)[kTetLanes]) {
   constexpr int L = kTetLanes;
   double F[3][3][L];
   for (int i = 0; i < 3; ++i)
@@ -189,7 +188,62 @@ bool NeoHookeanTetForces(NeoHookeanTetLanes& b) {
       for (int l = 0; l < L; ++l)
         b.force[c][i][l] = VP[i][0][l] * b.gradient[c][0][l] + VP[i][1][l] * b.gradient[c][1][l] +
                            VP[i][2][l] * b.gradient[c][2][l];
+  if constexpr (Tangent) {
+    // NeoHookeanTetState's closed form with the lanes innermost: block (r, c) of the tangent is
+    // V (crossFH ((F g_r)(H g_c)^T + (H g_r)(F g_c)^T) + alongH (H g_r)(H g_c)^T
+    // + swapH (H g_c)(H g_r)^T + mu a (g_r . g_c) I), H = F^-T; a diagonal block is symmetric as
+    // written, so only its upper triangle is formed.
+    double fg[4][3][L], h[4][3][L], crossFH[L], alongH[L], swapH[L];
+    for (int r = 0; r < 4; ++r)
+      for (int i = 0; i < 3; ++i)
+        for (int l = 0; l < L; ++l) {
+          fg[r][i][l] = F[i][0][l] * b.gradient[r][0][l] + F[i][1][l] * b.gradient[r][1][l] +
+                        F[i][2][l] * b.gradient[r][2][l];
+          h[r][i][l] = (C[i][0][l] * b.gradient[r][0][l] + C[i][1][l] * b.gradient[r][1][l] +
+                        C[i][2][l] * b.gradient[r][2][l]) /
+                       J[l];
+        }
+    for (int l = 0; l < L; ++l) {
+      crossFH[l] = -(2.0 / 3.0) * mua[l];
+      alongH[l] = (2.0 / 9.0) * mua[l] * i1[l] + b.kappa[l] * (2.0 * J[l] - 1.0) * J[l];
+      swapH[l] = mua[l] * i1[l] / 3.0 - b.kappa[l] * (J[l] * J[l] - J[l]);
+    }
+    int entry = 0;
+    for (int p = 0; p < 12; ++p)
+      for (int q = p; q < 12; ++q, ++entry) {
+        const int r = p / 3, i = p % 3, c = q / 3, j = q % 3;
+        double* out = tangent[entry];
+        for (int l = 0; l < L; ++l) {
+          double v = crossFH[l] * (fg[r][i][l] * h[c][j][l] + h[r][i][l] * fg[c][j][l]) +
+                     alongH[l] * h[r][i][l] * h[c][j][l] + swapH[l] * h[c][i][l] * h[r][j][l];
+          if (i == j)
+            v += mua[l] * (b.gradient[r][0][l] * b.gradient[c][0][l] +
+                           b.gradient[r][1][l] * b.gradient[c][1][l] +
+                           b.gradient[r][2][l] * b.gradient[c][2][l]);
+          out[l] = b.volume[l] * v;
+        }
+      }
+  }
   return true;
+}
+
+} // namespace
+
+// Four-wide AVX2 where the CPU has it (the build's baseline is SSE2's two), chosen at load time.
+// Without FMA contraction, so that both versions give the same bits.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+bool NeoHookeanTetForces(NeoHookeanTetLanes& b) {
+  return TetLanes<false>(b, nullptr);
+}
+
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+bool NeoHookeanTetForcesAndTangents(NeoHookeanTetLanes& b,
+                                    double (*tangent)[kTetLanes]) {
+  return TetLanes<true>(b, tangent);
 }
 
 bool SmallStrainTetState(const TetReference& reference, const NeoHookeanParameters& p,

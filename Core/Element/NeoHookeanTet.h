@@ -66,6 +66,9 @@ struct NeoHookeanTetLanes {
 };
 // False, with the outputs unspecified, when any lane's det F <= 0.
 bool NeoHookeanTetForces(NeoHookeanTetLanes& lanes);
+// The same, and each lane's tangent (NeoHookeanTetState's to round-off) into tangent[entry][lane]:
+// its upper triangle row by row (78 entries, the packed order of ElementStiffness.h).
+bool NeoHookeanTetForcesAndTangents(NeoHookeanTetLanes& lanes, double (*tangent)[kTetLanes]);
 
 // The same cell with small-strain linear elasticity of the same moduli (shear mu, bulk kappa):
 // W = mu eps:eps + (kappa - 2 mu / 3) / 2 (tr eps)^2 with eps the symmetric part of F - I. Its

@@ -177,4 +177,54 @@ TEST(NeoHookeanTet, FourLaneForcesEqualTheCellState) {
   EXPECT_FALSE(NeoHookeanTetForces(lanes));
 }
 
+// The four-lane tangents against the one-cell state's, lane by lane (packed upper triangle, row
+// by row), with the forces the same as the force kernel's.
+TEST(NeoHookeanTet, FourLaneTangentsEqualTheCellState) {
+  NeoHookeanTetLanes lanes;
+  TetReference refs[kTetLanes];
+  CornerDisplacements moves[kTetLanes];
+  NeoHookeanParameters materials[kTetLanes];
+  for (int l = 0; l < kTetLanes; ++l) {
+    TetCorners corners = SkewedTet();
+    corners.row((l + 1) % 4) += Eigen::RowVector3d(-0.1 * l, 0.05 * l, 0.15);
+    refs[l] = MakeTetReference(corners);
+    moves[l] = (0.3 * (l + 1)) * LargeMove(corners);
+    materials[l] = NeoHookeanFromLinear(800.0 * (l + 1), 0.45 - 0.05 * l);
+    for (int a = 0; a < 4; ++a)
+      for (int i = 0; i < 3; ++i) {
+        lanes.corner[a][i][l] = moves[l](a, i);
+        lanes.gradient[a][i][l] = refs[l].gradients(a, i);
+      }
+    lanes.volume[l] = refs[l].volume;
+    lanes.mu[l] = materials[l].mu;
+    lanes.kappa[l] = materials[l].kappa;
+  }
+  NeoHookeanTetLanes forcesOnly = lanes;
+  ASSERT_TRUE(NeoHookeanTetForces(forcesOnly));
+  double tangents[kPackedElementSize][kTetLanes];
+  ASSERT_TRUE(NeoHookeanTetForcesAndTangents(lanes, tangents));
+  for (int l = 0; l < kTetLanes; ++l) {
+    double energy;
+    ElementVector force;
+    ElementMatrix tangent;
+    ASSERT_TRUE(NeoHookeanTetState(refs[l], materials[l], moves[l], energy, force, &tangent));
+    EXPECT_EQ(lanes.energy[l], forcesOnly.energy[l]) << l;
+    for (int a = 0; a < 4; ++a)
+      for (int i = 0; i < 3; ++i)
+        EXPECT_EQ(lanes.force[a][i][l], forcesOnly.force[a][i][l]) << l << " " << a << i;
+    const double scale = tangent.cwiseAbs().maxCoeff();
+    ASSERT_GT(scale, 0.0);
+    int entry = 0;
+    for (int p = 0; p < 12; ++p)
+      for (int q = p; q < 12; ++q, ++entry)
+        EXPECT_NEAR(tangents[entry][l], tangent(p, q), 1e-13 * scale) << l << " " << p << q;
+  }
+  // An inverted lane refuses the batch.
+  const TetCorners corners = SkewedTet();
+  for (int a = 0; a < 4; ++a)
+    for (int i = 0; i < 3; ++i)
+      lanes.corner[a][i][1] = a == 3 ? 2.0 * (corners(0, i) - corners(3, i)) : 0.0;
+  EXPECT_FALSE(NeoHookeanTetForcesAndTangents(lanes, tangents));
+}
+
 } // namespace
