@@ -5,6 +5,7 @@
 #include "Common/BlasThreads.h"
 #include "Common/ExceptionBoundary.h"
 #include "Common/HelperThreads.h"
+#include "Common/UninitializedVector.h"
 #include "CondensedFEM/LargeDeformationProblem.h"
 #include "CondensedFEM/LbfgsHistory.h"
 #include "Mesh/InputValidation.h"
@@ -87,19 +88,31 @@ struct RestReleases {
 
 // The released DOFs' Schur coupling in the form an iteration reads: W in single precision (it is
 // read twice per iteration, like the single-precision factor, and needs be no more accurate), and
-// S^-1.
+// S^-1. W's buffer is kept from one contact change to the next and from solve to solve
+// (LargeDeformationSystem::releaseColumns): each change copies megabytes of columns into it, and
+// fresh memory for them cost the page faults of its mapping as well, several milliseconds a change.
 struct ReleaseCoupling {
-  std::vector<int> dofs; // empty: no coupling
-  Eigen::MatrixXf w;
+  std::vector<int> dofs;        // empty: no coupling
+  UninitializedVector<float> w; // n x |dofs|, column-major
+  Eigen::Index n = 0;
   Eigen::MatrixXd schurInverse;
+
+  int columns() const { return static_cast<int>(dofs.size()); }
+  float* column(Eigen::Index j) { return w.data() + j * n; }
+  // Drops the coupling, keeping W's buffer.
+  void clear() {
+    dofs.clear();
+    n = 0;
+    schurInverse.resize(0, 0);
+  }
 
   // t = W^T b.
   Eigen::VectorXd transposeProduct(const Eigen::VectorXd& b) const {
-    const int k = static_cast<int>(w.cols());
+    const int k = columns();
     const Eigen::VectorXf bf = b.cast<float>();
     Eigen::MatrixXf parts = Eigen::MatrixXf::Zero(k, kParts);
     byRows([&](int part, int first, int rows) {
-      const int lda = static_cast<int>(w.rows()), one = 1;
+      const int lda = static_cast<int>(n), one = 1;
       const float alpha = 1.0f, beta = 0.0f;
       sgemv_("T", &rows, &k, &alpha, w.data() + first, &lda, bf.data() + first, &one, &beta,
              parts.col(part).data(), &one);
@@ -108,11 +121,11 @@ struct ReleaseCoupling {
   }
   // x -= W v.
   void subtractProduct(const Eigen::VectorXd& v, Eigen::VectorXd& x) const {
-    const int k = static_cast<int>(w.cols());
+    const int k = columns();
     const Eigen::VectorXf vf = v.cast<float>();
-    Eigen::VectorXf product(w.rows());
+    Eigen::VectorXf product(n);
     byRows([&](int, int first, int rows) {
-      const int lda = static_cast<int>(w.rows()), one = 1;
+      const int lda = static_cast<int>(n), one = 1;
       const float alpha = 1.0f, beta = 0.0f;
       sgemv_("N", &rows, &k, &alpha, w.data() + first, &lda, vf.data(), &one, &beta,
              product.data() + first, &one);
@@ -126,7 +139,6 @@ private:
   // each other beside the solve's helpers).
   static constexpr int kParts = 2;
   template <class Work> void byRows(const Work& work) const {
-    const int n = static_cast<int>(w.rows());
     ScopedBlasThreads serial(1, BlasScope::Pinned);
     RunOnHelpers(kParts, [&](int part) {
       const int first = static_cast<int>(std::int64_t(n) * part / kParts);
@@ -518,6 +530,8 @@ public:
 
   // What a synchronous refactorization assembles into (the solve's thread only).
   TangentBuffers solveBuffers;
+  // The released lift-off DOFs' coupling W (ReleaseCoupling), kept between solves.
+  UninitializedVector<float> releaseColumns;
 
 private:
   // With mutex_ held.
@@ -781,7 +795,12 @@ public:
   QuasiNewton(LargeDeformationSystem& sys, Problem& pb, PrecomputedLargeDeformationReport& report,
               StageTimings& timings, std::shared_ptr<const TangentFactor> factor)
       : sys_(sys), st_(*sys.structure), pb_(pb), report_(report), timings_(timings),
-        factor_(std::move(factor)), history_(sys.options.historySize) {}
+        factor_(std::move(factor)), history_(sys.options.historySize) {
+    released_.coupling.w.swap(sys_.releaseColumns);
+  }
+  ~QuasiNewton() { released_.coupling.w.swap(sys_.releaseColumns); }
+  QuasiNewton(const QuasiNewton&) = delete;
+  QuasiNewton& operator=(const QuasiNewton&) = delete;
 
   std::string why;        // set with Failure::Fallback
   int iterationLimit = 0; // > 0: Failure::Stopped when reached
@@ -899,7 +918,7 @@ private:
   void prepareReleased() {
     if (released_.factor == factor_.get() && released_.prescribed == pb_.prescribed)
       return;
-    released_ = ReleasedDofs();
+    released_.coupling.clear();
     released_.factor = factor_.get();
     released_.prescribed = pb_.prescribed;
     if (factor_->prescribed.size() != pb_.prescribed.size())
@@ -911,9 +930,12 @@ private:
     Eigen::MatrixXd schur(k, k);
     ReleaseCoupling& c = released_.coupling;
     if (const std::shared_ptr<const RestReleases> rest = restReleasesFor(dofs)) {
-      c.w.resize(n, k);
+      c.n = n;
+      // Room for every lift-off DOF at once: a later change that releases more does not move it.
+      c.w.reserve(static_cast<size_t>(n * rest->w.cols()));
+      c.w.resize(static_cast<size_t>(n * k));
       for (Eigen::Index j = 0; j < k; ++j)
-        c.w.col(j) = rest->w.col(rest->column[dofs[j]]);
+        std::copy_n(rest->w.col(rest->column[dofs[j]]).data(), n, c.column(j));
       for (Eigen::Index j = 0; j < k; ++j)
         for (Eigen::Index i = 0; i < k; ++i)
           schur(i, j) = rest->schur(rest->column[dofs[i]], rest->column[dofs[j]]);
@@ -925,12 +947,16 @@ private:
       if (!substituteMany(columns, w))
         return;
       schur -= columns.transpose() * w;
-      c.w = w.cast<float>();
+      c.n = n;
+      c.w.resize(static_cast<size_t>(n * k));
+      for (Eigen::Index j = 0; j < k; ++j)
+        for (Eigen::Index i = 0; i < n; ++i)
+          c.column(j)[i] = static_cast<float>(w(i, j));
     }
     schur = 0.5 * (schur + schur.transpose()).eval();
     Eigen::LLT<Eigen::MatrixXd> llt(schur);
     if (llt.info() != Eigen::Success) {
-      c = ReleaseCoupling(); // not positive definite (the factor's state is far): the diagonal
+      c.clear(); // not positive definite (the factor's state is far): the diagonal
       return;
     }
     c.dofs = std::move(dofs);
