@@ -45,12 +45,45 @@ void YieldToInteractiveWork() {
 #endif
 }
 
+// The tangents of factors that are gone, kept for the next factor's copy: a fresh copy's
+// megabytes cost the page faults of their mapping (several milliseconds on the face's tangent),
+// while a kept matrix of the same pattern is overwritten in place. Holds at most two.
+class TangentBin {
+public:
+  void take(SparseMatrix& into) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!kept_.empty()) {
+      into.swap(kept_.back());
+      kept_.pop_back();
+    }
+  }
+  void give(SparseMatrix& from) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (kept_.size() < 2) {
+      kept_.emplace_back();
+      kept_.back().swap(from);
+    }
+  }
+
+private:
+  std::mutex mutex_;
+  std::vector<SparseMatrix> kept_;
+};
+
 // A numeric factor of the tangent at state u with the DOFs `prescribed` pinned (their rows and
 // columns zero, their diagonal kept), and the unpinned tangent for the predictor's products.
 struct TangentFactor {
+  TangentFactor() = default;
+  TangentFactor(const TangentFactor&) = delete;
+  TangentFactor& operator=(const TangentFactor&) = delete;
+  ~TangentFactor() {
+    if (const std::shared_ptr<TangentBin> to = bin.lock())
+      to->give(tangent);
+  }
   CholmodFactor factor;         // empty when `single` was factored directly
   SinglePrecisionFactor single; // empty unless options.singlePrecisionFactor
   SparseMatrix tangent;
+  std::weak_ptr<TangentBin> bin; // where `tangent` goes when this factor is gone
   // The backend's copy of `single` and `tangent` (null: the CPU's), and why there is none when a
   // backend was asked.
   std::shared_ptr<FactorOnDevice> device;
@@ -173,6 +206,7 @@ struct TangentBuffers {
   // worker's buffers).
   MultifrontalWorkspace workspace;
   std::shared_ptr<FactorValueBin> values;
+  std::shared_ptr<TangentBin> tangents; // likewise shared
 };
 
 // A set of DOFs and where their columns lie in every tangent's values (all tangents share one
@@ -331,7 +365,11 @@ Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffer
     (*timings)[Stage::ElementStiffness].ms += clock.lapMs();
   AssembleFromPacked(packed.data(), pattern);
   auto made = std::make_shared<TangentFactor>();
-  made->tangent = pattern.upper;
+  if (buffers.tangents) {
+    buffers.tangents->take(made->tangent);
+    made->bin = buffers.tangents;
+  }
+  made->tangent = pattern.upper; // in place where the bin gave a matrix of this pattern
   made->state = u;
   made->prescribed = prescribed;
   if (contactAtU) {
@@ -540,6 +578,7 @@ private:
       return;
     workerBuffers_.pattern = solveBuffers.pattern; // copied here: the solve's thread writes it
     workerBuffers_.values = solveBuffers.values;
+    workerBuffers_.tangents = solveBuffers.tangents;
     worker_ = std::thread([this] { work(); });
   }
 
@@ -739,6 +778,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     sys->backend = request.options.backend;
   sys->options = options;
   sys->solveBuffers.values = std::make_shared<FactorValueBin>();
+  sys->solveBuffers.tangents = std::make_shared<TangentBin>();
   sys->structure = std::make_shared<Structure>();
   Structure& st = *sys->structure;
   status = MakeStructure(sys->request, options.slidingLiftOff, st);
