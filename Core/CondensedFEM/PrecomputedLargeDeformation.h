@@ -5,7 +5,8 @@
 // that an edit costs no numeric factorization.
 //
 // Precompute (on a worker thread): the node frames, the assembly pattern, the METIS ordering and
-// the symbolic analysis of the whole-mesh tangent, and the numeric factor of the rest-pose tangent
+// the symbolic analysis of the whole-mesh tangent without the couplings of the nodes that every
+// solve pins (FactorPattern in the .cpp), and the numeric factor of the rest-pose tangent
 // (prescribed DOFs keep their diagonal; their rows and columns are zero).
 //
 // Solve: L-BFGS on the free DOFs whose initial inverse Hessian is that factor (Liu, Bouaziz &
