@@ -117,28 +117,46 @@ TEST(NeoHookeanTet, InvertedCellIsRejected) {
   EXPECT_EQ(energy, -1.0);
 }
 
-// The four-lane force kernel against the one-cell state, lane by lane, with each lane a different
-// cell, move and material; and one inverted lane refuses the whole batch.
-TEST(NeoHookeanTet, FourLaneForcesEqualTheCellState) {
+// Four different cells, moves and materials, lane l holding cell l: `corner(l)` is the corner
+// shifted from SkewedTet's, `shift(l)` its shift, `scale(l)` the LargeMove's scale and
+// `material(l)` the lane's material.
+struct FourCells {
   NeoHookeanTetLanes lanes;
   TetReference refs[kTetLanes];
   CornerDisplacements moves[kTetLanes];
   NeoHookeanParameters materials[kTetLanes];
-  for (int l = 0; l < kTetLanes; ++l) {
-    TetCorners corners = SkewedTet();
-    corners.row(l) += Eigen::RowVector3d(0.1 * l, -0.05 * l, 0.2);
-    refs[l] = MakeTetReference(corners);
-    moves[l] = (0.25 * (l + 1)) * LargeMove(corners);
-    materials[l] = NeoHookeanFromLinear(1000.0 * (l + 1), 0.3 + 0.05 * l);
-    for (int a = 0; a < 4; ++a)
-      for (int i = 0; i < 3; ++i) {
-        lanes.corner[a][i][l] = moves[l](a, i);
-        lanes.gradient[a][i][l] = refs[l].gradients(a, i);
-      }
-    lanes.volume[l] = refs[l].volume;
-    lanes.mu[l] = materials[l].mu;
-    lanes.kappa[l] = materials[l].kappa;
+
+  template <class Corner, class Shift, class Scale, class Material>
+  FourCells(Corner corner, Shift shift, Scale scale, Material material) {
+    for (int l = 0; l < kTetLanes; ++l) {
+      TetCorners corners = SkewedTet();
+      corners.row(corner(l)) += shift(l);
+      refs[l] = MakeTetReference(corners);
+      moves[l] = scale(l) * LargeMove(corners);
+      materials[l] = material(l);
+      for (int a = 0; a < 4; ++a)
+        for (int i = 0; i < 3; ++i) {
+          lanes.corner[a][i][l] = moves[l](a, i);
+          lanes.gradient[a][i][l] = refs[l].gradients(a, i);
+        }
+      lanes.volume[l] = refs[l].volume;
+      lanes.mu[l] = materials[l].mu;
+      lanes.kappa[l] = materials[l].kappa;
+    }
   }
+};
+
+// The four-lane force kernel against the one-cell state, lane by lane, with each lane a different
+// cell, move and material; and one inverted lane refuses the whole batch.
+TEST(NeoHookeanTet, FourLaneForcesEqualTheCellState) {
+  FourCells cells([](int l) { return l; },
+                  [](int l) { return Eigen::RowVector3d(0.1 * l, -0.05 * l, 0.2); },
+                  [](int l) { return 0.25 * (l + 1); },
+                  [](int l) { return NeoHookeanFromLinear(1000.0 * (l + 1), 0.3 + 0.05 * l); });
+  NeoHookeanTetLanes& lanes = cells.lanes;
+  const TetReference* refs = cells.refs;
+  const CornerDisplacements* moves = cells.moves;
+  const NeoHookeanParameters* materials = cells.materials;
   ASSERT_TRUE(NeoHookeanTetForces(lanes));
   for (int l = 0; l < kTetLanes; ++l) {
     double energy;
@@ -180,25 +198,14 @@ TEST(NeoHookeanTet, FourLaneForcesEqualTheCellState) {
 // The four-lane tangents against the one-cell state's, lane by lane (packed upper triangle, row
 // by row), with the forces the same as the force kernel's.
 TEST(NeoHookeanTet, FourLaneTangentsEqualTheCellState) {
-  NeoHookeanTetLanes lanes;
-  TetReference refs[kTetLanes];
-  CornerDisplacements moves[kTetLanes];
-  NeoHookeanParameters materials[kTetLanes];
-  for (int l = 0; l < kTetLanes; ++l) {
-    TetCorners corners = SkewedTet();
-    corners.row((l + 1) % 4) += Eigen::RowVector3d(-0.1 * l, 0.05 * l, 0.15);
-    refs[l] = MakeTetReference(corners);
-    moves[l] = (0.3 * (l + 1)) * LargeMove(corners);
-    materials[l] = NeoHookeanFromLinear(800.0 * (l + 1), 0.45 - 0.05 * l);
-    for (int a = 0; a < 4; ++a)
-      for (int i = 0; i < 3; ++i) {
-        lanes.corner[a][i][l] = moves[l](a, i);
-        lanes.gradient[a][i][l] = refs[l].gradients(a, i);
-      }
-    lanes.volume[l] = refs[l].volume;
-    lanes.mu[l] = materials[l].mu;
-    lanes.kappa[l] = materials[l].kappa;
-  }
+  FourCells cells([](int l) { return (l + 1) % 4; },
+                  [](int l) { return Eigen::RowVector3d(-0.1 * l, 0.05 * l, 0.15); },
+                  [](int l) { return 0.3 * (l + 1); },
+                  [](int l) { return NeoHookeanFromLinear(800.0 * (l + 1), 0.45 - 0.05 * l); });
+  NeoHookeanTetLanes& lanes = cells.lanes;
+  const TetReference* refs = cells.refs;
+  const CornerDisplacements* moves = cells.moves;
+  const NeoHookeanParameters* materials = cells.materials;
   NeoHookeanTetLanes forcesOnly = lanes;
   ASSERT_TRUE(NeoHookeanTetForces(forcesOnly));
   double tangents[kPackedElementSize][kTetLanes];
