@@ -969,8 +969,8 @@ private:
     const Eigen::Index n = pb_.prescribed.size(), k = static_cast<Eigen::Index>(dofs.size());
     Eigen::MatrixXd schur(k, k);
     ReleaseCoupling& c = released_.coupling;
+    c.n = n;
     if (const std::shared_ptr<const RestReleases> rest = restReleasesFor(dofs)) {
-      c.n = n;
       // Room for every lift-off DOF at once: a later change that releases more does not move it.
       c.w.reserve(static_cast<size_t>(n * rest->w.cols()));
       c.w.resize(static_cast<size_t>(n * k));
@@ -987,7 +987,6 @@ private:
       if (!substituteMany(columns, w))
         return;
       schur -= columns.transpose() * w;
-      c.n = n;
       c.w.resize(static_cast<size_t>(n * k));
       for (Eigen::Index j = 0; j < k; ++j)
         for (Eigen::Index i = 0; i < n; ++i)

@@ -314,7 +314,7 @@ struct SinglePrecisionFactor::Impl {
     // Roots of at most `light` work are not placed one by one while the split is searched: their
     // sum goes to the lighter side, as placing them would about do.
     const double light = total / 65536.0;
-    std::vector<char> bestTop(ns, 0);
+    std::vector<char> inTop(ns, 0); // after the replay below: the best step's top
     std::vector<int> candidates;
     double lightWork = 0.0; // of the candidates of at most `light` work
     auto start = [&] {
@@ -330,7 +330,7 @@ struct SinglePrecisionFactor::Impl {
     auto raise = [&] { // the heaviest candidate to the top
       const int heaviest = candidates.back();
       candidates.pop_back();
-      bestTop[heaviest] = 1;
+      inTop[heaviest] = 1;
       lightWork -= subtree[heaviest] <= light ? subtree[heaviest] : 0.0;
       for (int c : children[heaviest]) {
         candidates.insert(std::upper_bound(candidates.begin(), candidates.end(), c, lighter), c);
@@ -373,29 +373,28 @@ struct SinglePrecisionFactor::Impl {
       }
       topWork += work[raise()];
     }
-    std::fill(bestTop.begin(), bestTop.end(), 0);
-    std::vector<int> bestSide; // per candidate root: 0 or 1
+    std::fill(inTop.begin(), inTop.end(), 0);
+    std::vector<int> sideOf; // per candidate root of the best step: 0 or 1
     if (bestStep >= 0) {
       start();
       for (int step = 0; step < bestStep; ++step)
         raise();
-      sides(&bestSide);
+      sides(&sideOf);
     }
-    const std::vector<int>& bestRoots = candidates;
     // Two threads only where they save a tenth of the work.
     split = bestStep >= 0 && best < 0.9 * total;
     if (!split)
       return;
     std::vector<int> owner(ns, -1); // -1: top
-    for (size_t c = 0; c < bestRoots.size(); ++c)
-      owner[bestRoots[c]] = bestSide[c];
+    for (size_t c = 0; c < candidates.size(); ++c)
+      owner[candidates[c]] = sideOf[c];
     for (int k = ns - 1; k >= 0; --k)
-      if (!bestTop[k] && owner[k] < 0 && parent[k] >= 0)
+      if (!inTop[k] && owner[k] < 0 && parent[k] >= 0)
         owner[k] = owner[parent[k]];
     topIndex.assign(n, -1);
     topColumns = 0;
     for (int k = 0; k < ns; ++k) {
-      if (bestTop[k]) {
+      if (inTop[k]) {
         top.push_back(k);
         for (int c = super[k]; c < super[k + 1]; ++c)
           topIndex[c] = topColumns++;
