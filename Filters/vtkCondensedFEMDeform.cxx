@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkCondensedFEMDeform.h"
 
+#include "Common/BlasKernels.h"
 #include "Common/LargeAllocations.h"
 #include "CondensedFEMDeformBone.h"
 #include "CondensedFEMDeformBoneInput.h"
@@ -54,6 +55,16 @@ struct vtkCondensedFEMDeform::Cache {
 vtkCondensedFEMDeform::vtkCondensedFEMDeform() : State(new Cache) {
   // Each precompute frees tens of MB when the next replaces it: keep that from staying resident.
   faceplan::ReturnLargeAllocationsToSystem();
+  // An OpenBLAS that does not know this CPU factors several times slower than it could; only the
+  // environment of the next start can change that (Common/BlasKernels.h). Said once per process,
+  // in the log at INFO: the results are the same.
+  static const bool blasSaid = [] {
+    const faceplan::BlasKernels blas = faceplan::DescribeBlasKernels();
+    if (!blas.advice.empty())
+      vtkLog(INFO, "FacePlan: " << blas.advice);
+    return true;
+  }();
+  (void)blasSaid;
   this->SetNumberOfInputPorts(2);
   this->SetNumberOfOutputPorts(2);
 }

@@ -6,6 +6,34 @@
 
 namespace faceplan {
 
+namespace {
+
+bool IsAvx512Kernels(const std::string& name) {
+  return name == "SkylakeX" || name == "Cooperlake" || name == "SapphireRapids";
+}
+
+bool IsAvx2Kernels(const std::string& name) {
+  return name == "Haswell" || name == "Zen" || name == "Excavator" || IsAvx512Kernels(name);
+}
+
+} // namespace
+
+void AdviseBlasKernels(BlasKernels& k) {
+  k.suggested.clear();
+  k.advice.clear();
+  if (k.name.empty())
+    return;
+  if (k.cpuHasAvx512 && !IsAvx512Kernels(k.name))
+    k.suggested = "SkylakeX";
+  else if (k.cpuHasAvx2 && !IsAvx2Kernels(k.name))
+    k.suggested = k.amd ? "Zen" : "Haswell";
+  if (k.suggested.empty() || k.userChose)
+    return;
+  k.advice = "OpenBLAS runs its " + k.name + " kernels on this " +
+             (k.cpuHasAvx512 ? "AVX-512" : "AVX2") + " CPU; OPENBLAS_CORETYPE=" + k.suggested +
+             " in the environment before the program starts selects faster ones";
+}
+
 BlasKernels DescribeBlasKernels() {
   BlasKernels kernels;
   using CoreName = char* (*)();
@@ -13,14 +41,14 @@ BlasKernels DescribeBlasKernels() {
     if (const char* text = name())
       kernels.name = text;
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  __builtin_cpu_init();
   kernels.cpuHasAvx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
                          __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl");
+  kernels.cpuHasAvx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  kernels.amd = __builtin_cpu_is("amd");
 #endif
-  const bool avx2Kernels = kernels.name == "Haswell" || kernels.name == "Zen";
-  if (avx2Kernels && kernels.cpuHasAvx512 && !std::getenv("OPENBLAS_CORETYPE"))
-    kernels.advice = "OpenBLAS runs its " + kernels.name +
-                     " (AVX2) kernels on this AVX-512 CPU; OPENBLAS_CORETYPE=SkylakeX in the "
-                     "environment before the program starts selects its AVX-512 kernels";
+  kernels.userChose = std::getenv("OPENBLAS_CORETYPE") != nullptr;
+  AdviseBlasKernels(kernels);
   return kernels;
 }
 

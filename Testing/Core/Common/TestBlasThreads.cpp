@@ -128,23 +128,51 @@ TEST(BlasThreads, APinnedScopeHoldsAgainstSharedScopesOnOtherThreads) {
   EXPECT_EQ(OpenBlasThreads(), original);
 }
 
-// The kernel report names OpenBLAS's choice (the tests link OpenBLAS) and gives advice only while
-// AVX2 kernels run on an AVX-512 CPU and the user made no choice of their own.
-TEST(BlasKernels, AdviceOnlyForAvx2KernelsOnAnAvx512CpuWithoutAUserChoice) {
-  const char* previous = std::getenv("OPENBLAS_CORETYPE");
-  const std::string saved = previous ? previous : "";
-  unsetenv("OPENBLAS_CORETYPE");
-  const BlasKernels unset = DescribeBlasKernels();
-  if (unset.name.empty())
+// The suggestion: the CPU's widest kernels where OpenBLAS runs narrower ones; advice only where
+// the user made no choice of their own.
+TEST(BlasKernels, SuggestsTheCpusWidestKernels) {
+  auto advise = [](const char* name, bool avx512, bool avx2, bool amd, bool chose) {
+    BlasKernels k;
+    k.name = name;
+    k.cpuHasAvx512 = avx512;
+    k.cpuHasAvx2 = avx2;
+    k.amd = amd;
+    k.userChose = chose;
+    AdviseBlasKernels(k);
+    return k;
+  };
+  // SSE3 kernels on an AVX-512 Intel CPU that OpenBLAS does not know.
+  BlasKernels k = advise("Prescott", true, true, false, false);
+  EXPECT_EQ(k.suggested, "SkylakeX");
+  EXPECT_NE(k.advice.find("OPENBLAS_CORETYPE=SkylakeX"), std::string::npos) << k.advice;
+  EXPECT_NE(k.advice.find("Prescott"), std::string::npos) << k.advice;
+  // AVX2 kernels on an AVX-512 CPU.
+  EXPECT_EQ(advise("Zen", true, true, true, false).suggested, "SkylakeX");
+  EXPECT_EQ(advise("Haswell", true, true, false, false).suggested, "SkylakeX");
+  // Pre-AVX2 kernels on AVX2 CPUs: Intel's and AMD's AVX2 kernels.
+  EXPECT_EQ(advise("Nehalem", false, true, false, false).suggested, "Haswell");
+  EXPECT_EQ(advise("Sandybridge", false, true, true, false).suggested, "Zen");
+  // The CPU's own kernels, or a CPU without AVX2: nothing to suggest.
+  EXPECT_TRUE(advise("SkylakeX", true, true, false, false).suggested.empty());
+  EXPECT_TRUE(advise("Cooperlake", true, true, false, false).suggested.empty());
+  EXPECT_TRUE(advise("Zen", false, true, true, false).suggested.empty());
+  EXPECT_TRUE(advise("Haswell", false, true, false, false).suggested.empty());
+  EXPECT_TRUE(advise("Prescott", false, false, false, false).suggested.empty());
+  EXPECT_TRUE(advise("", true, true, false, false).suggested.empty()); // not OpenBLAS
+  // A user's own choice is theirs: the suggestion stays, the advice goes.
+  k = advise("Haswell", true, true, false, true);
+  EXPECT_EQ(k.suggested, "SkylakeX");
+  EXPECT_TRUE(k.advice.empty());
+}
+
+// The process's own report names OpenBLAS's choice (the tests link OpenBLAS) and reads the
+// user's choice from the environment.
+TEST(BlasKernels, DescribesThisProcess) {
+  const BlasKernels k = DescribeBlasKernels();
+  if (k.name.empty())
     GTEST_SKIP() << "the BLAS in this process is not OpenBLAS";
-  const bool avx2 = unset.name == "Haswell" || unset.name == "Zen";
-  EXPECT_EQ(!unset.advice.empty(), avx2 && unset.cpuHasAvx512) << unset.name;
-  if (!unset.advice.empty())
-    EXPECT_NE(unset.advice.find("OPENBLAS_CORETYPE=SkylakeX"), std::string::npos);
-  setenv("OPENBLAS_CORETYPE", "Haswell", 1); // a user's own choice is theirs
-  EXPECT_TRUE(DescribeBlasKernels().advice.empty());
-  if (previous)
-    setenv("OPENBLAS_CORETYPE", saved.c_str(), 1);
-  else
-    unsetenv("OPENBLAS_CORETYPE");
+  EXPECT_EQ(k.userChose, std::getenv("OPENBLAS_CORETYPE") != nullptr);
+  EXPECT_EQ(k.advice.empty(), k.suggested.empty() || k.userChose) << k.name;
+  if (k.cpuHasAvx512)
+    EXPECT_TRUE(k.cpuHasAvx2);
 }
