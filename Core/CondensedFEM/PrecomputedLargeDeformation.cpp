@@ -856,10 +856,11 @@ public:
     const double tight = sys_.options.tolerance;
     const double settle = sys_.options.settleTolerance;
     double tolerance = liftOff ? std::max(tight, settle) : tight;
-    bool rechecking = false; // at recheckTolerance, on the way to the tolerance
     int updates = 0;
     while (true) {
-      const Failure f = minimise(u, tolerance, rechecking ? tight : tolerance);
+      // A factor made while the contact settles serves the rest of the solve too: whether one
+      // pays is judged against the solve's own tolerance, not the settling phase's.
+      const Failure f = minimise(u, tolerance, tight);
       if (f != Failure::None)
         return f;
 
@@ -881,11 +882,10 @@ public:
           }
         clearHistory();
         tolerance = std::max(tight, settle);
-        rechecking = false;
       } else {
+        // At recheckTolerance on the way to the tolerance.
         const double recheck = sys_.options.recheckTolerance;
-        rechecking = recheck > tight && tolerance > recheck;
-        tolerance = rechecking ? recheck : tight;
+        tolerance = recheck > tight && tolerance > recheck ? recheck : tight;
       }
       if (!moved) { // the converged evaluation still holds at u
         cached_.energy = lastEnergy_;

@@ -85,7 +85,7 @@ struct PrecomputedLargeDeformationOptions {
   // residual on the way to `tolerance` (0: not). A node whose normal force is near zero may change
   // side only as the residual falls; found here, its change costs the iterations from this
   // residual's state instead of from a converged one (the six osteotomy full moves: 131 iterations
-  // against 141). Whether a refactorization pays is judged against `tolerance` meanwhile.
+  // against 141).
   double recheckTolerance = 1e-6;
   int historySize = 8; // L-BFGS pairs kept
   // Quasi-Newton iterations over the whole solve; past it the solve falls back to Newton.
@@ -100,7 +100,9 @@ struct PrecomputedLargeDeformationOptions {
   // BENCHMARKS.md; the rate's prediction errs on the slow side, as contact changes slow the
   // iterations that follow, hence a little less) and refactorCostIterationsOnDevice with a
   // backend's (whose iterations are 10-20 times quicker while the factorization stays on the CPU).
-  // A count rather than a timing: the same input gives the same result on every run.
+  // A count rather than a timing: the same input gives the same result on every run. The
+  // prediction is to `tolerance`, also while the contact settles at settleTolerance: a factor
+  // made then serves the rest of the solve.
   bool adaptiveRefactorization = true;
   double refactorCostIterations = 10.0;
   double refactorCostIterationsOnDevice = 300.0;
