@@ -101,8 +101,8 @@ struct PrecomputedLargeDeformationOptions {
   // iterations that follow, hence a little less) and refactorCostIterationsOnDevice with a
   // backend's (whose iterations are 10-20 times quicker while the factorization stays on the CPU).
   // A count rather than a timing: the same input gives the same result on every run. The
-  // prediction is to `tolerance`, also while the contact settles at settleTolerance: a factor
-  // made then serves the rest of the solve.
+  // prediction is to `tolerance`; while the contact settles at settleTolerance, to that in a
+  // warm-started solve and to `tolerance` in one from rest.
   bool adaptiveRefactorization = true;
   double refactorCostIterations = 10.0;
   double refactorCostIterationsOnDevice = 300.0;
