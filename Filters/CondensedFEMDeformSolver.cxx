@@ -62,6 +62,14 @@ void Solver::chooseBackend(const Settings& settings, PrecomputeOptions& options,
     notes.push_back("Backend CUDA is not available (" + cudaUnavailable_ + "); using the CPU");
 }
 
+void Solver::waitForBackgroundWork() {
+  if (!haveLarge_)
+    return;
+  std::shared_ptr<LargeDeformationSystem> system;
+  if (background_.waitLargeDeformation(system) && system)
+    WaitForRefactorization(*system);
+}
+
 void Solver::startLargeDeformation(const PrecomputeRequest& given, const Settings& settings,
                                    const std::shared_ptr<ComputeBackend>& backend) {
   if (haveLarge_ && largeLiftOff_ == settings.liftOff && largeRequest_.options.backend == backend &&

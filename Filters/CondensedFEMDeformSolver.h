@@ -40,6 +40,9 @@ public:
   Status run(const PrecomputeRequest& request, const SolveInput& input, const Settings& settings,
              const std::function<void(double)>& progress, SolveOutcome& outcome);
   int precomputeCount() const { return precomputeCount_; }
+  // Blocks until the large-deformation precompute and its background work (the refactorization
+  // after a solve, the corrections of the state ahead) are done; at once where there is none.
+  void waitForBackgroundWork();
 
 private:
   void chooseBackend(const Settings& settings, PrecomputeOptions& options,

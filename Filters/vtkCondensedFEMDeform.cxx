@@ -75,6 +75,10 @@ int vtkCondensedFEMDeform::GetPrecomputeCount() {
   return this->State->solver.precomputeCount();
 }
 
+void vtkCondensedFEMDeform::WaitForBackgroundWork() {
+  this->State->solver.waitForBackgroundWork();
+}
+
 int vtkCondensedFEMDeform::GetContactBuildCount() {
   return this->State->contactBuilds;
 }

@@ -226,6 +226,12 @@ public:
   /// Number of times this filter built the tissue-bone contact map; for tests.
   int GetContactBuildCount();
 
+  /// Blocks until the large-deformation model's background work is done: its precompute, the
+  /// refactorization that follows each solve and the corrections of the drag's state ahead. The
+  /// next update then starts from the same factor on every run, whatever the machine's load (for
+  /// tests and scripted measurements; the GUI never needs it).
+  void WaitForBackgroundWork();
+
   /// Newer than the last output while an upstream edit arrived during the last RequestData (from a
   /// progress callback, while the precompute ran): the pipeline stamps the output after the edit,
   /// so without this the next update would keep a result of the superseded inputs.

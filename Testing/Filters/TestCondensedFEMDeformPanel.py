@@ -42,7 +42,8 @@ iterator = sm.NewPropertyIterator()
 iterator.Begin()
 while not iterator.IsAtEnd():
     prop = iterator.GetProperty()
-    if not prop.GetInformationOnly() and prop.GetClassName() != "vtkSMInputProperty":
+    # A command property (vtkSMProperty itself: WaitForBackgroundWork) is no setting of the panel.
+    if not prop.GetInformationOnly() and prop.GetClassName() not in ("vtkSMInputProperty", "vtkSMProperty"):
         settable.append(iterator.GetKey())
     iterator.Next()
 for name in settable:

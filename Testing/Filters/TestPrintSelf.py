@@ -21,7 +21,9 @@ for name, inputs in FILTERS.items():
     settable = []
     for prop in proxy.ListProperties():
         sm = proxy.GetProperty(prop).SMProperty
-        if sm.GetInformationOnly() or isinstance(proxy.GetProperty(prop), servermanager.InputProperty):
+        # A command property (vtkSMProperty itself: WaitForBackgroundWork) holds no value to print.
+        if sm.GetInformationOnly() or isinstance(proxy.GetProperty(prop), servermanager.InputProperty) or \
+                sm.GetClassName() == "vtkSMProperty":
             continue
         settable.append(sm.GetXMLName() if hasattr(sm, "GetXMLName") else prop)
     missing = [p for p in settable if p + ":" not in printed]
