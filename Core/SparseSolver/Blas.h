@@ -24,7 +24,4 @@ void strsm_(const char* side, const char* uplo, const char* transa, const char* 
             const int* ldb);
 void ssyrk_(const char* uplo, const char* trans, const int* n, const int* k, const float* alpha,
             const float* a, const int* lda, const float* beta, float* c, const int* ldc);
-// LAPACK (OpenBLAS carries it; CMake links LAPACK::LAPACK for other BLAS).
-void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info);
-void spotrf_(const char* uplo, const int* n, float* a, const int* lda, int* info);
 }

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // SparseSolver/MultifrontalCholesky: the multifrontal factor in CHOLMOD's layout must be CHOLMOD's
-// factor up to round-off, the same bit for bit from run to run whatever the thread schedule, and
-// refuse a matrix that is not positive definite (CholmodFactor then names CHOLMOD's first failing
-// column, as before).
+// factor up to round-off (a wide supernode's too), the same bit for bit from run to run whatever
+// the thread schedule, and refuse a matrix that is not positive definite (CholmodFactor then names
+// CHOLMOD's first failing column, as before).
 #include "CondensedFEM/CondensedSystem.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/CholmodViews.h"
@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 using namespace faceplan;
@@ -198,6 +199,70 @@ TEST(MultifrontalCholesky, RefusesAMatrixThatIsNotPositiveDefinite) {
   unsetenv("FACEPLAN_FACTORIZATION");
   EXPECT_EQ(messages[0], messages[1]);
   EXPECT_NE(messages[0].find("CHOLMOD stopped at column"), std::string::npos) << messages[0];
+}
+
+// A dense matrix is one supernode, whose panel (its diagonal block and the rows below) is factored
+// by halving its columns down to small leaves: widths that split into uneven halves and leaves
+// smaller than the rest. Its factor is CHOLMOD's in double and single precision, and where a pivot
+// fails the failing column is named exactly: A = M D M^T with M unit lower triangular and D the
+// identity but for -1 at `column`, whose Cholesky pivots are D's.
+TEST(MultifrontalCholesky, FactorsAWideSupernodeAndNamesItsFailingColumn) {
+  for (const int n : {7, 9, 50, 131}) {
+    for (const int column : {-1, 0, n / 2 - 1, n - 1}) { // -1: positive definite
+      Eigen::MatrixXd m = Eigen::MatrixXd::Identity(n, n);
+      for (int j = 0; j < n; ++j)
+        for (int i = j + 1; i < n; ++i)
+          m(i, j) = 0.3 * std::sin(1.0 + i * 7 + j * 3);
+      Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+      if (column >= 0)
+        d[column] = -1.0;
+      const Eigen::MatrixXd dense = m * d.asDiagonal() * m.transpose();
+      const SparseMatrix upper = dense.triangularView<Eigen::Upper>().toDenseMatrix().sparseView();
+      std::vector<int> natural(n);
+      for (int k = 0; k < n; ++k)
+        natural[k] = k;
+      QuietCholmodCommon quiet;
+      quiet.common.supernodal = CHOLMOD_SUPERNODAL;
+      cholmod_factor* mine = AnalyzeInGivenOrder(upper, natural, quiet.common);
+      cholmod_factor* theirs = AnalyzeInGivenOrder(upper, natural, quiet.common);
+      ASSERT_TRUE(mine && theirs);
+      ASSERT_EQ(mine->nsuper, 1u) << n;
+      std::vector<float> single(static_cast<const int*>(mine->px)[1]);
+      const Status s = MultifrontalFactorize(upper, mine, &quiet.common, 2);
+      const Status f = MultifrontalFactorizeSingle(upper, *mine, single.data(), 2);
+      if (column >= 0) {
+        const std::string named = "pivot failed at column " + std::to_string(column) + ")";
+        EXPECT_FALSE(s.ok);
+        EXPECT_EQ(mine->minor, static_cast<size_t>(column)) << n;
+        EXPECT_NE(s.message.find(named), std::string::npos) << n << ": " << s.message;
+        EXPECT_FALSE(f.ok);
+        EXPECT_NE(f.message.find(named), std::string::npos) << n << ": " << f.message;
+      } else {
+        ASSERT_TRUE(s.ok) << s.message;
+        ASSERT_TRUE(f.ok) << f.message;
+        cholmod_sparse view = ViewUpper(upper);
+        ASSERT_TRUE(cholmod_factorize(&view, theirs, &quiet.common));
+        ASSERT_EQ(theirs->minor, theirs->n);
+        const std::vector<double> a = Values(mine), b = Values(theirs);
+        ASSERT_EQ(a.size(), b.size());
+        ASSERT_EQ(single.size(), b.size());
+        double largest = 0.0, difference = 0.0, singleDifference = 0.0;
+        for (size_t k = 0; k < a.size(); ++k) {
+          largest = std::max(largest, std::abs(b[k]));
+          difference = std::max(difference, std::abs(a[k] - b[k]));
+          singleDifference = std::max(singleDifference, std::abs(single[k] - b[k]));
+        }
+        EXPECT_LT(difference, 1e-13 * largest) << n;
+        EXPECT_LT(singleDifference, 1e-5 * largest) << n;
+        // The strictly upper triangle of the diagonal block is zero, as CHOLMOD leaves it.
+        for (int j = 1; j < n; ++j)
+          for (int i = 0; i < j; ++i)
+            ASSERT_EQ(a[static_cast<size_t>(j) * n + i], 0.0) << n << " " << i << " " << j;
+      }
+      cholmod_free_factor(&mine, &quiet.common);
+      cholmod_free_factor(&theirs, &quiet.common);
+    }
+  }
 }
 
 // The factor CholmodFactor makes multifrontally solves as CHOLMOD's does.
