@@ -100,12 +100,7 @@ def cut_scene():
     def move(mm):  # mm: how far the cut goes below the demo's (0 = no cut: the surface far below)
         offset = 0.0 if mm > 0.0 else -200.0  # rest: the surface below the chin cuts nothing
         deeper = mm - 1.0 if mm > 0.0 else 0.0
-        shift = offset - deeper
-
-        def moved(curve):
-            return [c + (shift if k % 3 == 2 else 0.0) for k, c in enumerate(curve)]
-        cut.CurveU = moved(faceplan_pipeline.CURVE_U)
-        cut.CurveV = moved(faceplan_pipeline.CURVE_V)
+        faceplan_pipeline.place_cut(cut, offset - deeper)
     return fem, [roi, cut], move, 1.0
 
 

@@ -93,9 +93,7 @@ table = servermanager.Fetch(fem, 0, None, 1)
 rows = [(table.GetValue(r, 0).ToString(), table.GetValue(r, 1).ToDouble(), table.GetValue(r, 2).ToInt(),
          table.GetValue(r, 3).ToString()) for r in range(table.GetNumberOfRows())]
 # The edit: the whole cut surface 0.5 mm lower (a deeper cut); bone, ROI and tissue unchanged.
-lower = lambda curve: [c - (0.5 if k % 3 == 2 else 0.0) for k, c in enumerate(curve)]
-cut.CurveU = lower(faceplan_pipeline.CURVE_U)
-cut.CurveV = lower(faceplan_pipeline.CURVE_V)
+faceplan_pipeline.place_cut(cut, -0.5)
 start = time.time()
 fem.UpdatePipeline()
 edit = time.time() - start

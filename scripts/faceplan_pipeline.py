@@ -10,6 +10,12 @@ CURVE_U = [40, -30, CUT_Z, 60, -30, CUT_Z - 0.5, 80, -30, CUT_Z - 0.5, 100, -30,
 CURVE_V = [40, -30, CUT_Z, 40, -10, CUT_Z + 0.5, 40, 10, CUT_Z + 0.5, 40, 30, CUT_Z]
 
 
+def place_cut(cut, dz):
+    """Sets the cut surface dz mm above the demo's (dz < 0: a deeper cut, more bone goes)."""
+    cut.CurveU = [c + (dz if k % 3 == 2 else 0.0) for k, c in enumerate(CURVE_U)]
+    cut.CurveV = [c + (dz if k % 3 == 2 else 0.0) for k, c in enumerate(CURVE_V)]
+
+
 def build(data_dir):
     """Returns (tissue, mandible, roi, cut, fem) proxies; LoadPlugin must have run first."""
     tissue = simple.XMLUnstructuredGridReader(registrationName="face_tissue.vtu",

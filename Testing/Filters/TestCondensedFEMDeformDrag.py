@@ -43,11 +43,7 @@ def main():
 
         def place(mm):
             """The demo's cut surface lowered by mm - 1 (mm = 1: the demo's cut)."""
-            shift = -(mm - 1.0)
-            cut.CurveU = [c + (shift if k % 3 == 2 else 0.0)
-                          for k, c in enumerate(faceplan_pipeline.CURVE_U)]
-            cut.CurveV = [c + (shift if k % 3 == 2 else 0.0)
-                          for k, c in enumerate(faceplan_pipeline.CURVE_V)]
+            faceplan_pipeline.place_cut(cut, 1.0 - mm)
     else:
         tissue, bone, osteotomy, skeleton, fem = osteotomy_scenes.build(sys.argv[2], name)
         check(int(fem.LiftOff) == 1 and float(fem.LipSeal) == -1.0,
@@ -63,7 +59,6 @@ def main():
             """The segment moved mm along the scene's direction."""
             osteotomy.Translation = list(direction * mm / whole)
     fem.LargeDeformationSolver = "Precomputed"
-
 
     def move(mm):
         """The bone placed at mm; the solve's field data."""

@@ -203,9 +203,7 @@ def build(scene, split, data_dir, work_dir):
         bone = cut
 
         def edit():
-            lower = lambda curve: [c - (0.5 if k % 3 == 2 else 0.0) for k, c in enumerate(curve)]
-            cut.CurveU = lower(faceplan_pipeline.CURVE_U)
-            cut.CurveV = lower(faceplan_pipeline.CURVE_V)
+            faceplan_pipeline.place_cut(cut, -0.5)
     elif scene == "osteotomy":  # BSSO: the mandible's body moved, maxilla and cranium fixed
         import osteotomy_scenes
         _, operation, translation, _ = osteotomy_scenes.SCENES["bsso"]
