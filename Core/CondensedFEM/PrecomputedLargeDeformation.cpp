@@ -192,6 +192,10 @@ struct FactorPattern {
   SparseMatrix upper;      // the pattern (values unused)
   std::vector<int> source; // per entry, its index in the whole mesh's tangent
   CholmodFactor analysis;  // its ordering and symbolic analysis, made once
+  // The rest tangent's single-precision factorization, which later ones reuse in part
+  // (PrecomputedLargeDeformationOptions::reuseTolerance); made once, then only read.
+  MultifrontalReference rest;
+  double reuseTolerance = -1.0; // < 0: no reuse
 };
 
 // What a factorization assembles into, kept from one to the next by each thread that factors: the
@@ -350,11 +354,13 @@ std::shared_ptr<const RestReleases> MakeRestReleases(const TangentFactor& factor
 // Assembles the tangent at u into `buffers` and factors it with the DOFs `prescribed` pinned, or,
 // given `contactAtU` (targets and loads at u), with the contact that Newton's rule gives at u from
 // `prescribed` and the force evaluated here. False (with a message) when a cell is inverted or the
-// pinned tangent is not positive definite.
+// pinned tangent is not positive definite. `keepRest`: the factorization is kept as fp.rest (the
+// precompute's, which alone may write fp); the others reuse fp.rest.
 Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffers& buffers,
                      const Eigen::VectorXd& u, const std::vector<char>& prescribed,
                      Problem* contactAtU, bool singlePrecision, ComputeBackend* backend,
-                     std::shared_ptr<TangentFactor>& out, StageTimings* timings) {
+                     std::shared_ptr<TangentFactor>& out, StageTimings* timings,
+                     MultifrontalReference* keepRest = nullptr) {
   StageClock clock;
   Evaluation ev;
   std::vector<double>& packed = buffers.packed;
@@ -397,9 +403,17 @@ Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffer
   // The single-precision factor straight from the tangent: about half the time of the double
   // factor and its copy. Where single precision breaks down on the tangent, from the double factor,
   // which also gives the message when the tangent is not positive definite.
+  FactorReuse reuse;
+  if (keepRest)
+    reuse.keep = fp.reuseTolerance >= 0.0 ? keepRest : nullptr;
+  else if (fp.reuseTolerance >= 0.0 && fp.rest.made()) {
+    reuse.from = &fp.rest;
+    reuse.tolerance = fp.reuseTolerance;
+  }
   const bool factoredSingle =
       singlePrecision &&
-      made->single.factorize(fp.analysis, factored, 2, &buffers.workspace, buffers.values).ok;
+      made->single.factorize(fp.analysis, factored, 2, &buffers.workspace, buffers.values, reuse)
+          .ok;
   Status status = Status::Ok();
   if (!factoredSingle) {
     status = made->factor.analyzeLike(fp.analysis);
@@ -692,7 +706,7 @@ Status ValidateOptions(const PrecomputedLargeDeformationOptions& o) {
       o.historySize < 0 || o.maxIterations < 1 || o.refactorAfter < 0 ||
       o.maxRefactorizations < 0 || o.maxSubstepHalvings < 0 || o.maxContactUpdates < 0 ||
       o.maxCoupledReleases < 0 || o.maxRestReleases < 0 || o.factorAheadOrder < 1 ||
-      o.factorAheadOrder > 2 || o.aheadCorrections < 0)
+      o.factorAheadOrder > 2 || o.aheadCorrections < 0 || std::isnan(o.reuseTolerance))
     return Status::Error("invalid large-deformation options");
   return Status::Ok();
 }
@@ -804,8 +818,10 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   sys->timings[Stage::Reordering].ms = clock.lapMs();
   const Eigen::VectorXd rest = Eigen::VectorXd::Zero(3 * st.n);
   std::shared_ptr<TangentFactor> factor;
+  sys->factorPattern.reuseTolerance = options.reuseTolerance;
   status = FactorTangent(st, sys->factorPattern, sys->solveBuffers, rest, st.prescribed, nullptr,
-                         options.singlePrecisionFactor, sys->backend.get(), factor, &sys->timings);
+                         options.singlePrecisionFactor, sys->backend.get(), factor, &sys->timings,
+                         &sys->factorPattern.rest);
   if (!status)
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
@@ -1250,6 +1266,8 @@ private:
       released = false;
       return false;
     }
+    if (made->single.factoredShare() < 1.0)
+      ++report_.partialRefactorizations;
     factor_ = std::move(made);
     ++report_.refactorizations;
     if (released) {

@@ -2,6 +2,7 @@
 #include "SparseSolver/MultifrontalCholesky.h"
 #include "Common/BlasThreads.h"
 #include "Common/InversePermutation.h"
+#include "Common/ParallelFor.h"
 #include "SparseSolver/Blas.h"
 #include "SparseSolver/SupernodalTree.h"
 
@@ -222,6 +223,15 @@ template <class Scalar> struct Update {
   size_t capacity = 0;
 };
 
+// How a factorization reuses a reference, or keeps one (MultifrontalReference).
+template <class Scalar> struct Reuse {
+  const std::vector<char>* active = nullptr; // the supernodes to factor (null: every one)
+  std::vector<const Scalar*> borrowed;       // per supernode: its kept update matrix, or null
+  // Where the update matrices of the supernodes keepMask marks are copied (null: none kept).
+  std::vector<std::unique_ptr<Scalar[]>>* keep = nullptr;
+  const std::vector<char>* keepMask = nullptr;
+};
+
 // Buffers for the update matrices, reused: over one factorization they add up to several times
 // the factor, most in blocks large enough for malloc to map fresh pages for each, which the kernel
 // zero-fills on first touch (a visible part of a precompute's CPU time). A released buffer serves
@@ -340,7 +350,8 @@ template <class Work> void OverTriangleColumns(int size, int parts, Work&& work)
 // elimination-order column, or -1.
 template <class Scalar>
 int FactorSupernode(const Plan& p, int t, Scalar* x, std::vector<Update<Scalar>>& updates,
-                    UpdatePool<Scalar>& pool, std::vector<int>& position, int threads) {
+                    UpdatePool<Scalar>& pool, std::vector<int>& position, int threads,
+                    const Reuse<Scalar>* reuse) {
   const int width = p.columns(t), height = p.rows(t), off = height - width;
   const int* rows = p.s + p.pi[t];
   for (int k = 0; k < height; ++k)
@@ -365,10 +376,12 @@ int FactorSupernode(const Plan& p, int t, Scalar* x, std::vector<Update<Scalar>>
   };
   auto extendAdd = [&](int child, int b0, int b1, Scalar* update) {
     const int childOff = p.rows(child) - p.columns(child);
+    // A child not factored here has its update matrix in the reference.
+    const Scalar* childUpdate =
+        updates[child].values || !reuse ? updates[child].values.get() : reuse->borrowed[child];
     const int ranges = double(childOff) * (b1 - b0) >= kParallelFrom ? parts : 1;
     OverTriangleColumns(b1 - b0, ranges, [&](int c0, int c1) {
-      ExtendAdd(p, t, child, updates[child].values.get(), position, block, update, b0 + c0,
-                b0 + c1);
+      ExtendAdd(p, t, child, childUpdate, position, block, update, b0 + c0, b0 + c1);
     });
   };
   for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q)
@@ -394,6 +407,10 @@ int FactorSupernode(const Plan& p, int t, Scalar* x, std::vector<Update<Scalar>>
     for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q) {
       const int child = p.children[q];
       extendAdd(child, childSplit(child), p.rows(child) - p.columns(child), update);
+    }
+    if (reuse && reuse->keep && (*reuse->keepMask)[t]) {
+      (*reuse->keep)[t].reset(new Scalar[size_t(off) * off]);
+      std::copy_n(update, size_t(off) * off, (*reuse->keep)[t].get());
     }
   }
   for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q)
@@ -427,9 +444,11 @@ std::vector<char> MarkTop(const Plan& p, int threads) {
 // or -1.
 template <class Scalar>
 Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumnOut,
-                        MultifrontalReport* report, UpdatePool<Scalar>& pool) {
+                        MultifrontalReport* report, UpdatePool<Scalar>& pool,
+                        const Reuse<Scalar>* reuse) {
   threads = std::max(1, threads);
   const std::vector<char> top = MarkTop(p, threads);
+  auto factored = [&](int t) { return !reuse || !reuse->active || (*reuse->active)[t]; };
 
   std::vector<Update<Scalar>> updates(p.nsuper);
   std::atomic<int> failedColumn{-1};
@@ -447,8 +466,10 @@ Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumn
     std::vector<int> ready;
     int remaining = 0;
     for (int t = 0; t < p.nsuper; ++t) {
-      pending[t] = p.childStart[t + 1] - p.childStart[t];
-      if (!top[t]) {
+      pending[t] = 0; // the children factored here (an ancestor of one is factored too)
+      for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q)
+        pending[t] += factored(p.children[q]) ? 1 : 0;
+      if (!top[t] && factored(t)) {
         ++remaining;
         if (pending[t] == 0)
           ready.push_back(t);
@@ -472,7 +493,7 @@ Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumn
           const int t = ready.back();
           ready.pop_back();
           lock.unlock();
-          const int failed = FactorSupernode(p, t, x, updates, pool, position, 1);
+          const int failed = FactorSupernode(p, t, x, updates, pool, position, 1, reuse);
           if (failed >= 0)
             noteFailure(failed);
           lock.lock();
@@ -508,16 +529,21 @@ Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumn
     ScopedBlasThreads threadedBlas(std::min(threads, 8));
     std::vector<int> position(p.n, 0);
     for (int t = 0; t < p.nsuper && failedColumn < 0; ++t)
-      if (top[t])
-        if (const int failed = FactorSupernode(p, t, x, updates, pool, position, threads);
+      if (top[t] && factored(t))
+        if (const int failed = FactorSupernode(p, t, x, updates, pool, position, threads, reuse);
             failed >= 0)
           noteFailure(failed);
   }
   if (report) {
-    double total = 0.0, topFlops = 0.0;
+    double total = 0.0, topFlops = 0.0, factoredFlops = 0.0;
     report->topSupernodes = 0;
+    report->supernodesFactored = 0;
     for (int t = 0; t < p.nsuper; ++t) {
       total += p.flops[t];
+      if (factored(t)) {
+        factoredFlops += p.flops[t];
+        ++report->supernodesFactored;
+      }
       if (top[t]) {
         topFlops += p.flops[t];
         ++report->topSupernodes;
@@ -525,6 +551,7 @@ Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumn
     }
     report->supernodes = p.nsuper;
     report->topFlopsShare = total > 0.0 ? topFlops / total : 0.0;
+    report->factoredFlopsShare = total > 0.0 ? factoredFlops / total : 1.0;
     report->threads = threads;
   }
   for (Update<Scalar>& u : updates) // those a failure left unread
@@ -608,14 +635,15 @@ Status PlanFor(const SparseMatrix& upper, const cholmod_factor& L, MultifrontalW
 
 template <class Scalar>
 Status Factorize(const Plan& p, Scalar* x, int threads, int& failedColumn,
-                 MultifrontalReport* report, UpdatePool<Scalar>* kept) {
+                 MultifrontalReport* report, UpdatePool<Scalar>* kept,
+                 const Reuse<Scalar>* reuse = nullptr) {
   if (kept) {
-    const Status s = FactorizeNumeric(p, x, threads, failedColumn, report, *kept);
+    const Status s = FactorizeNumeric(p, x, threads, failedColumn, report, *kept, reuse);
     kept->trim();
     return s;
   }
   UpdatePool<Scalar> pool;
-  return FactorizeNumeric(p, x, threads, failedColumn, report, pool);
+  return FactorizeNumeric(p, x, threads, failedColumn, report, pool, reuse);
 }
 
 } // namespace
@@ -646,9 +674,131 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
   return Status::Ok();
 }
 
+struct MultifrontalReference::Impl {
+  // What it was made for: the analysis's structure (as MultifrontalWorkspace::Impl) and the
+  // matrix's pattern.
+  const void *super = nullptr, *s = nullptr, *perm = nullptr;
+  std::vector<int> outer, inner;
+  std::vector<double> entries; // the matrix's, in the plan's order (Plan::entrySource)
+  std::vector<double> scale;   // sqrt |a_kk| per elimination-order column
+  std::vector<float> factor;   // L's values
+  std::vector<std::unique_ptr<float[]>> updates; // per supernode, or null where not kept
+  double bytes = 0.0;
+
+  bool fits(const SparseMatrix& upper, const cholmod_factor& L) const {
+    return !factor.empty() && super == L.super && s == L.s && perm == L.Perm &&
+           static_cast<Eigen::Index>(outer.size()) == upper.cols() + 1 &&
+           static_cast<Eigen::Index>(inner.size()) == upper.nonZeros() &&
+           std::equal(outer.begin(), outer.end(), upper.outerIndexPtr()) &&
+           std::equal(inner.begin(), inner.end(), upper.innerIndexPtr());
+  }
+};
+
+MultifrontalReference::MultifrontalReference() : impl(std::make_unique<Impl>()) {}
+MultifrontalReference::~MultifrontalReference() = default;
+
+bool MultifrontalReference::made() const {
+  return !impl->factor.empty();
+}
+
+double MultifrontalReference::keptBytes() const {
+  return impl->bytes;
+}
+
+namespace {
+
+// The supernodes whose update matrices a reference keeps: those whose subtree's flops are at least
+// kKeepFlopsPerEntry per entry of the update (a reuse then saves far more than it reads), with the
+// ratio raised until they hold no more entries than the factor. Roots have no update.
+std::vector<char> UpdatesToKeep(const Plan& p) {
+  std::vector<double> subtree(p.flops);
+  for (int t = 0; t < p.nsuper; ++t) // postorder: children first
+    if (p.parent[t] >= 0)
+      subtree[p.parent[t]] += subtree[t];
+  const double budget = double(p.px[p.nsuper]);
+  std::vector<char> keep(p.nsuper, 0);
+  for (double ratio = 256.0;; ratio *= 4.0) {
+    double entries = 0.0;
+    for (int t = 0; t < p.nsuper; ++t) {
+      const double off = p.rows(t) - p.columns(t);
+      keep[t] = p.parent[t] >= 0 && off > 0 && subtree[t] >= ratio * off * off;
+      entries += keep[t] ? off * off : 0.0;
+    }
+    if (entries <= budget)
+      return keep;
+  }
+}
+
+// The supernodes to factor against reference r: those with a column whose entries differ from
+// r's beyond the tolerance, their ancestors, and the children these need whose update matrices r
+// does not keep (and so on down).
+std::vector<char> SupernodesToFactor(const Plan& p, const MultifrontalReference::Impl& r,
+                                     double tolerance) {
+  std::vector<char> changed(p.n, 0); // per column, on every core (it reads the whole matrix)
+  ParallelFor(p.n, 4096, [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t k = begin; k < end; ++k)
+      for (int q = p.entryStart[k]; q < p.entryStart[k + 1]; ++q) {
+        const double bound = tolerance * r.scale[k] * r.scale[p.entryRow[q]];
+        if (!(std::abs(p.values[p.entrySource[q]] - r.entries[q]) <= bound)) { // NaN differs
+          changed[k] = 1;
+          break;
+        }
+      }
+  });
+  std::vector<char> factor(p.nsuper, 0);
+  for (int t = 0; t < p.nsuper; ++t)
+    factor[t] = std::any_of(changed.begin() + p.super[t], changed.begin() + p.super[t + 1],
+                            [](char c) { return c != 0; });
+  for (int t = 0; t < p.nsuper; ++t)
+    if (factor[t] && p.parent[t] >= 0)
+      factor[p.parent[t]] = 1;
+  for (int t = p.nsuper - 1; t >= 0; --t) // parents first
+    if (factor[t])
+      for (int q = p.childStart[t]; q < p.childStart[t + 1]; ++q)
+        if (!r.updates[p.children[q]])
+          factor[p.children[q]] = 1;
+  return factor;
+}
+
+// Keeps a successful factorization (its matrix p.values, its factor x and the updates copied
+// during it) as reference r.
+void KeepReference(const Plan& p, const SparseMatrix& upper, const cholmod_factor& L,
+                   const float* x, std::vector<std::unique_ptr<float[]>>& updates,
+                   MultifrontalReference::Impl& r) {
+  r.super = L.super;
+  r.s = L.s;
+  r.perm = L.Perm;
+  r.outer.assign(upper.outerIndexPtr(), upper.outerIndexPtr() + upper.cols() + 1);
+  r.inner.assign(upper.innerIndexPtr(), upper.innerIndexPtr() + upper.nonZeros());
+  const int entries = p.entryStart[p.n];
+  r.entries.resize(entries);
+  for (int q = 0; q < entries; ++q)
+    r.entries[q] = p.values[p.entrySource[q]];
+  r.scale.assign(p.n, 0.0);
+  for (int k = 0; k < p.n; ++k)
+    for (int q = p.entryStart[k]; q < p.entryStart[k + 1]; ++q)
+      if (p.entryRow[q] == k)
+        r.scale[k] += r.entries[q];
+  for (double& d : r.scale)
+    d = std::sqrt(std::abs(d));
+  r.factor.assign(x, x + p.px[p.nsuper]);
+  r.updates = std::move(updates);
+  r.bytes = 8.0 * (r.entries.size() + r.scale.size()) +
+            4.0 * (r.factor.size() + r.outer.size() + r.inner.size());
+  for (int t = 0; t < p.nsuper; ++t)
+    if (r.updates[t]) {
+      const double off = p.rows(t) - p.columns(t);
+      r.bytes += 4.0 * off * off;
+    }
+}
+
+} // namespace
+
 Status MultifrontalFactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
                                    float* values, int threads, MultifrontalReport* report,
-                                   MultifrontalWorkspace* workspace) {
+                                   MultifrontalWorkspace* workspace, MultifrontalReference* keep) {
+  if (keep)
+    keep->impl = std::make_unique<MultifrontalReference::Impl>();
   if (!values)
     return Status::Error("internal: no values to factor into");
   Plan local;
@@ -657,11 +807,74 @@ Status MultifrontalFactorizeSingle(const SparseMatrix& upper, const cholmod_fact
     return s;
   if (!FitsSingle(upper))
     return Status::Error("the matrix does not fit single precision");
+  Reuse<float> reuse;
+  std::vector<char> keepMask;
+  std::vector<std::unique_ptr<float[]>> kept;
+  if (keep) {
+    keepMask = UpdatesToKeep(*plan);
+    kept.resize(plan->nsuper);
+    reuse.keep = &kept;
+    reuse.keepMask = &keepMask;
+  }
   int failedColumn = -1;
   if (Status s = Factorize(*plan, values, threads, failedColumn, report,
-                           workspace ? &workspace->impl->single : nullptr);
+                           workspace ? &workspace->impl->single : nullptr, keep ? &reuse : nullptr);
       !s)
     return s;
+  if (failedColumn >= 0)
+    return NotPositiveDefinite(failedColumn);
+  if (keep)
+    KeepReference(*plan, upper, analysis, values, kept, *keep->impl);
+  return Status::Ok();
+}
+
+Status MultifrontalRefactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
+                                     float* values, int threads,
+                                     const MultifrontalReference& reference, double tolerance,
+                                     MultifrontalReport* report, MultifrontalWorkspace* workspace) {
+  const MultifrontalReference::Impl& r = *reference.impl;
+  if (!(tolerance >= 0.0))
+    return Status::Error("internal: the reuse tolerance must be zero or positive");
+  if (!values)
+    return Status::Error("internal: no values to factor into");
+  Plan local;
+  const Plan* plan = nullptr;
+  if (Status s = PlanFor(upper, analysis, workspace, local, plan); !s)
+    return s;
+  if (!FitsSingle(upper))
+    return Status::Error("the matrix does not fit single precision");
+  const Plan& p = *plan;
+  UpdatePool<float>* pool = workspace ? &workspace->impl->single : nullptr;
+  int failedColumn = -1;
+  if (!r.fits(upper, analysis)) {
+    if (Status s = Factorize(p, values, threads, failedColumn, report, pool); !s)
+      return s;
+  } else {
+    const std::vector<char> factor = SupernodesToFactor(p, r, tolerance);
+    // The supernodes reused take the reference's columns: runs of them, copied on every core.
+    std::vector<std::pair<std::int64_t, std::int64_t>> runs;
+    for (int t = 0; t < p.nsuper; ++t)
+      if (!factor[t]) {
+        if (!runs.empty() && runs.back().second == p.px[t])
+          runs.back().second = p.px[t + 1];
+        else
+          runs.emplace_back(p.px[t], p.px[t + 1]);
+      }
+    ParallelFor(p.px[p.nsuper], 1 << 16, [&](std::int64_t begin, std::int64_t end) {
+      for (const auto& [from, to] : runs) {
+        const std::int64_t b = std::max(from, begin), e = std::min(to, end);
+        if (b < e)
+          std::copy(r.factor.begin() + b, r.factor.begin() + e, values + b);
+      }
+    });
+    Reuse<float> reuse;
+    reuse.active = &factor;
+    reuse.borrowed.resize(p.nsuper);
+    for (int t = 0; t < p.nsuper; ++t)
+      reuse.borrowed[t] = r.updates[t].get();
+    if (Status s = Factorize(p, values, threads, failedColumn, report, pool, &reuse); !s)
+      return s;
+  }
   return failedColumn >= 0 ? NotPositiveDefinite(failedColumn) : Status::Ok();
 }
 

@@ -28,6 +28,10 @@ struct MultifrontalReport {
   int topSupernodes = 0;    // run last, one after another, with threaded BLAS
   double topFlopsShare = 0; // their share of the factorization's flops
   int threads = 0;
+  // With a reference (MultifrontalRefactorizeSingle): the supernodes factored, and their share of
+  // a whole factorization's flops; without, every supernode and 1.
+  int supernodesFactored = 0;
+  double factoredFlopsShare = 1.0;
 };
 
 // L: a supernodal symbolic (or numeric) factor of `upper`'s matrix with 32-bit indices, as
@@ -48,8 +52,23 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
 // Fails when an entry is beyond a float's range, or a pivot is not positive in single precision
 // (the matrix need not be indefinite: single precision's rounding may break down on an
 // ill-conditioned one).
+// With `keep`, a successful factorization is kept there as the reference of later ones (see
+// MultifrontalReference); a failed one leaves it empty.
 Status MultifrontalFactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
                                    float* values, int threads, MultifrontalReport* report = nullptr,
-                                   MultifrontalWorkspace* workspace = nullptr);
+                                   MultifrontalWorkspace* workspace = nullptr,
+                                   MultifrontalReference* keep = nullptr);
+
+// The single-precision factorization of `upper` that reuses `reference` (made by
+// MultifrontalFactorizeSingle with the same analysis and a matrix of the same pattern) wherever
+// the entries of a supernode's columns and of all its descendants' differ from the reference's by
+// at most `tolerance` times sqrt(|a_ii a_jj|) of the reference's diagonal (NaN differs; 0 reuses
+// only exactly equal columns, and the factor is then the whole factorization's bit for bit). A
+// reference that is empty or was made for another analysis or pattern: the whole factorization.
+Status MultifrontalRefactorizeSingle(const SparseMatrix& upper, const cholmod_factor& analysis,
+                                     float* values, int threads,
+                                     const MultifrontalReference& reference, double tolerance,
+                                     MultifrontalReport* report = nullptr,
+                                     MultifrontalWorkspace* workspace = nullptr);
 
 } // namespace faceplan

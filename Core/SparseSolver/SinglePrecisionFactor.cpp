@@ -78,6 +78,7 @@ struct SinglePrecisionFactor::Impl {
   std::vector<int> super, pi, s, perm;
   std::vector<std::int64_t> px;
   UninitializedVector<float> values; // filled whole by assign()
+  double factoredShare = 1.0;        // SinglePrecisionFactor::factoredShare
   // The split for two threads: top supernodes (ascending), each side's supernodes (ascending), and
   // per column its index among the top part's columns (-1 elsewhere).
   std::vector<int> top, side[2];
@@ -462,7 +463,8 @@ Status SinglePrecisionFactor::assign(const CholmodFactor& factor, int threads) {
 
 Status SinglePrecisionFactor::factorize(const CholmodFactor& analysed, const SparseMatrix& upper,
                                         int threads, MultifrontalWorkspace* workspace,
-                                        const std::shared_ptr<FactorValueBin>& bin) {
+                                        const std::shared_ptr<FactorValueBin>& bin,
+                                        const FactorReuse& reuse) {
   impl_ = std::make_unique<Impl>(); // the previous values, if any, go to their bin
   const cholmod_factor_struct* L = analysed.analysis();
   if (!L || !L->is_super || L->itype != CHOLMOD_INT)
@@ -482,15 +484,24 @@ Status SinglePrecisionFactor::factorize(const CholmodFactor& analysed, const Spa
   d.adoptStructure(*L, tree);
   // Each supernode's columns are written whole by the factorization, on the thread that factors
   // it (which so first touches those pages, where they are fresh).
-  if (Status status = MultifrontalFactorizeSingle(upper, *L, d.values.data(), WorkerThreads(16),
-                                                  nullptr, workspace);
-      !status) {
+  MultifrontalReport report;
+  const Status status =
+      reuse.from ? MultifrontalRefactorizeSingle(upper, *L, d.values.data(), WorkerThreads(16),
+                                                 *reuse.from, reuse.tolerance, &report, workspace)
+                 : MultifrontalFactorizeSingle(upper, *L, d.values.data(), WorkerThreads(16),
+                                               &report, workspace, reuse.keep);
+  if (!status) {
     impl_ = std::make_unique<Impl>();
     return status;
   }
+  d.factoredShare = report.factoredFlopsShare;
   if (threads > 1 && WorkerThreads(2) > 1)
     d.chooseSplit(tree);
   return Status::Ok();
+}
+
+double SinglePrecisionFactor::factoredShare() const {
+  return impl_->factoredShare;
 }
 
 Status SinglePrecisionFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {

@@ -20,6 +20,16 @@ namespace faceplan {
 
 class CholmodFactor;
 class MultifrontalWorkspace;
+class MultifrontalReference;
+
+// A factorization's use of a reference factorization (MultifrontalReference): `keep` receives
+// this one's, or this one reuses `from`'s unchanged supernodes (with `tolerance`, as
+// MultifrontalRefactorizeSingle).
+struct FactorReuse {
+  MultifrontalReference* keep = nullptr;
+  const MultifrontalReference* from = nullptr;
+  double tolerance = 0.0;
+};
 
 // The value buffers of single-precision factors that are gone, kept for the next factorization of
 // the same size: a fresh buffer is mapped and page-faulted in, zero-filled by the kernel, on each
@@ -53,10 +63,15 @@ public:
   // they may on a matrix too ill-conditioned for it: the caller then factors in double and copies.
   // With a workspace (for successive factorizations on one thread) its plan and update buffers are
   // reused, and with a bin this factor's values come from it when it holds a buffer of their size
-  // and go back to it when this factor is destroyed or factored again.
+  // and go back to it when this factor is destroyed or factored again. With `reuse`, as FactorReuse
+  // says (a factor that reuses a reference is close to the factor of `upper`, not equal).
   Status factorize(const CholmodFactor& analysed, const SparseMatrix& upper, int threads = 2,
                    MultifrontalWorkspace* workspace = nullptr,
-                   const std::shared_ptr<FactorValueBin>& bin = nullptr);
+                   const std::shared_ptr<FactorValueBin>& bin = nullptr,
+                   const FactorReuse& reuse = FactorReuse());
+  // The share of a whole factorization's flops that the last factorize spent (below 1 where it
+  // reused a reference; 1 after assign).
+  double factoredShare() const;
   // x = (L L^T)^-1 b (the factored matrix's inverse applied to b, original numbering), in single
   // precision after scaling b to unit largest entry. Safe to call from several threads at once.
   Status solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;

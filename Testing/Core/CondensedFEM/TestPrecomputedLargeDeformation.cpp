@@ -537,6 +537,49 @@ TEST(PrecomputedLargeDeformation, ASlowConvergenceRefactorsWhereItIs) {
   EXPECT_EQ(RelativeMaxNodeDifference(first.allDisplacement, second.allDisplacement), 0.0);
 }
 
+TEST(PrecomputedLargeDeformation, ARefactorizationReusesTheRestFactorWhereTheMoveDoesNotReach) {
+  // A long bar on a fixed floor, its top pressed by a third of its height over its first fifth:
+  // the tangent at an iterate differs from the rest tangent near the press and barely at the far
+  // end. A refactorization then reuses the rest factor's supernodes there (the factor is that of
+  // a tangent with the rest values in their columns), and the solve is still Newton's equilibrium;
+  // without reuse (a negative tolerance) every factorization is whole.
+  constexpr double kLong = 60.0, kPressed = 12.0;
+  PrecomputeRequest request;
+  request.mesh = MakeBoxTetMesh(15, 3, 3, kLong, kLy, kLz);
+  request.materials = Materials::Uniform(kE, kNu);
+  for (Eigen::Index i = 0; i < request.mesh.numPoints(); ++i) {
+    const Eigen::RowVector3d p = request.mesh.points.row(i);
+    const int node = static_cast<int>(i);
+    request.sets.kept.push_back(node);
+    if (p.z() == 0.0 || (p.z() == kLz && p.x() <= kPressed))
+      request.sets.constrained.push_back(node);
+    if (p.z() == kLz && p.x() <= kPressed)
+      request.sets.movable.push_back(node);
+  }
+  const SolveInput input = PlateMove(request, kLz / 3.0);
+  const SolveResult newton = Newton(request, input, false);
+  PrecomputedLargeDeformationReport reports[2];
+  for (int reuse = 0; reuse < 2; ++reuse) {
+    PrecomputedLargeDeformationOptions options;
+    options.refactorAfter = 3; // a refactorization in any case
+    if (reuse == 0)
+      options.reuseTolerance = -1.0;
+    auto system = Precomputed(request, options);
+    ASSERT_TRUE(system);
+    SolveResult result;
+    const Status s =
+        SolvePrecomputedLargeDeformation(*system, input, nullptr, result, reports[reuse]);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_FALSE(reports[reuse].fellBack) << reports[reuse].fallbackReason;
+    EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement), kAgreement)
+        << "reuse " << reuse;
+  }
+  EXPECT_GE(reports[0].refactorizations, 1);
+  EXPECT_EQ(reports[0].partialRefactorizations, 0);
+  EXPECT_GE(reports[1].refactorizations, 1);
+  EXPECT_EQ(reports[1].partialRefactorizations, reports[1].refactorizations);
+}
+
 TEST(PrecomputedLargeDeformation, AMoveBackTowardsRestStartsFromRest) {
   // After the 35 % press, a 5 % press is nearer the rest state than the pressed one: it starts
   // from rest with the rest factor, and equals the cold solve.
@@ -682,6 +725,9 @@ TEST(PrecomputedLargeDeformation, BadInputIsAnError) {
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   options = {};
   options.aheadCorrections = -1;
+  EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
+  options = {};
+  options.reuseTolerance = std::nan("");
   EXPECT_FALSE(PrecomputeLargeDeformation(request, options, system).ok);
   PrecomputeRequest broken = request;
   broken.mesh.tets(0, 0) = -1;

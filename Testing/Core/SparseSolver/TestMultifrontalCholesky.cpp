@@ -7,6 +7,7 @@
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/CholmodViews.h"
 #include "SparseSolver/MultifrontalCholesky.h"
+#include "SparseSolver/MultifrontalWorkspace.h"
 #include "SparseSolver/SymbolicAnalysis.h"
 #include "Support/FEMTestScenes.h"
 
@@ -263,6 +264,99 @@ TEST(MultifrontalCholesky, FactorsAWideSupernodeAndNamesItsFailingColumn) {
       cholmod_free_factor(&theirs, &quiet.common);
     }
   }
+}
+
+// A factorization that reuses a reference (MultifrontalRefactorizeSingle). With tolerance 0 it is
+// the whole factorization bit for bit and factors only the supernodes that a change reaches (the
+// changed column's, its ancestors', and the children they need whose updates are not kept);
+// changes within the tolerance reuse every supernode and give the reference's factor; a
+// reference of another pattern is not reused; a pivot that fails in a supernode factored again
+// is an error.
+TEST(MultifrontalCholesky, RefactorizationReusesTheSupernodesAChangeDoesNotReach) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  const SparseMatrix& upper = system->kff;
+  QuietCholmodCommon quiet;
+  cholmod_factor* L = Analysed(*system, upper, quiet.common);
+  ASSERT_TRUE(L);
+  ASSERT_GT(L->nsuper, 20u);
+  const size_t size = static_cast<size_t>(static_cast<const int*>(L->px)[L->nsuper]);
+  // The diagonal entry of the column eliminated first, and of the one in the middle.
+  auto diagonal = [&](const SparseMatrix& m, size_t position) {
+    const int column = static_cast<const int*>(L->Perm)[position];
+    for (int q = m.outerIndexPtr()[column]; q < m.outerIndexPtr()[column + 1]; ++q)
+      if (m.innerIndexPtr()[q] == column)
+        return q;
+    return -1;
+  };
+  MultifrontalReference reference;
+  EXPECT_FALSE(reference.made());
+  std::vector<float> rest(size), whole(size), reused(size);
+  ASSERT_TRUE(
+      MultifrontalFactorizeSingle(upper, *L, rest.data(), 2, nullptr, nullptr, &reference).ok);
+  ASSERT_TRUE(reference.made());
+  EXPECT_GT(reference.keptBytes(), 4.0 * size);
+
+  for (const size_t position : {size_t{0}, static_cast<size_t>(L->n / 2)}) {
+    SparseMatrix changed = upper;
+    const int q = diagonal(changed, position);
+    ASSERT_GE(q, 0);
+    changed.valuePtr()[q] *= 1.5; // still positive definite
+    MultifrontalReport full, partial;
+    ASSERT_TRUE(MultifrontalFactorizeSingle(changed, *L, whole.data(), 2, &full).ok);
+    ASSERT_TRUE(
+        MultifrontalRefactorizeSingle(changed, *L, reused.data(), 2, reference, 0.0, &partial).ok);
+    EXPECT_EQ(reused, whole) << "column position " << position;
+    EXPECT_NE(reused, rest);
+    EXPECT_EQ(full.supernodesFactored, full.supernodes);
+    EXPECT_EQ(full.factoredFlopsShare, 1.0);
+    EXPECT_GT(partial.supernodesFactored, 0);
+    EXPECT_LT(partial.supernodesFactored, partial.supernodes) << "column position " << position;
+    EXPECT_GT(partial.factoredFlopsShare, 0.0);
+    EXPECT_LT(partial.factoredFlopsShare, 1.0);
+  }
+
+  SparseMatrix scaled = upper;
+  for (Eigen::Index k = 0; k < scaled.nonZeros(); ++k)
+    scaled.valuePtr()[k] *= 1.0 + 1e-4;
+  MultifrontalReport report;
+  ASSERT_TRUE(
+      MultifrontalRefactorizeSingle(scaled, *L, reused.data(), 2, reference, 1e-3, &report).ok);
+  EXPECT_EQ(report.supernodesFactored, 0);
+  EXPECT_EQ(reused, rest);
+  ASSERT_TRUE(
+      MultifrontalRefactorizeSingle(scaled, *L, reused.data(), 2, reference, 1e-5, &report).ok);
+  EXPECT_EQ(report.supernodesFactored, report.supernodes);
+
+  SparseMatrix failing = upper;
+  failing.valuePtr()[diagonal(failing, L->n / 2)] = -1.0;
+  const Status s = MultifrontalRefactorizeSingle(failing, *L, reused.data(), 2, reference, 0.0);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("not positive definite"), std::string::npos) << s.message;
+
+  // A reference made for another matrix's pattern: the whole factorization.
+  MultifrontalReference elsewhere;
+  {
+    const auto bigger = [] {
+      std::shared_ptr<const CondensedSystem> made;
+      EXPECT_TRUE(Precompute(ShellRequest(12, 4), made).ok);
+      return made;
+    }();
+    ASSERT_TRUE(bigger);
+    QuietCholmodCommon otherQuiet;
+    cholmod_factor* M = Analysed(*bigger, bigger->kff, otherQuiet.common);
+    ASSERT_TRUE(M);
+    std::vector<float> values(static_cast<size_t>(static_cast<const int*>(M->px)[M->nsuper]));
+    ASSERT_TRUE(
+        MultifrontalFactorizeSingle(bigger->kff, *M, values.data(), 2, nullptr, nullptr, &elsewhere)
+            .ok);
+    cholmod_free_factor(&M, &otherQuiet.common);
+  }
+  ASSERT_TRUE(
+      MultifrontalRefactorizeSingle(upper, *L, reused.data(), 2, elsewhere, 1.0, &report).ok);
+  EXPECT_EQ(report.supernodesFactored, report.supernodes);
+  EXPECT_EQ(reused, rest);
+  cholmod_free_factor(&L, &quiet.common);
 }
 
 // The factor CholmodFactor makes multifrontally solves as CHOLMOD's does.
