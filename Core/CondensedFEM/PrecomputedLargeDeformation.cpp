@@ -205,6 +205,9 @@ struct TangentBuffers {
   AssemblyPattern pattern;
   std::vector<double> packed;
   SparseMatrix factored; // the pinned tangent on FactorPattern's entries
+  // The entries of `factored` that the contact pinnedFor pins: off the diagonal, and on it.
+  std::vector<char> pinnedFor;
+  std::vector<int> pinnedEntries, pinnedDiagonal;
   // Kept from one factorization on this thread to the next (the tangents share one pattern), and
   // the factors' values, kept when a factor is gone for the next (shared by the solve's and the
   // worker's buffers).
@@ -375,7 +378,13 @@ Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffer
     buffers.tangents->take(made->tangent);
     made->bin = buffers.tangents;
   }
-  made->tangent = pattern.upper; // in place where the bin gave a matrix of this pattern
+  // The bin's matrices all have this system's pattern: one it gave takes the assembled values by
+  // a swap (the next assembly writes into its storage), a fresh one by a copy.
+  if (made->tangent.nonZeros() == pattern.upper.nonZeros() &&
+      made->tangent.cols() == pattern.upper.cols())
+    made->tangent.swap(pattern.upper);
+  else
+    made->tangent = pattern.upper;
   made->state = u;
   made->prescribed = prescribed;
   if (contactAtU) {
@@ -387,15 +396,17 @@ Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffer
   SparseMatrix& factored = buffers.factored;
   if (factored.nonZeros() != fp.upper.nonZeros())
     factored = fp.upper;
-  const double* tangent = pattern.upper.valuePtr();
+  const double* tangent = made->tangent.valuePtr();
   double* values = factored.valuePtr();
   for (size_t k = 0; k < fp.source.size(); ++k)
     values[k] = tangent[fp.source[k]];
-  std::vector<int> entries, diagonal;
-  FindPinnedEntries(factored, made->prescribed, entries, diagonal);
-  for (int k : entries)
+  if (buffers.pinnedFor != made->prescribed) { // a new contact
+    FindPinnedEntries(factored, made->prescribed, buffers.pinnedEntries, buffers.pinnedDiagonal);
+    buffers.pinnedFor = made->prescribed;
+  }
+  for (int k : buffers.pinnedEntries)
     values[k] = 0.0;
-  for (int k : diagonal)
+  for (int k : buffers.pinnedDiagonal)
     if (!(values[k] > 0.0))
       values[k] = 1.0;
   if (timings)
@@ -1505,7 +1516,12 @@ Status SolveImpl(LargeDeformationSystem& sys, const SolveInput& input,
     Eigen::VectorXd trial = u;
     const std::vector<char> contact = pb.prescribed;
     solver.why.clear();
-    solver.setStartForce(reached == 0.0 && report.warmStarted ? &warm->force : nullptr);
+    // The start's internal force where it is known: a warm start's, or the rest factor's (made at
+    // the rest state, where a solve from rest starts).
+    const Eigen::VectorXd* startForce = nullptr;
+    if (reached == 0.0)
+      startForce = report.warmStarted ? &warm->force : &sys.restFactor->force;
+    solver.setStartForce(startForce);
     const Failure f = solver.substep(trial);
     if (f == Failure::Stopped) {
       if (to < 1.0)

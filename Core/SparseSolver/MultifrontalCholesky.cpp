@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "SparseSolver/MultifrontalCholesky.h"
 #include "Common/BlasThreads.h"
+#include "Common/HelperThreads.h"
 #include "Common/InversePermutation.h"
 #include "Common/ParallelFor.h"
 #include "SparseSolver/Blas.h"
@@ -509,17 +510,14 @@ Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumn
         wake.notify_all();
       }
     };
-    std::vector<std::thread> threadsStarted;
-    for (int k = 1; k < threads; ++k) {
-      try {
-        threadsStarted.emplace_back(worker);
-      } catch (...) { // no more threads: the ones started (and this one) do the work
-        break;
-      }
+    // On the calling thread's helpers (HelperThreads), which the steps before a refactorization
+    // (the tangent's cells, its assembly) leave awake: threads started here would share the cores
+    // with them while they wait.
+    try {
+      RunOnHelpers(threads, [&worker](int) { worker(); });
+    } catch (...) { // no helper to be had: this thread alone
+      worker();
     }
-    worker();
-    for (std::thread& th : threadsStarted)
-      th.join();
   }
   if (outOfMemory)
     return Status::Error("out of memory in the multifrontal factorization");
