@@ -49,7 +49,8 @@ void ToNodeFrames(const Structure& st, const int* node, double* packed) {
 } // namespace
 
 bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
-              std::vector<double>* packed, EvaluationScratch* scratch) {
+              std::vector<double>* packed, EvaluationScratch* scratch,
+              const NearRestTangents* nearRest) {
   const TetMesh& mesh = *st.mesh;
   const std::int64_t m = mesh.numTets();
   EvaluationScratch local;
@@ -65,11 +66,28 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
   buffers.force.resize(static_cast<size_t>(ranges));
   if (packed)
     packed->resize(static_cast<size_t>(m) * kPackedElementSize);
+  if (!packed || (nearRest &&
+                  (!nearRest->rest || !nearRest->held || nearRest->rest->size() != packed->size())))
+    nearRest = nullptr;
+  if (nearRest) {
+    nearRest->held->resize(static_cast<size_t>(m), 0);
+    buffers.order.resize(static_cast<size_t>(ranges));
+  }
   ParallelFor(ranges, 2, [&](std::int64_t firstRange, std::int64_t lastRange) {
     CornerDisplacements corner;
     ElementMatrix tangent;
     NeoHookeanTetLanes lanes;
     double laneTangents[kPackedElementSize][kTetLanes];
+    std::vector<int> tail;
+    // A cell near rest: its rest tangent into the buffer, unless the buffer holds it already.
+    auto holdRest = [&](std::int64_t c) {
+      char& held = (*nearRest->held)[c];
+      if (!held) {
+        const size_t at = static_cast<size_t>(c) * kPackedElementSize;
+        std::copy_n(nearRest->rest->data() + at, kPackedElementSize, packed->data() + at);
+        held = 1;
+      }
+    };
     for (std::int64_t r = firstRange; r < lastRange; ++r) {
       Eigen::VectorXd& force = buffers.force[r];
       force.setZero(3 * st.n);
@@ -82,16 +100,50 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
         force.segment<3>(3 * node[a]) += f;
       };
       const std::int64_t begin = m * r / ranges, end = m * (r + 1) / ranges;
-      for (std::int64_t e = begin; e < end;) {
-        // Four neo-Hookean cells at a time: their forces, and their tangents when asked for.
-        if (e + kTetLanes <= end &&
-            std::none_of(st.smallStrain.begin() + e, st.smallStrain.begin() + e + kTetLanes,
-                         [](char c) { return c != 0; })) {
+      // The cells in the order they are taken: the range's own, or with near-rest tangents the
+      // cells that need their tangent first and those near rest after, so that four of a kind
+      // share the lanes. nearFrom: where the near-rest cells start in that order.
+      std::int64_t nearFrom = end - begin;
+      const int* order = nullptr;
+      if (nearRest) {
+        std::vector<int>& list = buffers.order[r];
+        list.clear();
+        std::vector<int>& near = tail; // kept per thread
+        near.clear();
+        for (std::int64_t e = begin; e < end; ++e) {
+          bool isNear = !st.smallStrain[e];
+          if (isNear) {
+            for (int a = 0; a < 4; ++a) {
+              const int n = mesh.tets(e, a);
+              corner.row(a) = st.toGlobal(n, u.segment<3>(3 * n)).transpose();
+            }
+            const Eigen::Matrix3d F = DeformationGradient(st.cells[e], corner);
+            isNear = (F - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= nearRest->limit;
+          }
+          (isNear ? near : list).push_back(static_cast<int>(e));
+        }
+        nearFrom = static_cast<std::int64_t>(list.size());
+        list.insert(list.end(), near.begin(), near.end());
+        order = list.data();
+      }
+      auto cellAt = [&](std::int64_t i) { return order ? order[i] : begin + i; };
+      const std::int64_t count = end - begin;
+      for (std::int64_t i = 0; i < count;) {
+        const std::int64_t e = cellAt(i);
+        // Four neo-Hookean cells at a time: their forces, and their tangents when asked for
+        // (not for cells near rest, which take their rest tangent).
+        const bool near = i >= nearFrom;
+        const bool withTangent = packed && !near;
+        bool lanesOfAKind = i + kTetLanes <= count && (i >= nearFrom || i + kTetLanes <= nearFrom);
+        for (int l = 0; l < kTetLanes && lanesOfAKind; ++l)
+          lanesOfAKind = !st.smallStrain[cellAt(i + l)];
+        if (lanesOfAKind) {
           int nodes[kTetLanes][4];
           for (int l = 0; l < kTetLanes; ++l) {
-            const TetReference& cell = st.cells[e + l];
+            const std::int64_t c = cellAt(i + l);
+            const TetReference& cell = st.cells[c];
             for (int a = 0; a < 4; ++a) {
-              nodes[l][a] = mesh.tets(e + l, a);
+              nodes[l][a] = mesh.tets(c, a);
               const Eigen::Vector3d ua = st.toGlobal(nodes[l][a], u.segment<3>(3 * nodes[l][a]));
               for (int i = 0; i < 3; ++i) {
                 lanes.corner[a][i][l] = ua[i];
@@ -99,11 +151,11 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
               }
             }
             lanes.volume[l] = cell.volume;
-            lanes.mu[l] = st.materials[e + l].mu;
-            lanes.kappa[l] = st.materials[e + l].kappa;
+            lanes.mu[l] = st.materials[c].mu;
+            lanes.kappa[l] = st.materials[c].kappa;
           }
-          if (!(packed ? NeoHookeanTetForcesAndTangents(lanes, laneTangents)
-                       : NeoHookeanTetForces(lanes))) {
+          if (!(withTangent ? NeoHookeanTetForcesAndTangents(lanes, laneTangents)
+                            : NeoHookeanTetForces(lanes))) {
             buffers.valid[r] = 0;
             break;
           }
@@ -113,15 +165,20 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
               add(nodes[l], a,
                   Eigen::Vector3d(lanes.force[a][0][l], lanes.force[a][1][l],
                                   lanes.force[a][2][l]));
-            if (packed) {
-              double* o = packed->data() + static_cast<size_t>(e + l) * kPackedElementSize;
+            const std::int64_t c = cellAt(i + l);
+            if (withTangent) {
+              double* o = packed->data() + static_cast<size_t>(c) * kPackedElementSize;
               for (int k = 0; k < kPackedElementSize; ++k)
                 o[k] = laneTangents[k][l];
               if (std::any_of(nodes[l], nodes[l] + 4, [&](int n) { return st.frameOf[n] >= 0; }))
                 ToNodeFrames(st, nodes[l], o);
+              if (nearRest)
+                (*nearRest->held)[c] = 0;
+            } else if (packed) {
+              holdRest(c);
             }
           }
-          e += kTetLanes;
+          i += kTetLanes;
           continue;
         }
         int node[4];
@@ -131,11 +188,11 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
         }
         ElementVector f;
         double cellEnergy = 0.0;
-        const bool state = st.smallStrain[e]
-                               ? SmallStrainTetState(st.cells[e], st.materials[e], corner,
-                                                     cellEnergy, f, packed ? &tangent : nullptr)
-                               : NeoHookeanTetState(st.cells[e], st.materials[e], corner,
-                                                    cellEnergy, f, packed ? &tangent : nullptr);
+        const bool state =
+            st.smallStrain[e] ? SmallStrainTetState(st.cells[e], st.materials[e], corner,
+                                                    cellEnergy, f, withTangent ? &tangent : nullptr)
+                              : NeoHookeanTetState(st.cells[e], st.materials[e], corner, cellEnergy,
+                                                   f, withTangent ? &tangent : nullptr);
         if (!state) {
           buffers.valid[r] = 0;
           break;
@@ -143,20 +200,24 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
         energy += cellEnergy;
         for (int a = 0; a < 4; ++a) {
           const int fa = st.frameOf[node[a]];
-          if (packed && fa >= 0) {
+          if (withTangent && fa >= 0) {
             const Eigen::Matrix3d& Q = st.frames[fa];
             tangent.middleRows<3>(3 * a) = (Q.transpose() * tangent.middleRows<3>(3 * a)).eval();
             tangent.middleCols<3>(3 * a) = (tangent.middleCols<3>(3 * a) * Q).eval();
           }
           add(node, a, f.segment<3>(3 * a));
         }
-        if (packed) {
+        if (withTangent) {
           double* o = packed->data() + static_cast<size_t>(e) * kPackedElementSize;
           for (int p = 0; p < 12; ++p)
             for (int q = p; q < 12; ++q)
               *o++ = tangent(p, q);
+          if (nearRest)
+            (*nearRest->held)[e] = 0;
+        } else if (packed) {
+          holdRest(e);
         }
-        ++e;
+        ++i;
       }
       buffers.energy[r] = energy;
     }

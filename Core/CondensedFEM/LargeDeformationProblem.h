@@ -74,9 +74,21 @@ struct EvaluationScratch {
   std::vector<double> energy;
   std::vector<Eigen::VectorXd> force;
   std::vector<char> valid;
+  std::vector<std::vector<int>> order; // per range, with NearRestTangents: its cells, far first
+};
+// Cells near rest keep their rest tangent (for a tangent that only preconditions, as the
+// precomputed solve's factor does): a neo-Hookean cell whose deformation gradient is within `limit`
+// of the identity (largest entry of F - I) gets `rest`'s packed tangent instead of its own.
+// `held` (one flag per cell, kept with the packed buffer) says whether the buffer already holds a
+// cell's rest tangent, so that only cells that come near rest again are copied.
+struct NearRestTangents {
+  const std::vector<double>* rest = nullptr;
+  std::vector<char>* held = nullptr;
+  double limit = 0.0;
 };
 bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
-              std::vector<double>* packed, EvaluationScratch* scratch = nullptr);
+              std::vector<double>* packed, EvaluationScratch* scratch = nullptr,
+              const NearRestTangents* nearRest = nullptr);
 
 // v: a vector or a matrix's column.
 void ZeroPrescribed(const std::vector<char>& prescribed, Eigen::Ref<Eigen::VectorXd> v);

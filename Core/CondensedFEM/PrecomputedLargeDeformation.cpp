@@ -196,6 +196,8 @@ struct FactorPattern {
   // (PrecomputedLargeDeformationOptions::reuseTolerance); made once, then only read.
   MultifrontalReference rest;
   double reuseTolerance = -1.0; // < 0: no reuse
+  // The rest tangent's cells (packed), which cells near rest keep in later factorizations.
+  std::vector<double> restPacked;
 };
 
 // What a factorization assembles into, kept from one to the next by each thread that factors: the
@@ -204,7 +206,8 @@ struct FactorPattern {
 struct TangentBuffers {
   AssemblyPattern pattern;
   std::vector<double> packed;
-  SparseMatrix factored; // the pinned tangent on FactorPattern's entries
+  SparseMatrix factored;      // the pinned tangent on FactorPattern's entries
+  std::vector<char> restHeld; // per cell: `packed` holds its rest tangent (NearRestTangents)
   // The entries of `factored` that the contact pinnedFor pins: off the diagonal, and on it.
   std::vector<char> pinnedFor;
   std::vector<int> pinnedEntries, pinnedDiagonal;
@@ -368,7 +371,18 @@ Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffer
   Evaluation ev;
   std::vector<double>& packed = buffers.packed;
   AssemblyPattern& pattern = buffers.pattern;
-  if (!Evaluate(st, u, ev, &packed))
+  // Where the factorization reuses the rest factor, cells that are nearly at rest keep their rest
+  // tangent: a cell's tangent changes with its deformation gradient by about its modulus times
+  // |F - I|, so within a quarter of the reuse tolerance its entries change by less than the
+  // tolerance of their diagonal (on the main demo's cut three quarters of the cells).
+  NearRestTangents nearRest;
+  const bool reusing = fp.reuseTolerance >= 0.0 && fp.rest.made() && !fp.restPacked.empty();
+  if (reusing) {
+    nearRest.rest = &fp.restPacked;
+    nearRest.held = &buffers.restHeld;
+    nearRest.limit = 0.25 * fp.reuseTolerance;
+  }
+  if (!Evaluate(st, u, ev, &packed, nullptr, reusing ? &nearRest : nullptr))
     return Status::Error("a cell is inverted at the state to factor");
   if (timings)
     (*timings)[Stage::ElementStiffness].ms += clock.lapMs();
@@ -836,6 +850,10 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
   if (!status)
     return Status::Error("the large-deformation precompute could not factor the rest tangent: " +
                          status.message);
+  if (sys->factorPattern.rest.made()) {
+    sys->factorPattern.restPacked = sys->solveBuffers.packed;
+    sys->solveBuffers.restHeld.assign(static_cast<size_t>(st.mesh->numTets()), 1);
+  }
   // The rest tangent (upper, unpinned) stays in restFactor.
   std::vector<int> movableDofs;
   for (int node : request.sets.movable)

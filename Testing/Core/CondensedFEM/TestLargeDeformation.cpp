@@ -4,6 +4,7 @@
 // against every cell's, and bad input.
 #include "Common/RelativeDifference.h"
 #include "CondensedFEM/LargeDeformation.h"
+#include "CondensedFEM/LargeDeformationProblem.h"
 #include "Element/NeoHookeanTet.h"
 #include "Support/BoxMeshGenerator.h"
 #include "Support/FEMTestScenes.h"
@@ -153,6 +154,65 @@ TEST(LargeDeformation, TinyMovesConvergeToTheLinearSolution) {
     EXPECT_LT(RelativeMaxNodeDifference(large.allDisplacement, linear.allDisplacement), 1e-5)
         << press;
   }
+}
+
+TEST(LargeDeformation, CellsNearRestKeepTheirRestTangent) {
+  // Half a block moved: the cells whose corners all stay put are at rest (F = I), the others are
+  // deformed. With NearRestTangents the cells at rest take the rest tangent and the others their
+  // own, the forces are the plain evaluation's, and a cell whose buffer already holds its rest
+  // tangent is not copied again.
+  const PrecomputeRequest request = PressedBlockRequest(kLx, kLy, kLz, kNu, kE);
+  large_deformation::Structure st;
+  ASSERT_TRUE(large_deformation::MakeStructure(request, false, st).ok);
+  const Eigen::Index n = request.mesh.numPoints();
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(3 * n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::RowVector3d p = request.mesh.points.row(i);
+    if (p.x() > 0.5 * kLx)
+      u.segment<3>(3 * i) =
+          st.toLocal(static_cast<int>(i), Eigen::Vector3d(0.02 * p.z(), 0.0, -0.05 * p.x()));
+  }
+  large_deformation::Evaluation atRest, exact, mixed;
+  std::vector<double> restPacked, exactPacked, packed;
+  ASSERT_TRUE(large_deformation::Evaluate(st, Eigen::VectorXd::Zero(3 * n), atRest, &restPacked));
+  ASSERT_TRUE(large_deformation::Evaluate(st, u, exact, &exactPacked));
+  std::vector<char> held;
+  large_deformation::NearRestTangents nearRest{&restPacked, &held, 1e-9};
+  ASSERT_TRUE(large_deformation::Evaluate(st, u, mixed, &packed, nullptr, &nearRest));
+  EXPECT_LT((mixed.force - exact.force).norm(), 1e-12 * exact.force.norm());
+  EXPECT_NEAR(mixed.energy, exact.energy, 1e-12 * std::abs(exact.energy));
+  const Eigen::Index m = request.mesh.numTets();
+  ASSERT_EQ(held.size(), static_cast<size_t>(m));
+  int atRestCells = 0, deformedCells = 0;
+  for (Eigen::Index e = 0; e < m; ++e) {
+    bool still = true;
+    for (int a = 0; a < 4; ++a)
+      still = still && u.segment<3>(3 * request.mesh.tets(e, a)).isZero();
+    const size_t at = static_cast<size_t>(e) * kPackedElementSize;
+    const std::vector<double>& expected = still ? restPacked : exactPacked;
+    double largest = 0.0, difference = 0.0;
+    for (int k = 0; k < kPackedElementSize; ++k) {
+      largest = std::max(largest, std::abs(expected[at + k]));
+      difference = std::max(difference, std::abs(packed[at + k] - expected[at + k]));
+    }
+    ASSERT_LE(difference, 1e-12 * largest) << "cell " << e << (still ? " at rest" : " deformed");
+    EXPECT_EQ(held[static_cast<size_t>(e)], still ? 1 : 0) << e;
+    (still ? atRestCells : deformedCells) += 1;
+  }
+  EXPECT_GT(atRestCells, 0);
+  EXPECT_GT(deformedCells, 0);
+  // Held flags are trusted: a cell at rest whose buffer is marked as holding its rest tangent is
+  // left as it is.
+  Eigen::Index restCell = 0;
+  while (held[static_cast<size_t>(restCell)] == 0)
+    ++restCell;
+  packed[static_cast<size_t>(restCell) * kPackedElementSize] = -7.0;
+  ASSERT_TRUE(large_deformation::Evaluate(st, u, mixed, &packed, nullptr, &nearRest));
+  EXPECT_EQ(packed[static_cast<size_t>(restCell) * kPackedElementSize], -7.0);
+  held[static_cast<size_t>(restCell)] = 0;
+  ASSERT_TRUE(large_deformation::Evaluate(st, u, mixed, &packed, nullptr, &nearRest));
+  EXPECT_EQ(packed[static_cast<size_t>(restCell) * kPackedElementSize],
+            restPacked[static_cast<size_t>(restCell) * kPackedElementSize]);
 }
 
 TEST(LargeDeformation, BadInputIsAnError) {
