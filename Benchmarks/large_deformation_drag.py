@@ -12,14 +12,17 @@ Per scene and solver (medians of repeats; the bone's filters are updated before 
   same steps back to back with no pause ("continuous"; the background refactorization may lag); the
   median of every paused step, and of the steady ones, from the third on (after two equal changes,
   which the solve extrapolates to second order; the first step after the move has no direction);
-- the precompute's time (the first update).
+- the precompute's time (the first update);
+- paired full moves (--paired rounds): a Precomputed full move then a Newton one, round after
+  round, so that the ratio of their medians is measured within the same minutes of a machine whose
+  speed drifts.
 It also writes every iterate's time and relative residual (field data ConvergenceHistory) of one full
 move, the first drag step and the last one per scene and solver to a CSV
 (Benchmarks/plot_large_deformation_convergence.py plots it).
 
     pvpython Benchmarks/large_deformation_drag.py <FacePlan.so> <Data dir> [--repeats 5]
-        [--drag-steps 6] [--scenes lefort1,bsso,genioplasty,cut] [--lip-seal MM] [--json FILE]
-        [--csv FILE]
+        [--drag-steps 6] [--scenes lefort1,bsso,genioplasty,cut] [--lip-seal MM] [--paired 3]
+        [--json FILE] [--csv FILE]
 """
 import argparse
 import builtins
@@ -43,6 +46,8 @@ parser.add_argument("--repeats", type=int, default=5)
 parser.add_argument("--newton-repeats", type=int, default=3)
 parser.add_argument("--drag-steps", type=int, default=6)
 parser.add_argument("--pause", type=float, default=1.5, help="seconds before a 'paused' update")
+parser.add_argument("--paired", type=int, default=3,
+                    help="rounds of a Precomputed and a Newton full move, one after the other")
 parser.add_argument("--scenes", default="lefort1,bsso,genioplasty,cut")
 parser.add_argument("--lip-seal", type=float,
                     help="LipSeal (mm) of the osteotomy scenes instead of the demos' (0: open lips)")
@@ -184,6 +189,23 @@ def run_scenes():
         scene["speedup_drag_step"] = n["drag_step_ms"] / p["drag_step_ms"]
         print("  %-11s Newton / Precomputed: full move %.1fx, drag step %.1fx"
               % (name, scene["speedup_full_move"], scene["speedup_drag_step"]), flush=True)
+        if args.paired > 0:
+            paired = {"Precomputed": [], "Newton": []}
+            for k in range(args.paired):
+                for solver in ("Precomputed", "Newton"):
+                    fem.LargeDeformationSolver = solver
+                    move(0.0)
+                    timed_update(fem, bone)
+                    time.sleep(args.pause)  # the Precomputed's background work finishes
+                    move(full)
+                    ms, f = timed_update(fem, bone)
+                    paired[solver].append(ms)
+            scene["paired_full_move_ms_all"] = paired
+            scene["speedup_full_move_paired"] = (statistics.median(paired["Newton"])
+                                                 / statistics.median(paired["Precomputed"]))
+            print("  %-11s paired full moves: Precomputed %.1f ms, Newton %.1f ms (medians of %d): %.1fx"
+                  % (name, statistics.median(paired["Precomputed"]), statistics.median(paired["Newton"]),
+                     args.paired, scene["speedup_full_move_paired"]), flush=True)
         results[name] = scene
         for proxy in list(simple.GetSources().values()):
             simple.Delete(proxy)
