@@ -96,7 +96,7 @@ struct PrecomputedLargeDeformationOptions {
   // Also factor the tangent at the current state when the rate of the last iterations predicts
   // that finishing with the present factor takes longer than a factorization, which costs as much
   // as refactorCostIterations iterations with the CPU's substitutions (the single-precision
-  // factorization, its tangent and assembly take 11-15 iterations' time on the 2-core machine of
+  // factorization, its tangent and assembly take 9-12 iterations' time on the 2-core machine of
   // BENCHMARKS.md; the rate's prediction errs on the slow side, as contact changes slow the
   // iterations that follow, hence a little less) and refactorCostIterationsOnDevice with a
   // backend's (whose iterations are 10-20 times quicker while the factorization stays on the CPU).
