@@ -98,7 +98,7 @@ struct PrecomputedLargeDeformationOptions {
   // as refactorCostIterations iterations with the CPU's substitutions (the single-precision
   // factorization, its tangent and assembly take 9-12 iterations' time on the 2-core machine of
   // BENCHMARKS.md; the rate's prediction errs on the slow side, as contact changes slow the
-  // iterations that follow, hence a little less) and refactorCostIterationsOnDevice with a
+  // iterations that follow, hence the lower end) and refactorCostIterationsOnDevice with a
   // backend's (whose iterations are 10-20 times quicker while the factorization stays on the CPU).
   // A count rather than a timing: the same input gives the same result on every run. The
   // prediction is to `tolerance`; while the contact settles at settleTolerance, to that in a
