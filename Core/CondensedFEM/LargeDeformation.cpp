@@ -78,7 +78,7 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
     ElementMatrix tangent;
     NeoHookeanTetLanes lanes;
     double laneTangents[kPackedElementSize][kTetLanes];
-    std::vector<int> tail;
+    std::vector<int> nearCells; // a range's cells near rest, kept per thread
     // A cell near rest: its rest tangent into the buffer, unless the buffer holds it already.
     auto holdRest = [&](std::int64_t c) {
       char& held = (*nearRest->held)[c];
@@ -108,7 +108,7 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
       if (nearRest) {
         std::vector<int>& list = buffers.order[r];
         list.clear();
-        std::vector<int>& near = tail; // kept per thread
+        std::vector<int>& near = nearCells;
         near.clear();
         for (std::int64_t e = begin; e < end; ++e) {
           bool isNear = !st.smallStrain[e];

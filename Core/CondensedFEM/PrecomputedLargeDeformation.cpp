@@ -376,7 +376,7 @@ Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffer
   // |F - I|, so within a quarter of the reuse tolerance its entries change by less than the
   // tolerance of their diagonal (on the main demo's cut three quarters of the cells).
   NearRestTangents nearRest;
-  const bool reusing = fp.reuseTolerance >= 0.0 && fp.rest.made() && !fp.restPacked.empty();
+  const bool reusing = !keepRest && fp.reuseTolerance >= 0.0 && fp.rest.made();
   if (reusing) {
     nearRest.rest = &fp.restPacked;
     nearRest.held = &buffers.restHeld;
@@ -429,9 +429,9 @@ Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffer
   // factor and its copy. Where single precision breaks down on the tangent, from the double factor,
   // which also gives the message when the tangent is not positive definite.
   FactorReuse reuse;
-  if (keepRest)
-    reuse.keep = fp.reuseTolerance >= 0.0 ? keepRest : nullptr;
-  else if (fp.reuseTolerance >= 0.0 && fp.rest.made()) {
+  if (keepRest && fp.reuseTolerance >= 0.0)
+    reuse.keep = keepRest;
+  if (reusing) {
     reuse.from = &fp.rest;
     reuse.tolerance = fp.reuseTolerance;
   }

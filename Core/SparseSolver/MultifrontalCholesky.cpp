@@ -563,26 +563,42 @@ Status NotPositiveDefinite(int column) {
                        std::to_string(column) + ")");
 }
 
+// What a plan or a reference was made for: the analysis's structure (its arrays' addresses) and
+// the matrix's pattern.
+struct MadeFor {
+  const void *super = nullptr, *s = nullptr, *perm = nullptr;
+  std::vector<int> outer, inner;
+
+  void record(const SparseMatrix& upper, const cholmod_factor& L) {
+    super = L.super;
+    s = L.s;
+    perm = L.Perm;
+    outer.assign(upper.outerIndexPtr(), upper.outerIndexPtr() + upper.cols() + 1);
+    inner.assign(upper.innerIndexPtr(), upper.innerIndexPtr() + upper.nonZeros());
+  }
+  bool matches(const SparseMatrix& upper, const cholmod_factor& L) const {
+    return super == L.super && s == L.s && perm == L.Perm &&
+           static_cast<Eigen::Index>(outer.size()) == upper.cols() + 1 &&
+           static_cast<Eigen::Index>(inner.size()) == upper.nonZeros() &&
+           std::equal(outer.begin(), outer.end(), upper.outerIndexPtr()) &&
+           std::equal(inner.begin(), inner.end(), upper.innerIndexPtr());
+  }
+};
+
 } // namespace
 
 struct MultifrontalWorkspace::Impl {
-  // The plan and what it was made for: the analysis (its address, null while there is no plan, and
-  // its structure's arrays) and the matrix's pattern.
+  // The plan and what it was made for: the analysis (its address, null while there is no plan) and
+  // madeFor.
   Plan plan;
   const cholmod_factor* analysis = nullptr;
-  const void *super = nullptr, *s = nullptr, *perm = nullptr;
-  std::vector<int> outer, inner;
+  MadeFor madeFor;
   int plansReused = 0;
   UpdatePool<float> single;
   UpdatePool<double> twice;
 
   bool planFits(const SparseMatrix& upper, const cholmod_factor& L) const {
-    const Eigen::Index columns = upper.cols() + 1;
-    return analysis == &L && super == L.super && s == L.s && perm == L.Perm &&
-           static_cast<Eigen::Index>(outer.size()) == columns &&
-           static_cast<Eigen::Index>(inner.size()) == upper.nonZeros() &&
-           std::equal(outer.begin(), outer.end(), upper.outerIndexPtr()) &&
-           std::equal(inner.begin(), inner.end(), upper.innerIndexPtr());
+    return analysis == &L && madeFor.matches(upper, L);
   }
 };
 
@@ -619,11 +635,7 @@ Status PlanFor(const SparseMatrix& upper, const cholmod_factor& L, MultifrontalW
     w.analysis = nullptr;
     if (Status s = MakePlan(upper, L, w.plan); !s)
       return s;
-    w.super = L.super;
-    w.s = L.s;
-    w.perm = L.Perm;
-    w.outer.assign(upper.outerIndexPtr(), upper.outerIndexPtr() + upper.cols() + 1);
-    w.inner.assign(upper.innerIndexPtr(), upper.innerIndexPtr() + upper.nonZeros());
+    w.madeFor.record(upper, L);
     w.analysis = &L; // last: the plan is whole
   }
   w.plan.values = upper.valuePtr();
@@ -673,10 +685,7 @@ Status MultifrontalFactorize(const SparseMatrix& upper, cholmod_factor* L, cholm
 }
 
 struct MultifrontalReference::Impl {
-  // What it was made for: the analysis's structure (as MultifrontalWorkspace::Impl) and the
-  // matrix's pattern.
-  const void *super = nullptr, *s = nullptr, *perm = nullptr;
-  std::vector<int> outer, inner;
+  MadeFor madeFor;
   std::vector<double> entries; // the matrix's, in the plan's order (Plan::entrySource)
   std::vector<double> scale;   // sqrt |a_kk| per elimination-order column
   std::vector<float> factor;   // L's values
@@ -684,11 +693,7 @@ struct MultifrontalReference::Impl {
   double bytes = 0.0;
 
   bool fits(const SparseMatrix& upper, const cholmod_factor& L) const {
-    return !factor.empty() && super == L.super && s == L.s && perm == L.Perm &&
-           static_cast<Eigen::Index>(outer.size()) == upper.cols() + 1 &&
-           static_cast<Eigen::Index>(inner.size()) == upper.nonZeros() &&
-           std::equal(outer.begin(), outer.end(), upper.outerIndexPtr()) &&
-           std::equal(inner.begin(), inner.end(), upper.innerIndexPtr());
+    return !factor.empty() && madeFor.matches(upper, L);
   }
 };
 
@@ -707,7 +712,8 @@ namespace {
 
 // The supernodes whose update matrices a reference keeps: those whose subtree's flops are at least
 // kKeepFlopsPerEntry per entry of the update (a reuse then saves far more than it reads), with the
-// ratio raised until they hold no more entries than the factor. Roots have no update.
+// ratio raised fourfold until they hold no more entries than the factor. Roots have no update.
+constexpr double kKeepFlopsPerEntry = 256.0;
 std::vector<char> UpdatesToKeep(const Plan& p) {
   std::vector<double> subtree(p.flops);
   for (int t = 0; t < p.nsuper; ++t) // postorder: children first
@@ -715,7 +721,7 @@ std::vector<char> UpdatesToKeep(const Plan& p) {
       subtree[p.parent[t]] += subtree[t];
   const double budget = double(p.px[p.nsuper]);
   std::vector<char> keep(p.nsuper, 0);
-  for (double ratio = 256.0;; ratio *= 4.0) {
+  for (double ratio = kKeepFlopsPerEntry;; ratio *= 4.0) {
     double entries = 0.0;
     for (int t = 0; t < p.nsuper; ++t) {
       const double off = p.rows(t) - p.columns(t);
@@ -763,11 +769,7 @@ std::vector<char> SupernodesToFactor(const Plan& p, const MultifrontalReference:
 void KeepReference(const Plan& p, const SparseMatrix& upper, const cholmod_factor& L,
                    const float* x, std::vector<std::unique_ptr<float[]>>& updates,
                    MultifrontalReference::Impl& r) {
-  r.super = L.super;
-  r.s = L.s;
-  r.perm = L.Perm;
-  r.outer.assign(upper.outerIndexPtr(), upper.outerIndexPtr() + upper.cols() + 1);
-  r.inner.assign(upper.innerIndexPtr(), upper.innerIndexPtr() + upper.nonZeros());
+  r.madeFor.record(upper, L);
   const int entries = p.entryStart[p.n];
   r.entries.resize(entries);
   for (int q = 0; q < entries; ++q)
@@ -782,7 +784,7 @@ void KeepReference(const Plan& p, const SparseMatrix& upper, const cholmod_facto
   r.factor.assign(x, x + p.px[p.nsuper]);
   r.updates = std::move(updates);
   r.bytes = 8.0 * (r.entries.size() + r.scale.size()) +
-            4.0 * (r.factor.size() + r.outer.size() + r.inner.size());
+            4.0 * (r.factor.size() + r.madeFor.outer.size() + r.madeFor.inner.size());
   for (int t = 0; t < p.nsuper; ++t)
     if (r.updates[t]) {
       const double off = p.rows(t) - p.columns(t);

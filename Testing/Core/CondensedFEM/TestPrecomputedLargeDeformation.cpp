@@ -502,6 +502,20 @@ TEST(PrecomputedLargeDeformation, ItFallsBackToNewtonAndSaysSo) {
   EXPECT_NE(s.message.find("did not converge"), std::string::npos) << s.message;
 }
 
+// A cold solve of `input` on a system precomputed with `options`: converged without a fallback, to
+// Newton's equilibrium `newton`. Its report goes to `report`.
+void SolveAsNewton(const PrecomputeRequest& request, const SolveInput& input,
+                   const PrecomputedLargeDeformationOptions& options, const SolveResult& newton,
+                   PrecomputedLargeDeformationReport& report) {
+  auto system = Precomputed(request, options);
+  ASSERT_TRUE(system);
+  SolveResult result;
+  const Status s = SolvePrecomputedLargeDeformation(*system, input, nullptr, result, report);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_FALSE(report.fellBack) << report.fallbackReason;
+  EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement), kAgreement);
+}
+
 TEST(PrecomputedLargeDeformation, ASlowConvergenceRefactorsWhereItIs) {
   // A 55 % press from rest converges slowly with the rest tangent's factor: with adaptive
   // refactorization the solve factors the tangent at its iterate once the last iterations' rate
@@ -515,15 +529,8 @@ TEST(PrecomputedLargeDeformation, ASlowConvergenceRefactorsWhereItIs) {
     PrecomputedLargeDeformationOptions options;
     options.refactorAfter = 0; // only the adaptive rule refactors
     options.adaptiveRefactorization = adaptive == 1;
-    auto system = Precomputed(request, options);
-    ASSERT_TRUE(system);
-    SolveResult result;
-    const Status s =
-        SolvePrecomputedLargeDeformation(*system, input, nullptr, result, reports[adaptive]);
-    ASSERT_TRUE(s.ok) << s.message;
-    EXPECT_FALSE(reports[adaptive].fellBack) << reports[adaptive].fallbackReason;
-    EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement), kAgreement)
-        << "adaptive " << adaptive;
+    SCOPED_TRACE("adaptive " + std::to_string(adaptive));
+    SolveAsNewton(request, input, options, newton, reports[adaptive]);
   }
   EXPECT_EQ(reports[0].refactorizations, 0);
   EXPECT_GE(reports[1].refactorizations, 1);
@@ -564,15 +571,8 @@ TEST(PrecomputedLargeDeformation, ARefactorizationReusesTheRestFactorWhereTheMov
     options.refactorAfter = 3; // a refactorization in any case
     if (reuse == 0)
       options.reuseTolerance = -1.0;
-    auto system = Precomputed(request, options);
-    ASSERT_TRUE(system);
-    SolveResult result;
-    const Status s =
-        SolvePrecomputedLargeDeformation(*system, input, nullptr, result, reports[reuse]);
-    ASSERT_TRUE(s.ok) << s.message;
-    EXPECT_FALSE(reports[reuse].fellBack) << reports[reuse].fallbackReason;
-    EXPECT_LT(RelativeMaxNodeDifference(result.allDisplacement, newton.allDisplacement), kAgreement)
-        << "reuse " << reuse;
+    SCOPED_TRACE("reuse " + std::to_string(reuse));
+    SolveAsNewton(request, input, options, newton, reports[reuse]);
   }
   EXPECT_GE(reports[0].refactorizations, 1);
   EXPECT_EQ(reports[0].partialRefactorizations, 0);
