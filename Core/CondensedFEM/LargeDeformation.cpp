@@ -17,6 +17,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -61,6 +62,9 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
   // scattered memory and costs more than the cells' stress).
   const std::int64_t ranges =
       std::min<std::int64_t>(EvaluationScratch::kRanges, std::max<std::int64_t>(m, 1));
+  if (static_cast<std::int64_t>(st.rangeNodes.size()) != ranges ||
+      static_cast<std::int64_t>(st.cornerSlot.size()) != 4 * m)
+    return false; // not a structure MakeStructure made
   buffers.energy.assign(static_cast<size_t>(ranges), 0.0);
   buffers.valid.assign(static_cast<size_t>(ranges), 1);
   buffers.force.resize(static_cast<size_t>(ranges));
@@ -89,15 +93,15 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
       }
     };
     for (std::int64_t r = firstRange; r < lastRange; ++r) {
-      Eigen::VectorXd& force = buffers.force[r];
-      force.setZero(3 * st.n);
+      Eigen::VectorXd& force = buffers.force[r]; // over the range's nodes (Structure::rangeNodes)
+      force.setZero(3 * static_cast<Eigen::Index>(st.rangeNodes[r].size()));
       double energy = 0.0;
-      // A cell's force (global frame) into the range's sum, in the nodes' frames.
-      auto add = [&](const int* node, int a, Eigen::Vector3d f) {
+      // Corner a of cell e's force (global frame) into the range's sum, in the node's frame.
+      auto add = [&](std::int64_t e, const int* node, int a, Eigen::Vector3d f) {
         const int fa = st.frameOf[node[a]];
         if (fa >= 0)
           f = st.frames[fa].transpose() * f;
-        force.segment<3>(3 * node[a]) += f;
+        force.segment<3>(3 * st.cornerSlot[static_cast<size_t>(4 * e + a)]) += f;
       };
       const std::int64_t begin = m * r / ranges, end = m * (r + 1) / ranges;
       // The cells in the order they are taken: the range's own, or with near-rest tangents the
@@ -162,7 +166,7 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
           for (int l = 0; l < kTetLanes; ++l) {
             energy += lanes.energy[l];
             for (int a = 0; a < 4; ++a)
-              add(nodes[l], a,
+              add(cellAt(i + l), nodes[l], a,
                   Eigen::Vector3d(lanes.force[a][0][l], lanes.force[a][1][l],
                                   lanes.force[a][2][l]));
             const std::int64_t c = cellAt(i + l);
@@ -205,7 +209,7 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
             tangent.middleRows<3>(3 * a) = (Q.transpose() * tangent.middleRows<3>(3 * a)).eval();
             tangent.middleCols<3>(3 * a) = (tangent.middleCols<3>(3 * a) * Q).eval();
           }
-          add(node, a, f.segment<3>(3 * a));
+          add(e, node, a, f.segment<3>(3 * a));
         }
         if (withTangent) {
           double* o = packed->data() + static_cast<size_t>(e) * kPackedElementSize;
@@ -228,7 +232,12 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
   out.force.setZero(3 * st.n);
   for (std::int64_t r = 0; r < ranges; ++r) {
     out.energy += buffers.energy[r];
-    out.force += buffers.force[r];
+    const std::vector<int>& nodes = st.rangeNodes[r];
+    const double* f = buffers.force[r].data();
+    double* sum = out.force.data();
+    for (size_t k = 0; k < nodes.size(); ++k)
+      for (int c = 0; c < 3; ++c)
+        sum[3 * nodes[k] + c] += f[3 * k + c];
   }
   return std::isfinite(out.energy) && out.force.allFinite();
 }
@@ -274,10 +283,52 @@ Eigen::Vector3d IntoTissue(const TetMesh& mesh, const std::vector<std::vector<in
 
 } // namespace
 
+// The cells in the order of their centroids' Morton codes (ties by index).
+std::vector<int> SpaceFillingCellOrder(const TetMesh& mesh) {
+  const Eigen::Index m = mesh.numTets();
+  std::vector<int> order(static_cast<size_t>(m));
+  std::iota(order.begin(), order.end(), 0);
+  if (m == 0)
+    return order;
+  Eigen::MatrixX3d centroid(m, 3);
+  for (Eigen::Index e = 0; e < m; ++e)
+    centroid.row(e) = 0.25 * (mesh.points.row(mesh.tets(e, 0)) + mesh.points.row(mesh.tets(e, 1)) +
+                              mesh.points.row(mesh.tets(e, 2)) + mesh.points.row(mesh.tets(e, 3)));
+  const Eigen::RowVector3d low = centroid.colwise().minCoeff();
+  const double extent = (centroid.colwise().maxCoeff() - low).maxCoeff();
+  const double scale = extent > 0.0 ? 1023.0 / extent : 0.0;
+  auto spread = [](std::uint64_t v) { // 10 bits to every third of 30
+    v &= 0x3ff;
+    v = (v | (v << 16)) & 0x30000ff;
+    v = (v | (v << 8)) & 0x300f00f;
+    v = (v | (v << 4)) & 0x30c30c3;
+    v = (v | (v << 2)) & 0x9249249;
+    return v;
+  };
+  std::vector<std::uint64_t> key(static_cast<size_t>(m));
+  for (Eigen::Index e = 0; e < m; ++e) {
+    std::uint64_t code = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double q = std::clamp((centroid(e, i) - low[i]) * scale, 0.0, 1023.0);
+      code |= spread(static_cast<std::uint64_t>(q)) << i;
+    }
+    key[static_cast<size_t>(e)] = code;
+  }
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key[a] < key[b]; });
+  return order;
+}
+
 Status MakeStructure(const PrecomputeRequest& request, bool liftOff, Structure& st) {
-  const TetMesh& mesh = request.mesh;
   const NodeSets& sets = request.sets;
-  st.mesh = &mesh;
+  st.meshCell = SpaceFillingCellOrder(request.mesh);
+  auto ordered = std::make_shared<TetMesh>();
+  ordered->points = request.mesh.points;
+  ordered->tets.resize(request.mesh.numTets(), 4);
+  for (size_t e = 0; e < st.meshCell.size(); ++e)
+    ordered->tets.row(static_cast<Eigen::Index>(e)) = request.mesh.tets.row(st.meshCell[e]);
+  st.ownMesh = ordered;
+  st.mesh = st.ownMesh.get();
+  const TetMesh& mesh = *st.mesh;
   st.n = mesh.numPoints();
   const Eigen::Index n = st.n;
   st.frameOf.assign(n, -1);
@@ -315,10 +366,31 @@ Status MakeStructure(const PrecomputeRequest& request, bool liftOff, Structure& 
   for (Eigen::Index e = 0; e < mesh.numTets(); ++e) {
     for (int a = 0; a < 4; ++a)
       corners.row(a) = mesh.points.row(mesh.tets(e, a));
+    const Eigen::Index c = st.meshCell[static_cast<size_t>(e)];
     st.cells[e] = MakeTetReference(corners);
-    st.materials[e] = NeoHookeanFromLinear(request.materials.E(e), request.materials.nu(e));
-    st.cellMass[e] = request.materials.rho(e) * st.cells[e].volume;
-    st.smallStrain[e] = request.materials.isSmallStrain(e) ? 1 : 0;
+    st.materials[e] = NeoHookeanFromLinear(request.materials.E(c), request.materials.nu(c));
+    st.cellMass[e] = request.materials.rho(c) * st.cells[e].volume;
+    st.smallStrain[e] = request.materials.isSmallStrain(c) ? 1 : 0;
+  }
+  const std::int64_t m = mesh.numTets();
+  const std::int64_t ranges =
+      std::min<std::int64_t>(EvaluationScratch::kRanges, std::max<std::int64_t>(m, 1));
+  st.rangeNodes.assign(static_cast<size_t>(ranges), {});
+  st.cornerSlot.assign(static_cast<size_t>(4 * m), 0);
+  std::vector<int> slot(static_cast<size_t>(n), -1);
+  for (std::int64_t r = 0; r < ranges; ++r) {
+    const std::int64_t begin = m * r / ranges, end = m * (r + 1) / ranges;
+    std::vector<int>& nodes = st.rangeNodes[static_cast<size_t>(r)];
+    for (std::int64_t e = begin; e < end; ++e)
+      for (int a = 0; a < 4; ++a)
+        nodes.push_back(mesh.tets(e, a));
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    for (size_t k = 0; k < nodes.size(); ++k)
+      slot[static_cast<size_t>(nodes[k])] = static_cast<int>(k);
+    for (std::int64_t e = begin; e < end; ++e)
+      for (int a = 0; a < 4; ++a)
+        st.cornerSlot[static_cast<size_t>(4 * e + a)] = slot[static_cast<size_t>(mesh.tets(e, a))];
   }
   return Status::Ok();
 }
@@ -449,9 +521,10 @@ DeformationMeasures MeasureDeformation(const Structure& st, const Eigen::VectorX
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
         eigen.computeDirect(green, Eigen::EigenvaluesOnly);
         const double largest = eigen.eigenvalues().cwiseAbs().maxCoeff();
-        if (largest > r.largestGreenStrain) {
+        if (largest > r.largestGreenStrain ||
+            (largest == r.largestGreenStrain && st.requestCell(e) < r.largestStrainCell)) {
           r.largestGreenStrain = largest;
-          r.largestStrainCell = e;
+          r.largestStrainCell = st.requestCell(e);
         }
       }
     }
@@ -460,7 +533,9 @@ DeformationMeasures MeasureDeformation(const Structure& st, const Eigen::VectorX
   r.smallestVolumeRatio = std::numeric_limits<double>::infinity();
   for (const DeformationMeasures& p : part) {
     r.smallestVolumeRatio = std::min(r.smallestVolumeRatio, p.smallestVolumeRatio);
-    if (p.largestGreenStrain > r.largestGreenStrain) {
+    if (p.largestGreenStrain > r.largestGreenStrain ||
+        (p.largestGreenStrain == r.largestGreenStrain &&
+         p.largestStrainCell < r.largestStrainCell)) {
       r.largestGreenStrain = p.largestGreenStrain;
       r.largestStrainCell = p.largestStrainCell;
     }

@@ -184,4 +184,46 @@ void AssembleFromPacked(const double* packed, AssemblyPattern& pattern) {
   });
 }
 
+std::vector<int> PackedEntries(const AssemblyPattern& pattern, size_t packedSize) {
+  std::vector<int> entries(packedSize, -1);
+  for (size_t k = 0; k + 1 < pattern.gatherStart.size(); ++k)
+    for (int g = pattern.gatherStart[k]; g < pattern.gatherStart[k + 1]; ++g)
+      if (static_cast<size_t>(pattern.packedIndex[g]) < packedSize)
+        entries[static_cast<size_t>(pattern.packedIndex[g])] = static_cast<int>(k);
+  if (std::find(entries.begin(), entries.end(), -1) != entries.end())
+    entries.clear();
+  return entries;
+}
+
+void AssembleChangedCells(const std::vector<double>& restValues,
+                          const std::vector<double>& restPacked, const double* packed,
+                          const std::vector<char>& atRest, const std::vector<int>& entries,
+                          AssemblyPattern& pattern) {
+  const std::int64_t nnz = static_cast<std::int64_t>(restValues.size());
+  const std::int64_t parts = std::min<std::int64_t>(WorkerThreads(16), 8);
+  double* values = pattern.upper.valuePtr();
+  const double* rest = restPacked.data();
+  const int* entry = entries.data();
+  ParallelFor(parts, 2, [&](std::int64_t firstPart, std::int64_t lastPart) {
+    for (std::int64_t part = firstPart; part < lastPart; ++part) {
+      const int from = static_cast<int>(nnz * part / parts);
+      const int to = static_cast<int>(nnz * (part + 1) / parts);
+      std::copy(restValues.data() + from, restValues.data() + to, values + from);
+      const unsigned span = static_cast<unsigned>(to - from);
+      double elsewhere = 0.0; // where the entries of the other parts go
+      for (size_t c = 0; c < atRest.size(); ++c) {
+        if (atRest[c])
+          continue;
+        const size_t at = c * kPackedElementSize;
+        for (size_t k = at; k < at + kPackedElementSize; ++k) {
+          // A select, not a branch: a cell's entries fall in either part without a pattern.
+          const bool mine = static_cast<unsigned>(entry[k] - from) < span;
+          double* target = mine ? values + entry[k] : &elsewhere;
+          *target += packed[k] - rest[k];
+        }
+      }
+    }
+  });
+}
+
 } // namespace faceplan

@@ -187,7 +187,7 @@ TEST(LargeDeformation, CellsNearRestKeepTheirRestTangent) {
   for (Eigen::Index e = 0; e < m; ++e) {
     bool still = true;
     for (int a = 0; a < 4; ++a)
-      still = still && u.segment<3>(3 * request.mesh.tets(e, a)).isZero();
+      still = still && u.segment<3>(3 * st.mesh->tets(e, a)).isZero();
     const size_t at = static_cast<size_t>(e) * kPackedElementSize;
     const std::vector<double>& expected = still ? restPacked : exactPacked;
     double largest = 0.0, difference = 0.0;
