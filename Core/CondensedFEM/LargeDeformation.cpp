@@ -56,10 +56,10 @@ bool Evaluate(const Structure& st, const Eigen::VectorXd& u, Evaluation& out,
   const std::int64_t m = mesh.numTets();
   EvaluationScratch local;
   EvaluationScratch& buffers = scratch ? *scratch : local;
-  // A fixed number of cell ranges, each summing its cells' forces into its own vector in cell
-  // order, the ranges then added in order: the same sums on any number of threads, and each
-  // range writes the nodes of neighbouring cells (a gather per node from per-cell forces reads
-  // scattered memory and costs more than the cells' stress).
+  // A fixed number of cell ranges, each summing its cells' forces over its own nodes
+  // (Structure::rangeNodes) in cell order, the ranges then added in order: the same sums on any
+  // number of threads, and each range writes the nodes of neighbouring cells (a gather per node
+  // from per-cell forces reads scattered memory and costs more than the cells' stress).
   const std::int64_t ranges =
       std::min<std::int64_t>(EvaluationScratch::kRanges, std::max<std::int64_t>(m, 1));
   if (static_cast<std::int64_t>(st.rangeNodes.size()) != ranges ||
