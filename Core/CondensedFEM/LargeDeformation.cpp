@@ -281,8 +281,6 @@ Eigen::Vector3d IntoTissue(const TetMesh& mesh, const std::vector<std::vector<in
   return normal.dot(towardCells) < 0.0 ? Eigen::Vector3d(-normal) : normal;
 }
 
-} // namespace
-
 // The cells in the order of their centroids' Morton codes (ties by index).
 std::vector<int> SpaceFillingCellOrder(const TetMesh& mesh) {
   const Eigen::Index m = mesh.numTets();
@@ -317,6 +315,8 @@ std::vector<int> SpaceFillingCellOrder(const TetMesh& mesh) {
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key[a] < key[b]; });
   return order;
 }
+
+} // namespace
 
 Status MakeStructure(const PrecomputeRequest& request, bool liftOff, Structure& st) {
   const NodeSets& sets = request.sets;
