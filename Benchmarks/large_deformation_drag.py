@@ -134,6 +134,7 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
     r["largest_strain"] = f.get("LargestStrain")
     r["lifted_nodes"] = f.get("LiftedNodes", 0)
     r["refactorizations_full"] = f.get("Refactorizations", 0)
+    r["partial_refactorizations_full"] = f.get("PartialRefactorizations", 0)
     drag_paused, drag_cont, drag_iter = [], [], []
     steps = args.drag_steps if solver == "Precomputed" else builtins.min(args.drag_steps, repeats)
     time.sleep(args.pause if solver == "Precomputed" else 0.0)

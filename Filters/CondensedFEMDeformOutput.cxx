@@ -96,6 +96,7 @@ void AddFieldData(const SolveOutcome& outcome, const Settings& settings,
       AddScalar(fd, "ForceEvaluations", report.evaluations);
       AddScalar(fd, "FactorSolves", report.factorSolves);
       AddScalar(fd, "Refactorizations", report.refactorizations);
+      AddScalar(fd, "PartialRefactorizations", report.partialRefactorizations);
       AddScalar(fd, "WarmStarted", report.warmStarted ? 1.0 : 0.0);
       smallest = report.smallestVolumeRatio;
       lifted = report.liftedNodes;

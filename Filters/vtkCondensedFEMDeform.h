@@ -26,7 +26,8 @@
  * `ElementOrder`, `LargestStrain`, `InvertedCells`, `Model` (the model that ran) and `ModelNote`
  * (why); when the neo-Hookean model ran also `LargeDeformationSolver` (`SolverNote` when it fell
  * back to Newton), `SmallestVolumeRatio`, with Newton `LoadSteps` and `NewtonIterations`, with
- * Precomputed `QuasiNewtonIterations`, `FactorSolves`, `Refactorizations` and `WarmStarted`, and
+ * Precomputed `QuasiNewtonIterations`, `FactorSolves`, `Refactorizations` (of them
+ * `PartialRefactorizations`: those that reused the rest factor's supernodes) and `WarmStarted`, and
  * with LiftOff `LiftedNodes`. Precompute and solve warnings (slivers, strain above 10%, cells
  * inverted by the displacement, single-precision fallback, a tissue moving far beyond every bone)
  * are reported with vtkWarningMacro, once per state (an edit of the same situation does not repeat

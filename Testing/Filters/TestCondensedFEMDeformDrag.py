@@ -84,6 +84,15 @@ def main():
         move(0.0)
     fields = move(whole)
     print("%s, whole move: %d iterations, %d factorizations" % ((scene,) + iterations(fields)))
+    # The cut reaches a few of the face's cells: its refactorization reuses the rest factor.
+    partial = int(float(fields.get("PartialRefactorizations", "-1")))
+    refactored = iterations(fields)[1]
+    check(0 <= partial <= refactored, "%s, whole move: %d partial of %d factorizations" % (
+        scene, partial, refactored))
+    if name == "cut":
+        check(refactored >= 1 and partial == refactored,
+              "%s, whole move: every factorization reuses the rest factor (%d of %d)" % (
+                  scene, partial, refactored))
     lifted = {}
     for k in range(1, 9):
         fields = move(whole + 0.5 * k)
