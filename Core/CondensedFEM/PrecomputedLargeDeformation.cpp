@@ -199,10 +199,11 @@ struct FactorPattern {
   double reuseTolerance = -1.0; // < 0: no reuse
   // The rest tangent's cells (packed), which cells near rest keep in later factorizations.
   std::vector<double> restPacked;
-  // The rest tangent assembled (the whole mesh's pattern), and per packed cell entry its entry
-  // there: a later factorization starts from the rest tangent and adds what the cells that left
-  // rest changed, instead of summing every cell's entries again (a gather over tens of megabytes).
-  std::vector<double> restAssembled;
+  // The rest factor, whose tangent is the rest tangent assembled (the whole mesh's pattern), and
+  // per packed cell entry its entry there: a later factorization starts from the rest tangent and
+  // adds what the cells that left rest changed, instead of summing every cell's entries again (a
+  // gather over tens of megabytes).
+  std::shared_ptr<const TangentFactor> restFactor;
   std::vector<int> packedEntry;
 };
 
@@ -397,8 +398,8 @@ Status FactorTangent(const Structure& st, const FactorPattern& fp, TangentBuffer
   if (reusing && !fp.packedEntry.empty() &&
       3 * std::count(buffers.restHeld.begin(), buffers.restHeld.end(), 0) <=
           static_cast<std::ptrdiff_t>(buffers.restHeld.size()))
-    AssembleChangedCells(fp.restAssembled, fp.restPacked, packed.data(), buffers.restHeld,
-                         fp.packedEntry, pattern);
+    AssembleChangedCells(fp.restFactor->tangent.valuePtr(), fp.restPacked, packed.data(),
+                         buffers.restHeld, fp.packedEntry, pattern);
   else
     AssembleFromPacked(packed.data(), pattern);
   auto made = std::make_shared<TangentFactor>();
@@ -868,8 +869,7 @@ Status PrecomputeImpl(const PrecomputeRequest& request,
     FactorPattern& fp = sys->factorPattern;
     fp.restPacked = sys->solveBuffers.packed;
     sys->solveBuffers.restHeld.assign(static_cast<size_t>(st.mesh->numTets()), 1);
-    fp.restAssembled.assign(factor->tangent.valuePtr(),
-                            factor->tangent.valuePtr() + factor->tangent.nonZeros());
+    fp.restFactor = factor;
     fp.packedEntry = PackedEntries(sys->solveBuffers.pattern, fp.restPacked.size());
   }
   // The rest tangent (upper, unpinned) stays in restFactor.

@@ -195,11 +195,10 @@ std::vector<int> PackedEntries(const AssemblyPattern& pattern, size_t packedSize
   return entries;
 }
 
-void AssembleChangedCells(const std::vector<double>& restValues,
-                          const std::vector<double>& restPacked, const double* packed,
-                          const std::vector<char>& atRest, const std::vector<int>& entries,
-                          AssemblyPattern& pattern) {
-  const std::int64_t nnz = static_cast<std::int64_t>(restValues.size());
+void AssembleChangedCells(const double* restValues, const std::vector<double>& restPacked,
+                          const double* packed, const std::vector<char>& atRest,
+                          const std::vector<int>& entries, AssemblyPattern& pattern) {
+  const std::int64_t nnz = pattern.upper.nonZeros();
   const std::int64_t parts = std::min<std::int64_t>(WorkerThreads(16), 8);
   double* values = pattern.upper.valuePtr();
   const double* rest = restPacked.data();
@@ -208,7 +207,7 @@ void AssembleChangedCells(const std::vector<double>& restValues,
     for (std::int64_t part = firstPart; part < lastPart; ++part) {
       const int from = static_cast<int>(nnz * part / parts);
       const int to = static_cast<int>(nnz * (part + 1) / parts);
-      std::copy(restValues.data() + from, restValues.data() + to, values + from);
+      std::copy(restValues + from, restValues + to, values + from);
       const unsigned span = static_cast<unsigned>(to - from);
       double elsewhere = 0.0; // where the entries of the other parts go
       for (size_t c = 0; c < atRest.size(); ++c) {

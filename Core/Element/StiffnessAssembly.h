@@ -70,15 +70,14 @@ void AssembleFromPacked(const double* packed, AssemblyPattern& pattern);
 std::vector<int> PackedEntries(const AssemblyPattern& pattern, size_t packedSize);
 
 // pattern.upper's values for cells of which only some left their rest values: `restValues` (the
-// assembly of `restPacked`) plus, for each cell c without atRest[c], its entries in `packed` minus
-// those in `restPacked` (entries: PackedEntries); a cell with atRest[c] must hold its rest values
-// in `packed`. Entries that only cells at rest reach keep their rest values exactly; the others
-// equal AssembleFromPacked's to round-off. Each thread owns a range of entries and adds in cell
-// order: the same sums on any number of threads. A changed cell costs about twice its share of
-// the whole assembly, so this pays where few cells changed.
-void AssembleChangedCells(const std::vector<double>& restValues,
-                          const std::vector<double>& restPacked, const double* packed,
-                          const std::vector<char>& atRest, const std::vector<int>& entries,
-                          AssemblyPattern& pattern);
+// assembly of `restPacked`, one value per entry of pattern.upper) plus, for each cell c without
+// atRest[c], its entries in `packed` minus those in `restPacked` (entries: PackedEntries); a cell
+// with atRest[c] must hold its rest values in `packed`. Entries that only cells at rest reach keep
+// their rest values exactly; the others equal AssembleFromPacked's to round-off. Each thread owns a
+// range of entries and adds in cell order: the same sums on any number of threads. A changed cell
+// costs about twice its share of the whole assembly, so this pays where few cells changed.
+void AssembleChangedCells(const double* restValues, const std::vector<double>& restPacked,
+                          const double* packed, const std::vector<char>& atRest,
+                          const std::vector<int>& entries, AssemblyPattern& pattern);
 
 } // namespace faceplan

@@ -82,7 +82,7 @@ TEST(Assembly, ChangedCellsOnTopOfTheRestEqualTheWholeAssembly) {
     if (!atRest[k / kPackedElementSize])
       reached[static_cast<size_t>(entries[k])] = 1;
   pattern.upper.coeffs().setConstant(-1.0);
-  AssembleChangedCells(restValues, rest, now.data(), atRest, entries, pattern);
+  AssembleChangedCells(restValues.data(), rest, now.data(), atRest, entries, pattern);
   const double largest =
       Eigen::Map<const Eigen::VectorXd>(whole.data(), whole.size()).cwiseAbs().maxCoeff();
   int exact = 0, close = 0;
@@ -103,8 +103,7 @@ TEST(Assembly, ChangedCellsOnTopOfTheRestEqualTheWholeAssembly) {
   for (size_t i = 0; i < dofNode.size(); ++i)
     dofNode[i] = static_cast<int>(i) - 1; // node 0 dropped
   AssemblyPattern dropped;
-  ASSERT_TRUE(
-      BuildAssemblyPattern(mesh, dofNode, static_cast<int>(mesh.numPoints()) - 1, dropped));
+  ASSERT_TRUE(BuildAssemblyPattern(mesh, dofNode, static_cast<int>(mesh.numPoints()) - 1, dropped));
   EXPECT_TRUE(PackedEntries(dropped, rest.size()).empty());
 }
 
