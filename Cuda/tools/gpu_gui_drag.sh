@@ -110,9 +110,10 @@ for prefix, name in series:
     phases = " | ".join("%s %s" % (p, "%.1f" % med(p + "_ms_median") if med(p + "_ms_median") is not None else "-")
                         for p in ("pipeline", "representations", "render", "paint"))
     frame = med("frame_ms_median")
-    print("%-26s frame %7.1f ms = %5.1f updates/s (rounds: %s) | %s" % (
+    solve = med("solve_ms_median")  # Condensed FEM Deform's own solve within the pipeline phase
+    print("%-26s frame %7.1f ms = %5.1f updates/s (rounds: %s) | %s | solve %s" % (
         name, frame, 1e3 / frame, ", ".join("%.1f" % i[prefix + "updates_per_s_median"] for i in infos),
-        phases))
+        phases, "%.1f" % solve if solve is not None else "-"))
 renderer = (gl["gl_vendor"] or "") + " " + (gl["gl_renderer"] or "")
 if "NVIDIA" not in renderer or any(s in renderer for s in ("llvmpipe", "Mesa", "softpipe", "swrast")):
     print("FAIL: the frames were not drawn by the NVIDIA GPU (%s)" % renderer)

@@ -12,7 +12,8 @@ new data), the representations' update (geometry extraction, data delivery), the
 view's framebuffer and the paint (Qt's event loop run until idle, as it runs between two mouse
 moves: the view's widget shows the new frame, Qt composes the window and the panels that changed
 redraw), each as wall and process CPU time (all threads, llvmpipe's included: a loaded machine
-inflates it less).
+inflates it less). Condensed FEM Deform's own solve time in each move (its field data SolveTimeMs)
+goes in as `*solve_ms_median`: the plugin's share of the pipeline phase.
 
 The moves are made twice: first with ParaView's default render settings (keys `default_*`), then
 with the drag setting README.md recommends (faceplan_pipeline.drag_render_settings: FXAA off), the
@@ -93,6 +94,12 @@ try:
         out = fem.GetClientSideObject().GetOutputDataObject(0)
         return vtk_to_numpy(out.GetPointData().GetArray("Displacement")).copy()
 
+    def solve_ms():
+        """The solve's own time in the last update (field data SolveTimeMs): FacePlan's
+        Condensed FEM Deform share of the frame."""
+        array = fem.GetClientSideObject().GetOutputDataObject(0).GetFieldData().GetArray("SolveTimeMs")
+        return array.GetValue(0) if array is not None else None
+
     def precomputes():
         fem.UpdatePropertyInformation()
         return fem.GetPropertyValue("PrecomputeCount")
@@ -114,7 +121,7 @@ try:
     def drag(prefix, phases_too):
         """MOVES moves of control point 1 (alternately down and back up, so that every move
         changes the face); records the frame figures under info[prefix + ...]."""
-        frames_wall, frames_cpu = [], []
+        frames_wall, frames_cpu, solves = [], [], []
         span_start = time.clock_gettime(time.CLOCK_MONOTONIC)  # perf -k CLOCK_MONOTONIC's clock
         phases = {name: {"wall": [], "cpu": []}
                   for name in ("pipeline", "representations", "render", "paint")}
@@ -142,6 +149,7 @@ try:
             record("paint", t3, t4)
             frames_wall.append(1e3 * (t4[0] - t0[0]))
             frames_cpu.append(1e3 * (t4[1] - t0[1]))
+            solves.append(solve_ms())
             current = face_displacement()
             previous = state["previous"]
             state["changed"].append(current.shape == previous.shape
@@ -156,6 +164,8 @@ try:
         info[prefix + "frame_cpu_ms_median"] = median_ms(frames_cpu)
         info[prefix + "updates_per_s_median"] = round(1e3 / median, 1)
         info[prefix + "target_met"] = 1e3 / median >= TARGET_UPDATES_PER_S
+        if None not in solves:
+            info[prefix + "solve_ms_median"] = median_ms(solves)
         if phases_too:
             for name, times in phases.items():
                 info[prefix + name + "_ms_median"] = median_ms(times["wall"])
