@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "Common/HelperThreads.h"
+#include "Common/WorkerThreads.h"
 
 #include <atomic>
 #include <chrono>
@@ -79,12 +80,18 @@ public:
 
 private:
   void loop(int index, std::uint64_t seen) {
+    NameThisThread("faceplan-help");
+    bool hadPart = false;
     while (true) {
-      // Awake for a while, then asleep until the next step.
-      const auto until = std::chrono::steady_clock::now() + kSpin;
+      // Awake for a while after a part, then asleep until the next step. A helper that had no
+      // part in the last step (it had fewer parts than there are helpers: on a many-core machine
+      // most steps) sleeps at once, or every step would keep all the cores busy.
+      const auto until =
+          std::chrono::steady_clock::now() + (hadPart ? kSpin : std::chrono::microseconds(0));
       while (generation_.load(std::memory_order_acquire) == seen &&
              std::chrono::steady_clock::now() < until)
         FACEPLAN_PAUSE();
+      hadPart = false;
       const std::function<void(int)>* work = nullptr;
       {
         std::unique_lock<std::mutex> lock(mutex_);
@@ -96,6 +103,7 @@ private:
           continue; // a step with fewer parts
         work = work_;
       }
+      hadPart = true;
       std::exception_ptr error;
       try {
         (*work)(index + 1);

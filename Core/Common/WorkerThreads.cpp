@@ -5,6 +5,10 @@
 #include <cstdlib>
 #include <thread>
 
+#ifdef __linux__
+#include <pthread.h>
+#endif
+
 namespace faceplan {
 
 namespace {
@@ -30,6 +34,14 @@ int WorkerThreads(int cap) {
   if (const int limit = EnvironmentLimit(); limit > 0)
     threads = std::min(threads, limit);
   return threads;
+}
+
+void NameThisThread(const char* name) {
+#ifdef __linux__
+  pthread_setname_np(pthread_self(), name); // fails only on a name over 15 characters
+#else
+  (void)name;
+#endif
 }
 
 } // namespace faceplan

@@ -7,4 +7,8 @@ namespace faceplan {
 
 int WorkerThreads(int cap);
 
+// Names the calling thread (at most 15 characters) where the system keeps thread names (Linux), so
+// that top -H, perf and /proc/<pid>/task tell FacePlan's threads from the host application's.
+void NameThisThread(const char* name);
+
 } // namespace faceplan

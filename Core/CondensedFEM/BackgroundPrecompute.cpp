@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "CondensedFEM/BackgroundPrecompute.h"
 
+#include "Common/WorkerThreads.h"
+
 #include <cstdlib>
 #include <set>
 
@@ -79,6 +81,7 @@ void BackgroundPrecompute::launch(Slot<System>& slot, Compute compute) {
     slot.system.reset();
   }
   slot.worker = std::thread([this, &slot, generation, compute = std::move(compute)] {
+    NameThisThread("faceplan-pre");
     std::shared_ptr<System> system;
     Status status = compute(system);
     std::lock_guard<std::mutex> lock(mutex_);

@@ -7,6 +7,7 @@
 #include "Common/HelperThreads.h"
 #include "Common/ParallelFor.h"
 #include "Common/UninitializedVector.h"
+#include "Common/WorkerThreads.h"
 #include "CondensedFEM/LargeDeformationProblem.h"
 #include "CondensedFEM/LbfgsHistory.h"
 #include "Mesh/InputValidation.h"
@@ -637,6 +638,7 @@ private:
   }
 
   void work() {
+    NameThisThread("faceplan-drag");
     YieldToInteractiveWork();
     std::unique_lock<std::mutex> lock(mutex_);
     while (true) {

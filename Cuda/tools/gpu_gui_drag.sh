@@ -114,6 +114,15 @@ for prefix, name in series:
     print("%-26s frame %7.1f ms = %5.1f updates/s (rounds: %s) | %s | solve %s" % (
         name, frame, 1e3 / frame, ", ".join("%.1f" % i[prefix + "updates_per_s_median"] for i in infos),
         phases, "%.1f" % solve if solve is not None else "-"))
+for prefix, name in (("", "linear"), ("large_deformation_", "NeoHookean")):
+    per_move = {}
+    for i in infos:
+        for group, ms in i.get(prefix + "thread_cpu_ms_per_move", {}).items():
+            per_move.setdefault(group, []).append(ms)
+    if per_move:
+        print("CPU per move by thread, %s (median of the rounds, ms): %s" % (name, ", ".join(
+            "%s %.1f" % (g, statistics.median(v)) for g, v in sorted(
+                per_move.items(), key=lambda kv: -statistics.median(kv[1])))))
 renderer = (gl["gl_vendor"] or "") + " " + (gl["gl_renderer"] or "")
 if "NVIDIA" not in renderer or any(s in renderer for s in ("llvmpipe", "Mesa", "softpipe", "swrast")):
     print("FAIL: the frames were not drawn by the NVIDIA GPU (%s)" % renderer)

@@ -13,7 +13,8 @@ view's framebuffer and the paint (Qt's event loop run until idle, as it runs bet
 moves: the view's widget shows the new frame, Qt composes the window and the panels that changed
 redraw), each as wall and process CPU time (all threads, llvmpipe's included: a loaded machine
 inflates it less). Condensed FEM Deform's own solve time in each move (its field data SolveTimeMs)
-goes in as `*solve_ms_median`: the plugin's share of the pipeline phase.
+goes in as `*solve_ms_median`: the plugin's share of the pipeline phase; each thread group's CPU
+time per move as `*thread_cpu_ms_per_move` (FacePlan names its threads faceplan-help, -drag, -pre).
 
 The moves are made twice: first with ParaView's default render settings (keys `default_*`), then
 with the drag setting README.md recommends (faceplan_pipeline.drag_render_settings: FXAA off), the
@@ -43,6 +44,26 @@ from gui_result import check, result, write_result  # noqa: E402
 
 def clock():
     return time.perf_counter(), time.process_time()
+
+
+def thread_cpu_s():
+    """CPU seconds so far of each of this process's threads, by group: "main" (the GUI's thread),
+    else the thread's name with a trailing number dropped (llvmpipe-3 -> llvmpipe-*); threads a
+    library leaves unnamed carry the program's name."""
+    import glob
+    import re
+    tick = os.sysconf("SC_CLK_TCK")
+    groups = {}
+    for task in glob.glob("/proc/self/task/*"):
+        try:
+            stat = open(task + "/stat").read()
+        except OSError:  # the thread ended meanwhile
+            continue
+        name = stat[stat.find("(") + 1:stat.rfind(")")]
+        fields = stat[stat.rfind(")") + 2:].split()
+        group = "main" if os.path.basename(task) == str(os.getpid()) else re.sub(r"-?\d+$", "-*", name)
+        groups[group] = groups.get(group, 0.0) + (int(fields[11]) + int(fields[12])) / tick
+    return groups
 
 
 def median_ms(values):
@@ -122,6 +143,7 @@ try:
         """MOVES moves of control point 1 (alternately down and back up, so that every move
         changes the face); records the frame figures under info[prefix + ...]."""
         frames_wall, frames_cpu, solves = [], [], []
+        threads_before = thread_cpu_s()
         span_start = time.clock_gettime(time.CLOCK_MONOTONIC)  # perf -k CLOCK_MONOTONIC's clock
         phases = {name: {"wall": [], "cpu": []}
                   for name in ("pipeline", "representations", "render", "paint")}
@@ -158,6 +180,10 @@ try:
         state["down"] = not state["down"]
         info = result["info"]
         info[prefix + "monotonic_span_s"] = [span_start, time.clock_gettime(time.CLOCK_MONOTONIC)]
+        threads_after = thread_cpu_s()
+        info[prefix + "thread_cpu_ms_per_move"] = {
+            group: round(1e3 * (cpu - threads_before.get(group, 0.0)) / MOVES, 1)
+            for group, cpu in sorted(threads_after.items()) if cpu > threads_before.get(group, 0.0)}
         median = statistics.median(frames_wall)
         info[prefix + "frame_ms"] = [round(t, 2) for t in frames_wall]
         info[prefix + "frame_ms_median"] = round(median, 2)

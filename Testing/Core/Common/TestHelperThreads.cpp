@@ -4,7 +4,7 @@
 // helpers, one with fewer leaves the rest idle; a part's exception reaches the caller, and the
 // helpers serve the next call after it; a call from within a part runs its parts there; each
 // calling thread has its own helpers (TSan runs this); a forked child, which has none of them,
-// starts its own.
+// starts its own; the helpers carry a name, and one left without a part sleeps at once.
 #include "Common/HelperThreads.h"
 #include "Common/ParallelFor.h"
 
@@ -15,10 +15,14 @@
 #include <numeric>
 #include <set>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
+#include <chrono>
 #include <csignal>
+#include <ctime>
+#include <pthread.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -139,6 +143,47 @@ TEST(HelperThreads, EachCallingThreadHasItsOwnHelpers) {
   for (int h : hits)
     ASSERT_EQ(h, 1);
 }
+
+#ifdef __linux__
+TEST(HelperThreads, HelpersAreNamedAndThoseWithoutAPartSleep) {
+  // On a thread of its own: a fresh crew, whose helpers are numbered from this test's first call.
+  std::thread([] {
+    std::vector<pthread_t> helper(4);
+    std::vector<std::string> name(4);
+    RunOnHelpers(4, [&](int part) {
+      helper[part] = pthread_self();
+      char text[16] = {};
+      pthread_getname_np(pthread_self(), text, sizeof text);
+      name[part] = text;
+    });
+    for (int part = 1; part < 4; ++part)
+      EXPECT_EQ(name[part], "faceplan-help") << "helper " << part;
+    // Steps of two parts a millisecond apart: helpers 2 and 3 have no part in them. A helper that
+    // stayed awake after each wake-up (2 ms) would spend most of the time on its core.
+    auto cpuMs = [&](int part) {
+      clockid_t clock;
+      timespec t{};
+      if (pthread_getcpuclockid(helper[part], &clock) != 0 || clock_gettime(clock, &t) != 0)
+        return -1.0;
+      return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+    };
+    const double before2 = cpuMs(2), before3 = cpuMs(3);
+    ASSERT_GE(before2, 0.0);
+    ASSERT_GE(before3, 0.0);
+    const auto start = std::chrono::steady_clock::now();
+    std::atomic<int> ran{0};
+    for (int step = 0; step < 60; ++step) {
+      RunOnHelpers(2, [&](int) { ++ran; });
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    const double wallMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(ran, 120);
+    EXPECT_LT(cpuMs(2) - before2, 0.2 * wallMs) << "over " << wallMs << " ms";
+    EXPECT_LT(cpuMs(3) - before3, 0.2 * wallMs) << "over " << wallMs << " ms";
+  }).join();
+}
+#endif
 
 TEST(HelperThreads, AForkedChildStartsItsOwn) {
 #ifdef FACEPLAN_TSAN
