@@ -49,19 +49,21 @@ def clock():
 def thread_cpu_s():
     """CPU seconds so far of each of this process's threads, by group: "main" (the GUI's thread),
     else the thread's name with a trailing number dropped (llvmpipe-3 -> llvmpipe-*); threads a
-    library leaves unnamed carry the program's name."""
-    import glob
-    import re
+    library leaves unnamed carry the program's name. Only os: the GPU host's packed Python holds
+    just the modules a GUI run opens."""
     tick = os.sysconf("SC_CLK_TCK")
     groups = {}
-    for task in glob.glob("/proc/self/task/*"):
+    for tid in os.listdir("/proc/self/task"):
         try:
-            stat = open(task + "/stat").read()
+            with open("/proc/self/task/%s/stat" % tid) as f:
+                stat = f.read()
         except OSError:  # the thread ended meanwhile
             continue
         name = stat[stat.find("(") + 1:stat.rfind(")")]
         fields = stat[stat.rfind(")") + 2:].split()
-        group = "main" if os.path.basename(task) == str(os.getpid()) else re.sub(r"-?\d+$", "-*", name)
+        stripped = name.rstrip("0123456789")
+        group = ("main" if tid == str(os.getpid())
+                 else stripped + "*" if stripped != name and stripped.endswith("-") else name)
         groups[group] = groups.get(group, 0.0) + (int(fields[11]) + int(fields[12])) / tick
     return groups
 
