@@ -31,6 +31,8 @@ std::mutex scopeMutex;
 std::vector<int> openShared, openPinned;
 int countBeforeScopes = -1;
 
+thread_local bool threadIsBackground = false; // MarkThreadAsBackground
+
 // The count the open scopes ask for; -1 when none is open.
 int CountInForce() {
   const std::vector<int>& deciding = openPinned.empty() ? openShared : openPinned;
@@ -59,6 +61,14 @@ ScopedBlasThreads::~ScopedBlasThreads() {
   open.erase(std::find(open.begin(), open.end(), requested_));
   const int count = CountInForce();
   SetFunction()(count < 0 ? countBeforeScopes : count);
+}
+
+void MarkThreadAsBackground() {
+  threadIsBackground = true;
+}
+
+bool ThreadIsBackground() {
+  return threadIsBackground;
 }
 
 } // namespace faceplan

@@ -23,4 +23,12 @@ private:
   BlasScope kind_ = BlasScope::Shared;
 };
 
+// Marks the calling thread as background work (the refactorization ahead of a drag, at the lowest
+// priority): the threaded BLAS steps it asks for then run on one thread. OpenBLAS's threads are
+// the process's, at normal priority, and spin for about a tenth of a second after each threaded
+// call before they sleep, so a background step's threaded BLAS would take as many cores from the
+// edit the user waits for (on a 16-core host, 7 cores after every drag step).
+void MarkThreadAsBackground();
+bool ThreadIsBackground();
+
 } // namespace faceplan

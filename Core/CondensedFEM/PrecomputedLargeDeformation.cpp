@@ -640,6 +640,7 @@ private:
   void work() {
     NameThisThread("faceplan-drag");
     YieldToInteractiveWork();
+    MarkThreadAsBackground();
     std::unique_lock<std::mutex> lock(mutex_);
     while (true) {
       wake_.wait(lock, [this] { return stop_ || pending_ || releasesPending_; });

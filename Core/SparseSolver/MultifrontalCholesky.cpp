@@ -521,10 +521,12 @@ Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumn
   }
   if (outOfMemory)
     return Status::Error("out of memory in the multifrontal factorization");
+  // At most 8 BLAS threads for the top, as CholmodFactor::factorize has for CHOLMOD: OpenBLAS
+  // with 16 threads was many times slower on these blocks. One on a background thread
+  // (BlasThreads.h).
+  const int topBlasThreads = ThreadIsBackground() ? 1 : std::min(threads, 8);
   if (failedColumn < 0) {
-    // At most 8 BLAS threads, as CholmodFactor::factorize has for CHOLMOD: OpenBLAS with 16
-    // threads was many times slower on these blocks.
-    ScopedBlasThreads threadedBlas(std::min(threads, 8));
+    ScopedBlasThreads threadedBlas(topBlasThreads);
     std::vector<int> position(p.n, 0);
     for (int t = 0; t < p.nsuper && failedColumn < 0; ++t)
       if (top[t] && factored(t))
@@ -551,6 +553,7 @@ Status FactorizeNumeric(const Plan& p, Scalar* x, int threads, int& failedColumn
     report->topFlopsShare = total > 0.0 ? topFlops / total : 0.0;
     report->factoredFlopsShare = total > 0.0 ? factoredFlops / total : 1.0;
     report->threads = threads;
+    report->topBlasThreads = topBlasThreads;
   }
   for (Update<Scalar>& u : updates) // those a failure left unread
     pool.give(u);

@@ -28,6 +28,7 @@ struct MultifrontalReport {
   int topSupernodes = 0;    // run last, one after another, with threaded BLAS
   double topFlopsShare = 0; // their share of the factorization's flops
   int threads = 0;
+  int topBlasThreads = 0; // the BLAS threads the top asked for (1 on a background thread)
   // With a reference (MultifrontalRefactorizeSingle): the supernodes factored, and their share of
   // a whole factorization's flops; without, every supernode and 1.
   int supernodesFactored = 0;

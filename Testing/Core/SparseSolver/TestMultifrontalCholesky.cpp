@@ -2,7 +2,9 @@
 // SparseSolver/MultifrontalCholesky: the multifrontal factor in CHOLMOD's layout must be CHOLMOD's
 // factor up to round-off (a wide supernode's too), the same bit for bit from run to run whatever
 // the thread schedule, and refuse a matrix that is not positive definite (CholmodFactor then names
-// CHOLMOD's first failing column, as before).
+// CHOLMOD's first failing column, as before); on a background thread the top's BLAS runs on one
+// thread.
+#include "Common/BlasThreads.h"
 #include "CondensedFEM/CondensedSystem.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/CholmodViews.h"
@@ -17,6 +19,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <thread>
 #include <vector>
 
 using namespace faceplan;
@@ -102,6 +105,41 @@ TEST(MultifrontalCholesky, SameBitsOnEveryRun) {
     EXPECT_EQ(Values(L), first) << "run " << run;
   }
   cholmod_free_factor(&L, &quiet.common);
+}
+
+// The top's threaded BLAS asks for the factorization's threads (at most 8), but for one thread on
+// a thread marked as background work: OpenBLAS's threads would otherwise spin beside the edit the
+// user waits for. The factor is the same either way, up to the BLAS's round-off.
+TEST(MultifrontalCholesky, ABackgroundThreadsTopRunsItsBlasOnOneThread) {
+  const auto system = ShellSystem();
+  ASSERT_TRUE(system);
+  auto factorOn = [&](bool background, MultifrontalReport& report, std::vector<double>& values) {
+    std::thread([&] {
+      if (background)
+        MarkThreadAsBackground();
+      QuietCholmodCommon quiet;
+      cholmod_factor* L = Analysed(*system, system->kff, quiet.common);
+      ASSERT_TRUE(L);
+      ASSERT_TRUE(MultifrontalFactorize(system->kff, L, &quiet.common, 4, &report).ok);
+      values = Values(L);
+      cholmod_free_factor(&L, &quiet.common);
+    }).join();
+  };
+  MultifrontalReport foreground, background;
+  std::vector<double> a, b;
+  factorOn(false, foreground, a);
+  factorOn(true, background, b);
+  ASSERT_GT(foreground.topSupernodes, 0);
+  EXPECT_EQ(foreground.topBlasThreads, 4);
+  EXPECT_EQ(background.topBlasThreads, 1);
+  EXPECT_FALSE(ThreadIsBackground()); // the mark stays with its thread
+  ASSERT_EQ(a.size(), b.size());
+  double largest = 0.0, difference = 0.0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    largest = std::max(largest, std::abs(a[k]));
+    difference = std::max(difference, std::abs(a[k] - b[k]));
+  }
+  EXPECT_LT(difference, 1e-12 * largest);
 }
 
 // Bytes of every supernode's update matrix in double precision at once.
