@@ -27,7 +27,7 @@ private:
 // priority): the threaded BLAS steps it asks for then run on one thread. OpenBLAS's threads are
 // the process's, at normal priority, and spin for about a tenth of a second after each threaded
 // call before they sleep, so a background step's threaded BLAS would take as many cores from the
-// edit the user waits for (on a 16-core host, 7 cores after every drag step).
+// edit the user waits for.
 void MarkThreadAsBackground();
 bool ThreadIsBackground();
 

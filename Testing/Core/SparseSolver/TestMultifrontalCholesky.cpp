@@ -5,6 +5,7 @@
 // CHOLMOD's first failing column, as before); on a background thread the top's BLAS runs on one
 // thread.
 #include "Common/BlasThreads.h"
+#include "Common/RelativeDifference.h"
 #include "CondensedFEM/CondensedSystem.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/CholmodViews.h"
@@ -134,12 +135,7 @@ TEST(MultifrontalCholesky, ABackgroundThreadsTopRunsItsBlasOnOneThread) {
   EXPECT_EQ(background.topBlasThreads, 1);
   EXPECT_FALSE(ThreadIsBackground()); // the mark stays with its thread
   ASSERT_EQ(a.size(), b.size());
-  double largest = 0.0, difference = 0.0;
-  for (size_t k = 0; k < a.size(); ++k) {
-    largest = std::max(largest, std::abs(a[k]));
-    difference = std::max(difference, std::abs(a[k] - b[k]));
-  }
-  EXPECT_LT(difference, 1e-12 * largest);
+  EXPECT_LT(RelativeMaxDifference(b.data(), a.data(), a.size()), 1e-12);
 }
 
 // Bytes of every supernode's update matrix in double precision at once.
