@@ -3,6 +3,7 @@
 
 #include "BezierCut/BezierCut.h"
 #include "BezierCutInputCache.h"
+#include "FacePlanArrayRanges.h"
 #include "FacePlanGather.h"
 
 #include <vtkAlgorithmOutput.h>
@@ -212,9 +213,12 @@ int vtkBezierCut::RequestData(vtkInformation*, vtkInformationVector** inputVecto
       surface->Initialize();
     // Every rank reports the error; only rank 0 logged it.
     this->LastError = faceplan::gather::ShareRootMessage(controller, 0, this->LastError);
-    return 1;
+  } else {
+    this->Cut(input, output, surface);
   }
-  this->Cut(input, output, surface);
+  for (vtkDataObject* o :
+       {static_cast<vtkDataObject*>(output), static_cast<vtkDataObject*>(surface)})
+    faceplan::CacheArrayRanges(o, {input});
   return 1;
 }
 

@@ -12,6 +12,7 @@
 #include "CondensedFEMDeformParallel.h"
 #include "CondensedFEMDeformSolver.h"
 #include "CondensedFEMDeformValidate.h"
+#include "FacePlanArrayRanges.h"
 #include "FacePlanFieldData.h"
 #include "FacePlanGather.h"
 
@@ -220,6 +221,11 @@ int vtkCondensedFEMDeform::RequestData(vtkInformation*, vtkInformationVector** i
   // The field data are the solve's figures (Backend, Method, SolveTimeMs, ...), all made here:
   // the colour-by list offers the point arrays (Displacement) only.
   faceplan::fielddata::HideFromArrayLists(output->GetFieldData());
+  std::vector<vtkDataObject*> inputs{tissue};
+  for (int c = 0; c < inputVector[1]->GetNumberOfInformationObjects(); ++c)
+    inputs.push_back(vtkDataObject::GetData(inputVector[1], c));
+  for (vtkDataObject* o : {static_cast<vtkDataObject*>(output), static_cast<vtkDataObject*>(table)})
+    faceplan::CacheArrayRanges(o, inputs);
   return 1;
 }
 

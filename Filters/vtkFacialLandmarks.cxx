@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkFacialLandmarks.h"
 
+#include "FacePlanArrayRanges.h"
 #include "Landmarks/ClinicalBands.h"
 #include "Landmarks/FacialLandmarks.h"
 #include "Landmarks/LandmarkTable.h"
@@ -458,6 +459,8 @@ int vtkFacialLandmarks::RequestData(vtkInformation*, vtkInformationVector** inpu
   points->GetPointData()->AddArray(moved);
   if (!missing.empty() && haveBone)
     vtkWarningMacro(<< "FacialLandmarks: not found: " << missing);
+  for (vtkDataObject* o : {static_cast<vtkDataObject*>(table), static_cast<vtkDataObject*>(points)})
+    faceplan::CacheArrayRanges(o, {tissue, bone});
   return 1;
 }
 

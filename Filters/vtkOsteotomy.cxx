@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkOsteotomy.h"
 
+#include "FacePlanArrayRanges.h"
 #include "FacePlanDataStamp.h"
 #include "FacePlanFieldData.h"
 #include "FacePlanGather.h"
@@ -104,9 +105,12 @@ int vtkOsteotomy::RequestData(vtkInformation*, vtkInformationVector** inputVecto
     if (bone.IsRoot())
       this->Cut(bone.Whole() ? bone.Whole() : data, output, planesOutput);
     this->LastError = faceplan::gather::ShareRootMessage(controller, 0, this->LastError);
-    return 1;
+  } else {
+    this->Cut(data, output, planesOutput);
   }
-  this->Cut(data, output, planesOutput);
+  for (vtkDataObject* o :
+       {static_cast<vtkDataObject*>(output), static_cast<vtkDataObject*>(planesOutput)})
+    faceplan::CacheArrayRanges(o, {data});
   return 1;
 }
 

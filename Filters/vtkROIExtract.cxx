@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkROIExtract.h"
 
+#include "FacePlanArrayRanges.h"
 #include "FacePlanGather.h"
 #include "FacePlanVTKConvert.h"
 #include "ROIExtract/DefaultRegion.h"
@@ -173,9 +174,10 @@ int vtkROIExtract::RequestData(vtkInformation*, vtkInformationVector** inputVect
     faceplan::gather::RunOnWhole(
         controller, input, output,
         [this](vtkPointSet* in, vtkPointSet* out) { return this->Extract(in, out); });
-    return 1;
+  } else {
+    this->Extract(input, output);
   }
-  this->Extract(input, output);
+  faceplan::CacheArrayRanges(output, {input});
   return 1;
 }
 

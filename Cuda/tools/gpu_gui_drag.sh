@@ -11,6 +11,9 @@
 # fit a transfer of 64 MiB, carried one by one to a host that keeps them between calls).
 # On a host with ParaView, Xvfb and a FacePlan build with the plugin, `run` without PACK uses them.
 # The figures go to $OUT/gui_drag_gpu.txt (and each round's result JSON and logs beside it).
+# BASELINE_PLUGIN_DIR=<dir> (a build of another commit, from the same pack step) runs it beside
+# PLUGIN_DIR in every round, the two in alternating order, on the same display: its figures and the
+# per-round pairs follow the main ones (the machine's drift cancels in the pairs).
 # FACEPLAN_GLX_VENDOR=mesa tries the same steps on a host without NVIDIA's GLX (and fails the check).
 set -uo pipefail
 . "$(dirname "$0")/paraview_pack.sh"
@@ -80,49 +83,77 @@ EOF
   kill -0 "$xvfb_pid" 2>/dev/null || { echo "Xvfb did not start:"; cat "$out/xvfb.log"; return 1; }
   { nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; nproc; uname -r; } >"$out/machine.txt" 2>&1
   cat "$out/machine.txt"
-  local status=0 round
+  local status=0 round variant variants dir
   for round in $(seq 1 "$rounds"); do
-    DISPLAY=$display __GLX_VENDOR_LIBRARY_NAME=${FACEPLAN_GLX_VENDOR:-nvidia} python3 Testing/GUI/run_gui_test.py \
-      --script TestGUIDrag.py --paraview "$paraview" --paraview-arg=--no-mpi --plugin "$plugin" \
-      --source-dir "$PWD" --work-dir "/tmp/gui-drag-r$round" --timeout 240 >"$out/round$round.log" 2>&1 ||
-      status=1
-    grep -vE '^info:' "$out/round$round.log"
-    cp "/tmp/gui-drag-r$round/faceplan_gui_result.json" "$out/result_r$round.json" 2>/dev/null
-    cp "/tmp/gui-drag-r$round/paraview_gui.log" "$out/paraview_gui_r$round.log" 2>/dev/null
-    [ $status = 0 ] || break
+    variants=main
+    if [ -n "${BASELINE_PLUGIN_DIR:-}" ]; then
+      variants="main baseline"
+      [ $((round % 2)) = 0 ] && variants="baseline main"
+    fi
+    for variant in $variants; do
+      local tag=r$round dir=$(dirname "$plugin")
+      [ "$variant" = baseline ] && tag=r${round}_baseline dir=$BASELINE_PLUGIN_DIR
+      # Its own folder first: both builds name their library libFacePlanFilters.so.
+      LD_LIBRARY_PATH=$dir:${LD_LIBRARY_PATH:-} DISPLAY=$display \
+        __GLX_VENDOR_LIBRARY_NAME=${FACEPLAN_GLX_VENDOR:-nvidia} python3 Testing/GUI/run_gui_test.py \
+        --script TestGUIDrag.py --paraview "$paraview" --paraview-arg=--no-mpi --plugin "$dir/FacePlan.so" \
+        --source-dir "$PWD" --work-dir "/tmp/gui-drag-$tag" --timeout 240 >"$out/round_$tag.log" 2>&1 ||
+        status=1
+      grep -vE '^info:' "$out/round_$tag.log"
+      cp "/tmp/gui-drag-$tag/faceplan_gui_result.json" "$out/result_$tag.json" 2>/dev/null
+      cp "/tmp/gui-drag-$tag/paraview_gui.log" "$out/paraview_gui_$tag.log" 2>/dev/null
+      [ $status = 0 ] || break 2
+    done
   done
   kill "$xvfb_pid" 2>/dev/null
   [ $status = 0 ] || { echo "the GUI run failed: see $out"; return 1; }
-  python3 - "$out" "$rounds" <<'EOF' | tee "$out/gui_drag_gpu.txt"
+  python3 - "$out" "$rounds" "${BASELINE_PLUGIN_DIR:-}" <<'EOF' | tee "$out/gui_drag_gpu.txt"
 import json, statistics, sys
-out, rounds = sys.argv[1], int(sys.argv[2])
-infos = [json.load(open("%s/result_r%d.json" % (out, r)))["info"] for r in range(1, rounds + 1)]
-gl = infos[0]
-print("OpenGL: %s | %s | %s" % (gl["gl_vendor"], gl["gl_renderer"], gl["gl_version"]))
-print("view %s, %d rounds of 12 moves; per frame, median of each round's medians (ms, wall):" % (
-    gl["view_size"], rounds))
-series = (("default_", "ParaView's defaults"), ("", "FXAA off (drag setting)"),
-          ("small_view_", "FXAA off, quarter view"), ("large_deformation_", "FXAA off, NeoHookean"))
-for prefix, name in series:
-    def med(key):
-        values = [i.get(prefix + key) for i in infos]
-        return None if None in values else statistics.median(values)
-    phases = " | ".join("%s %s" % (p, "%.1f" % med(p + "_ms_median") if med(p + "_ms_median") is not None else "-")
-                        for p in ("pipeline", "representations", "render", "paint"))
-    frame = med("frame_ms_median")
-    solve = med("solve_ms_median")  # Condensed FEM Deform's own solve within the pipeline phase
-    print("%-26s frame %7.1f ms = %5.1f updates/s (rounds: %s) | %s | solve %s" % (
-        name, frame, 1e3 / frame, ", ".join("%.1f" % i[prefix + "updates_per_s_median"] for i in infos),
-        phases, "%.1f" % solve if solve is not None else "-"))
-for prefix, name in (("", "linear"), ("large_deformation_", "NeoHookean")):
-    per_move = {}
-    for i in infos:
-        for group, ms in i.get(prefix + "thread_cpu_ms_per_move", {}).items():
-            per_move.setdefault(group, []).append(ms)
-    if per_move:
-        print("CPU per move by thread, %s (median of the rounds, ms): %s" % (name, ", ".join(
-            "%s %.1f" % (g, statistics.median(v)) for g, v in sorted(
-                per_move.items(), key=lambda kv: -statistics.median(kv[1])))))
+out, rounds, baseline = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+def load(suffix):
+    return [json.load(open("%s/result_r%d%s.json" % (out, r, suffix)))["info"] for r in range(1, rounds + 1)]
+def summary(infos):
+    gl = infos[0]
+    print("OpenGL: %s | %s | %s" % (gl["gl_vendor"], gl["gl_renderer"], gl["gl_version"]))
+    print("view %s, %d rounds of 12 moves; per frame, median of each round's medians (ms, wall):" % (
+        gl["view_size"], rounds))
+    series = (("default_", "ParaView's defaults"), ("", "FXAA off (drag setting)"),
+              ("small_view_", "FXAA off, quarter view"), ("large_deformation_", "FXAA off, NeoHookean"))
+    for prefix, name in series:
+        def med(key):
+            values = [i.get(prefix + key) for i in infos]
+            return None if None in values else statistics.median(values)
+        phases = " | ".join("%s %s" % (p, "%.1f" % med(p + "_ms_median") if med(p + "_ms_median") is not None else "-")
+                            for p in ("pipeline", "representations", "render", "paint"))
+        frame = med("frame_ms_median")
+        solve = med("solve_ms_median")  # Condensed FEM Deform's own solve within the pipeline phase
+        print("%-26s frame %7.1f ms = %5.1f updates/s (rounds: %s) | %s | solve %s" % (
+            name, frame, 1e3 / frame, ", ".join("%.1f" % i[prefix + "updates_per_s_median"] for i in infos),
+            phases, "%.1f" % solve if solve is not None else "-"))
+    for prefix, name in (("", "linear"), ("large_deformation_", "NeoHookean")):
+        per_move = {}
+        for i in infos:
+            for group, ms in i.get(prefix + "thread_cpu_ms_per_move", {}).items():
+                per_move.setdefault(group, []).append(ms)
+        if per_move:
+            print("CPU per move by thread, %s (median of the rounds, ms): %s" % (name, ", ".join(
+                "%s %.1f" % (g, statistics.median(v)) for g, v in sorted(
+                    per_move.items(), key=lambda kv: -statistics.median(kv[1])))))
+    return gl
+infos = load("")
+gl = summary(infos)
+if baseline:
+    base = load("_baseline")
+    print("\nBaseline (%s), the same rounds:" % baseline)
+    summary(base)
+    print("\nPer round, this build against the baseline (frame ms, solve ms):")
+    for prefix, name in (("", "linear"), ("large_deformation_", "NeoHookean")):
+        pairs = ["%.1f/%.1f vs %.1f/%.1f" % (i[prefix + "frame_ms_median"], i.get(prefix + "solve_ms_median", 0),
+                                              b[prefix + "frame_ms_median"], b.get(prefix + "solve_ms_median", 0))
+                 for i, b in zip(infos, base)]
+        ratio = statistics.median(b[prefix + "frame_ms_median"] / i[prefix + "frame_ms_median"]
+                                  for i, b in zip(infos, base))
+        print("  %-10s %s; median frame ratio baseline/this %.3f" % (name, "; ".join(pairs), ratio))
 renderer = (gl["gl_vendor"] or "") + " " + (gl["gl_renderer"] or "")
 if "NVIDIA" not in renderer or any(s in renderer for s in ("llvmpipe", "Mesa", "softpipe", "swrast")):
     print("FAIL: the frames were not drawn by the NVIDIA GPU (%s)" % renderer)
