@@ -14,7 +14,8 @@ moves: the view's widget shows the new frame, Qt composes the window and the pan
 redraw), each as wall and process CPU time (all threads, llvmpipe's included: a loaded machine
 inflates it less). Condensed FEM Deform's own solve time in each move (its field data SolveTimeMs)
 goes in as `*solve_ms_median`: the plugin's share of the pipeline phase; each thread group's CPU
-time per move as `*thread_cpu_ms_per_move` (FacePlan names its threads faceplan-help, -drag, -pre).
+time per move as `*thread_cpu_ms_per_move` (FacePlan names its threads faceplan-help, -drag, -pre);
+each move's start on CLOCK_MONOTONIC and its phases' ends as `*phase_stamps`.
 
 The moves are made twice: first with ParaView's default render settings (keys `default_*`), then
 with the drag setting README.md recommends (faceplan_pipeline.drag_render_settings: FXAA off), the
@@ -144,7 +145,7 @@ try:
     def drag(prefix, phases_too):
         """MOVES moves of control point 1 (alternately down and back up, so that every move
         changes the face); records the frame figures under info[prefix + ...]."""
-        frames_wall, frames_cpu, solves = [], [], []
+        frames_wall, frames_cpu, solves, stamps = [], [], [], []
         threads_before = thread_cpu_s()
         span_start = time.clock_gettime(time.CLOCK_MONOTONIC)  # perf -k CLOCK_MONOTONIC's clock
         phases = {name: {"wall": [], "cpu": []}
@@ -157,6 +158,7 @@ try:
         for k in range(1, MOVES + 1):
             step = k if state["down"] else MOVES - k
             curve[5] = faceplan_pipeline.CUT_Z - 0.5 - 3.0 * step / MOVES  # over 3 mm whatever MOVES
+            move_start = time.clock_gettime(time.CLOCK_MONOTONIC)
             t0 = clock()
             cut.CurveU = curve
             fem.UpdatePipeline()  # Apply, as Auto Apply does: the shown outputs update, then draw
@@ -167,6 +169,8 @@ try:
             t3 = clock()
             process_events()  # what the GUI does before the next mouse move: paint
             t4 = clock()
+            # When each phase ended, for scripts/profile_gui_drag's split of perf's samples.
+            stamps.append([round(move_start, 6)] + [round(t[0] - t0[0], 6) for t in (t1, t2, t3, t4)])
             record("pipeline", t0, t1)
             record("representations", t1, t2)
             record("render", t2, t3)
@@ -182,6 +186,7 @@ try:
         state["down"] = not state["down"]
         info = result["info"]
         info[prefix + "monotonic_span_s"] = [span_start, time.clock_gettime(time.CLOCK_MONOTONIC)]
+        info[prefix + "phase_stamps"] = stamps
         threads_after = thread_cpu_s()
         info[prefix + "thread_cpu_ms_per_move"] = {
             group: round(1e3 * (cpu - threads_before.get(group, 0.0)) / MOVES, 1)
