@@ -30,7 +30,53 @@ namespace {
 
 // Per component min and max, and min and max of the tuple's Euclidean norm, as VTK computes them
 // (values converted to double, the norm's square summed over the components in order, the square
-// root taken of the extremes). False when a value is not finite (VTK's two variants then differ).
+// root taken of the extremes). False when a value is not finite (VTK's two variants then differ):
+// x - x is 0 for a finite x and NaN otherwise, so their sum tells without a branch per value.
+// NC > 0: that many components, kept in registers; 0: any number.
+template <int NC, typename T>
+bool ScanRanges(const T* values, vtkIdType nt, int nc, double* components, double norm[2]) {
+  constexpr int kFixed = NC > 0 ? NC : 1;
+  double fixedLow[kFixed], fixedHigh[kFixed];
+  std::vector<double> anyLow, anyHigh;
+  double* low = fixedLow;
+  double* high = fixedHigh;
+  if (NC == 0) {
+    anyLow.resize(static_cast<std::size_t>(nc));
+    anyHigh.resize(static_cast<std::size_t>(nc));
+    low = anyLow.data();
+    high = anyHigh.data();
+  } else {
+    nc = NC;
+  }
+  std::fill(low, low + nc, std::numeric_limits<double>::max());
+  std::fill(high, high + nc, std::numeric_limits<double>::lowest());
+  double normLow = std::numeric_limits<double>::max();
+  double normHigh = std::numeric_limits<double>::lowest();
+  double nonFinite = 0.0;
+  for (vtkIdType t = 0; t < nt; ++t) {
+    const T* tuple = values + t * nc;
+    double squared = 0.0;
+    for (int c = 0; c < nc; ++c) {
+      const double x = static_cast<double>(tuple[c]);
+      low[c] = x < low[c] ? x : low[c];
+      high[c] = x > high[c] ? x : high[c];
+      squared += x * x;
+      nonFinite += x - x;
+    }
+    normLow = squared < normLow ? squared : normLow;
+    normHigh = squared > normHigh ? squared : normHigh;
+  }
+  if (nonFinite != 0.0) // NaN compares unequal
+    return false;
+  for (int c = 0; c < nc; ++c) {
+    components[2 * c] = low[c];
+    components[2 * c + 1] = high[c];
+  }
+  norm[0] = std::sqrt(normLow);
+  norm[1] = std::sqrt(normHigh);
+  return true;
+}
+
 template <typename T>
 bool ComputeRanges(vtkAOSDataArrayTemplate<T>* array, std::vector<double>& components,
                    double norm[2]) {
@@ -38,41 +84,37 @@ bool ComputeRanges(vtkAOSDataArrayTemplate<T>* array, std::vector<double>& compo
   const vtkIdType nt = array->GetNumberOfTuples();
   const T* values = array->GetPointer(0);
   components.resize(2 * static_cast<std::size_t>(nc));
-  for (int c = 0; c < nc; ++c) {
-    components[2 * c] = std::numeric_limits<double>::max();
-    components[2 * c + 1] = std::numeric_limits<double>::lowest();
+  switch (nc) {
+  case 1:
+    return ScanRanges<1>(values, nt, nc, components.data(), norm);
+  case 2:
+    return ScanRanges<2>(values, nt, nc, components.data(), norm);
+  case 3:
+    return ScanRanges<3>(values, nt, nc, components.data(), norm);
+  default:
+    return ScanRanges<0>(values, nt, nc, components.data(), norm);
   }
-  double low = std::numeric_limits<double>::max(), high = std::numeric_limits<double>::lowest();
-  for (vtkIdType t = 0; t < nt; ++t) {
-    double squared = 0.0;
-    for (int c = 0; c < nc; ++c) {
-      const double x = static_cast<double>(values[t * nc + c]);
-      if (!std::isfinite(x))
-        return false;
-      components[2 * c] = std::min(components[2 * c], x);
-      components[2 * c + 1] = std::max(components[2 * c + 1], x);
-      squared += x * x;
-    }
-    low = std::min(low, squared);
-    high = std::max(high, squared);
-  }
-  norm[0] = std::sqrt(low);
-  norm[1] = std::sqrt(high);
-  return true;
 }
 
 void Store(vtkDataArray* array, const std::vector<double>& components, const double norm[2]) {
   vtkInformation* info = array->GetInformation();
   info->Set(vtkDataArray::L2_NORM_RANGE(), norm, 2);
   info->Set(vtkDataArray::L2_NORM_FINITE_RANGE(), norm, 2);
+  const int nc = array->GetNumberOfComponents();
   for (vtkInformationInformationVectorKey* key :
        {vtkDataArray::PER_COMPONENT(), vtkDataArray::PER_FINITE_COMPONENT()}) {
-    vtkNew<vtkInformationVector> perComponent;
-    perComponent->SetNumberOfInformationObjects(array->GetNumberOfComponents());
-    for (int c = 0; c < array->GetNumberOfComponents(); ++c)
+    vtkInformationVector* perComponent = info->Get(key);
+    if (!perComponent || perComponent->GetNumberOfInformationObjects() < nc) {
+      // As vtkDataArray::ComputeRange makes it: FastDelete, since an information vector's plain
+      // Delete runs VTK's garbage collector, which costs more than the whole scan.
+      perComponent = vtkInformationVector::New();
+      perComponent->SetNumberOfInformationObjects(nc);
+      info->Set(key, perComponent);
+      perComponent->FastDelete();
+    }
+    for (int c = 0; c < nc; ++c)
       perComponent->GetInformationObject(c)->Set(vtkDataArray::COMPONENT_RANGE(),
                                                  components.data() + 2 * c, 2);
-    info->Set(key, perComponent);
   }
 }
 
