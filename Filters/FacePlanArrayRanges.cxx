@@ -12,7 +12,6 @@
 #include <vtkInformationDoubleVectorKey.h>
 #include <vtkInformationInformationVectorKey.h>
 #include <vtkInformationVector.h>
-#include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPointSet.h>
 #include <vtkPoints.h>
