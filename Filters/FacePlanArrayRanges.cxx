@@ -117,8 +117,33 @@ void Store(vtkDataArray* array, const std::vector<double>& components, const dou
   }
 }
 
+// Whether VTK would take array's ranges from its cache: all four kinds stored since the array
+// last changed (an array the filter keeps from one update to the next, unchanged).
+bool CachedAndValid(vtkDataArray* array) {
+  vtkInformation* info = array->GetInformation();
+  if (info->GetMTime() < array->GetMTime() || !info->Has(vtkDataArray::L2_NORM_RANGE()) ||
+      !info->Has(vtkDataArray::L2_NORM_FINITE_RANGE()))
+    return false;
+  for (vtkInformationInformationVectorKey* key :
+       {vtkDataArray::PER_COMPONENT(), vtkDataArray::PER_FINITE_COMPONENT()}) {
+    vtkInformationVector* perComponent = info->Get(key);
+    if (!perComponent ||
+        perComponent->GetNumberOfInformationObjects() < array->GetNumberOfComponents())
+      return false;
+    for (int c = 0; c < array->GetNumberOfComponents(); ++c)
+      if (!perComponent->GetInformationObject(c)->Has(vtkDataArray::COMPONENT_RANGE()))
+        return false;
+  }
+  return true;
+}
+
+// Arrays of fewer values (the field data's one-value figures) are left to VTK: storing their
+// ranges costs what VTK's own passes over them cost, and a script that never asks would pay it.
+constexpr vtkIdType kSmallestCached = 64;
+
 void Cache(vtkDataArray* array) {
-  if (!array || array->GetNumberOfTuples() == 0 || array->GetNumberOfComponents() == 0)
+  if (!array || array->GetNumberOfValues() < kSmallestCached ||
+      array->GetNumberOfComponents() == 0 || CachedAndValid(array))
     return;
   std::vector<double> components;
   double norm[2];

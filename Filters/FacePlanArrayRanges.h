@@ -12,9 +12,11 @@
 // VTK would compute, so that ParaView finds them there.
 //
 // Only arrays the filter made are touched: one also held by an input (a shallow-copied pass-through
-// array) is left alone, since inputs are never modified. Arrays with a non-finite value, empty
-// arrays and arrays not stored as one contiguous block are left to VTK. Call it last, once the
-// output is complete: modifying an array afterwards invalidates its cached ranges, as in VTK.
+// array) is left alone, since inputs are never modified; so is one whose ranges are cached already
+// (an array kept unchanged from the last update). Arrays of fewer than 64 values, arrays with a
+// non-finite value and arrays not stored as one contiguous block are left to VTK. Call it last,
+// once the output is complete: modifying an array afterwards invalidates its cached ranges, as in
+// VTK.
 // Private to FacePlan::Filters.
 #include <vector>
 
