@@ -137,8 +137,8 @@ bool CachedAndValid(vtkDataArray* array) {
   return true;
 }
 
-// Arrays of fewer values (the field data's one-value figures) are left to VTK: storing their
-// ranges costs what VTK's own passes over them cost, and a script that never asks would pay it.
+// Arrays of fewer values (the field data's one-value figures) are left to VTK, so that a script
+// that never asks for ranges does not pay for them; ParaView's data information computes them.
 constexpr vtkIdType kSmallestCached = 64;
 
 void Cache(vtkDataArray* array) {
