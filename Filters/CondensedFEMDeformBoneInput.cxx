@@ -11,6 +11,7 @@
 #include "vtkPointSet.h"
 #include "vtkPolyData.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace faceplan {
@@ -74,6 +75,24 @@ const std::vector<unsigned char>& BoneInput::signature(vtkPointSet* bone) {
   return signature_;
 }
 
+namespace {
+
+// Diagonal of the bounding box of packed xyz triples (0 when there are none).
+double BoundsDiagonal(const std::vector<double>& xyz) {
+  if (xyz.size() < 3)
+    return 0.0;
+  double lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {xyz[0], xyz[1], xyz[2]};
+  for (size_t k = 3; k + 2 < xyz.size(); k += 3)
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = std::min(lo[c], xyz[k + c]);
+      hi[c] = std::max(hi[c], xyz[k + c]);
+    }
+  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+} // namespace
+
 bool BoneInput::sameUndeformed() const {
   if (undeformed_.size() != contactUndeformed_.size())
     return false;
@@ -106,11 +125,9 @@ Status BoneInput::update(vtkPointSet* bone, unsigned long tissueGeneration, doub
   validated_ = true;
 
   // The contact: same tissue, distances, structure and undeformed points as when it was built.
-  double bounds[6];
-  bone->GetBounds(bounds);
-  tolerance_ = 1e-9 * std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
-                                (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
-                                (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
+  // The undeformed points' scale, from the values just validated: the bone's own bounds would be
+  // computed afresh on every edit (its points are new each time), by VTK's slower generic pass.
+  tolerance_ = 1e-9 * BoundsDiagonal(undeformed_);
   tissue_ = tissueGeneration;
   contactDistance_ = contactDistance;
   releaseDistance_ = releaseDistance;

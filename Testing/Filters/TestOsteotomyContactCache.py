@@ -5,7 +5,9 @@ Usage: pvpython TestOsteotomyContactCache.py <path to FacePlan plugin> <Data dir
 Le Fort I on the Badin face, the bone fed directly and with a BSSO as a second Bone connection (a
 new merged bone with new arrays on every edit). Checks, by the filter's ContactBuildCount: an edit of the
 Osteotomy's Translation or Rotation re-uses the contact (and the precompute) and gives the same
-result as a fresh filter; a changed bone (the cut plane moved, the sides flipped) rebuilds it.
+result as a fresh filter; a changed bone (the cut plane moved, the sides flipped) rebuilds it, and so
+does a bone moved as a whole (same cells and arrays, other undeformed points), unless the move is
+within round-off of the bone's size.
 """
 import os
 import sys
@@ -92,5 +94,29 @@ for label, bone in (("direct", [lefort]), ("two connections", [lefort, bsso])):
     check(contact_builds(fem) == 3, "%s: flipped sides (new SegmentId, ROIMask) rebuild the contact"
           % label)
     Delete(fem)
+
+# The same cells and arrays with the undeformed points moved (the whole bone translated, its
+# Displacement unchanged): the contact is rebuilt. A move within the comparison's tolerance (1e-9 of
+# the bone's diagonal, about 1e-7 mm here) keeps it: the points are the same up to round-off.
+lefort.Translation = [-5.0, 0.0, 0.0]
+lefort.Rotation = [0.0, 0.0, 0.0]
+lefort.CutPlane1.Origin = [80.0, 0.0, 113.0]
+lefort.InsideOut = 0
+shifted = Transform(Input=lefort)
+shifted.Transform.Translate = [0.0, 0.0, 0.0]
+fem = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=[shifted], ContactDistance=1.0,
+                         OutputMode="Surface", ReleaseDistance=3.0)
+fem.UpdatePipeline()
+check(contact_builds(fem) == 1, "shifted bone: the first update builds the contact once")
+check(fetch(shifted).GetPoints().GetDataType() == 11, "shifted bone: the points are doubles")
+shifted.Transform.Translate = [1e-9, 0.0, 0.0]
+fem.UpdatePipeline()
+check(contact_builds(fem) == 1, "a bone moved by 1e-9 mm keeps the contact (builds %d)" % contact_builds(fem))
+shifted.Transform.Translate = [1e-3, 0.0, 0.0]
+fem.UpdatePipeline()
+check(contact_builds(fem) == 2, "a bone moved by 1e-3 mm rebuilds the contact (builds %d)" % contact_builds(fem))
+check(np.abs(point_array(fetch(fem), "Displacement") - fresh_result([shifted])).max() < 1e-9,
+      "after the moved bone's rebuild the result equals a fresh filter's")
+Delete(fem)
 
 finish("TestOsteotomyContactCache")
