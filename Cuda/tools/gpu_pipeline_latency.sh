@@ -11,6 +11,9 @@
 #          (pack --stage-only: only the files, in /tmp/pvpython-pack, to try them first)
 #   OUT=<dir> PACK=out/pvpython-pack.tar.xz PLUGIN_DIR=out/pvpython-plugin \
 #     Cuda/tools/gpu_pipeline_latency.sh run [ROUNDS] [EDITS]
+# BASELINE_PLUGIN_DIR=<dir> (a plugin folder of another commit, as pack makes it) runs beside, in
+# the same rounds in alternating order, and the summary gives each round's pair and the median
+# ratio: this host's speed differs from one process to the next, so only such pairs compare builds.
 set -uo pipefail
 . "$(dirname "$0")/paraview_pack.sh"
 cd "$(dirname "$0")/../.."
@@ -57,16 +60,46 @@ run() {
     return 1
   fi
   { nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; nproc; } >"$out/machine.txt" 2>&1
-  local status=0 round backend
+  local status=0 round backend variant variants dir tag
   for round in $(seq 1 "$rounds"); do
+    variants=main
+    if [ -n "${BASELINE_PLUGIN_DIR:-}" ]; then
+      variants="main baseline"
+      [ $((round % 2)) = 0 ] && variants="baseline main"
+    fi
     for backend in CUDA CPU; do
-      "$pvpython" --no-mpi Benchmarks/pipeline_latency.py --plugin "$plugin" \
-        --data "$PWD/Data" --shell-scene "$scene" --shell-only --edits "$edits" \
-        --backend "$backend" --json "$out/pipeline_latency_${backend}_r$round.json" 2>&1 |
-        grep -v 'WARN|' | tee -a "$out/pipeline_latency.txt"
-      [ "${PIPESTATUS[0]}" = 0 ] || status=1
+      for variant in $variants; do
+        dir=$(dirname "$plugin") tag=${backend}_r$round
+        [ "$variant" = baseline ] && dir=$BASELINE_PLUGIN_DIR tag=${backend}_r${round}_baseline
+        # Its own folder first: both builds name their library libFacePlanFilters.so.
+        LD_LIBRARY_PATH=$dir:${LD_LIBRARY_PATH:-} "$pvpython" --no-mpi Benchmarks/pipeline_latency.py \
+          --plugin "$dir/FacePlan.so" --data "$PWD/Data" --shell-scene "$scene" --shell-only \
+          --edits "$edits" --backend "$backend" --json "$out/pipeline_latency_$tag.json" 2>&1 |
+          grep -v 'WARN|' | sed "s/^/[$variant] /" | tee -a "$out/pipeline_latency.txt"
+        [ "${PIPESTATUS[0]}" = 0 ] || status=1
+      done
     done
   done
+  [ -z "${BASELINE_PLUGIN_DIR:-}" ] || python3 - "$out" "$rounds" <<'EOF' | tee -a "$out/pipeline_latency.txt"
+import json, statistics, sys
+out, rounds = sys.argv[1], int(sys.argv[2])
+for backend in ("CUDA", "CPU"):
+    pairs = []
+    for r in range(1, rounds + 1):
+        try:
+            a = json.load(open("%s/pipeline_latency_%s_r%d.json" % (out, backend, r)))[0]
+            b = json.load(open("%s/pipeline_latency_%s_r%d_baseline.json" % (out, backend, r)))[0]
+        except (OSError, ValueError, IndexError):
+            continue
+        pairs.append((a["fem_update_ms_median"], b["fem_update_ms_median"],
+                      a["overhead_ms_median"], b["overhead_ms_median"]))
+    if pairs:
+        print("%s: Condensed FEM Deform update per round, this / baseline (ms): %s; median ratio "
+              "baseline/this %.3f; overhead (update - solve) medians %.2f / %.2f ms" % (
+                  backend, ", ".join("%.2f/%.2f" % p[:2] for p in pairs),
+                  statistics.median(p[1] / p[0] for p in pairs),
+                  statistics.median(p[2] for p in pairs), statistics.median(p[3] for p in pairs)))
+EOF
   return $status
 }
 
