@@ -80,7 +80,8 @@ run() {
       done
     done
   done
-  [ -z "${BASELINE_PLUGIN_DIR:-}" ] || python3 - "$out" "$rounds" <<'EOF' | tee -a "$out/pipeline_latency.txt"
+  # The host's own Python: the pack's environment (PYTHONHOME) is for its pvpython.
+  [ -z "${BASELINE_PLUGIN_DIR:-}" ] || env -u PYTHONHOME -u LD_LIBRARY_PATH python3 - "$out" "$rounds" <<'EOF' | tee -a "$out/pipeline_latency.txt"
 import json, statistics, sys
 out, rounds = sys.argv[1], int(sys.argv[2])
 for backend in ("CUDA", "CPU"):
