@@ -14,6 +14,7 @@ import sys
 
 import numpy as np
 from paraview.simple import *  # noqa: F401,F403
+from vtkmodules.vtkCommonCore import VTK_DOUBLE
 
 LoadPlugin(sys.argv[1], ns=globals())
 data_dir = sys.argv[2]
@@ -108,7 +109,7 @@ fem = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=[shifted], Co
                          OutputMode="Surface", ReleaseDistance=3.0)
 fem.UpdatePipeline()
 check(contact_builds(fem) == 1, "shifted bone: the first update builds the contact once")
-check(fetch(shifted).GetPoints().GetDataType() == 11, "shifted bone: the points are doubles")
+check(fetch(shifted).GetPoints().GetDataType() == VTK_DOUBLE, "shifted bone: the points are doubles")
 shifted.Transform.Translate = [1e-9, 0.0, 0.0]
 fem.UpdatePipeline()
 check(contact_builds(fem) == 1, "a bone moved by 1e-9 mm keeps the contact (builds %d)" % contact_builds(fem))
