@@ -11,7 +11,8 @@
 #include "vtkPointSet.h"
 #include "vtkPolyData.h"
 
-#include <algorithm>
+#include <Eigen/Core>
+
 #include <cmath>
 
 namespace faceplan {
@@ -75,29 +76,19 @@ const std::vector<unsigned char>& BoneInput::signature(vtkPointSet* bone) {
   return signature_;
 }
 
-namespace {
-
-// Diagonal of the bounding box of packed xyz triples (0 when there are none).
-double BoundsDiagonal(const std::vector<double>& xyz) {
-  if (xyz.size() < 3)
-    return 0.0;
-  double lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {xyz[0], xyz[1], xyz[2]};
-  for (size_t k = 3; k + 2 < xyz.size(); k += 3)
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = std::min(lo[c], xyz[k + c]);
-      hi[c] = std::max(hi[c], xyz[k + c]);
-    }
-  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
-}
-
-} // namespace
-
 bool BoneInput::sameUndeformed() const {
   if (undeformed_.size() != contactUndeformed_.size())
     return false;
+  if (undeformed_.empty())
+    return true;
+  // Equal up to 1e-9 of the undeformed bone's diagonal, taken from the values just validated: the
+  // bone's own bounds would be computed afresh on every edit (its points are new each time).
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> points(
+      undeformed_.data(), static_cast<Eigen::Index>(undeformed_.size() / 3), 3);
+  const double tolerance =
+      1e-9 * (points.colwise().maxCoeff() - points.colwise().minCoeff()).norm();
   for (size_t k = 0; k < undeformed_.size(); ++k)
-    if (!(std::abs(undeformed_[k] - contactUndeformed_[k]) <= tolerance_))
+    if (!(std::abs(undeformed_[k] - contactUndeformed_[k]) <= tolerance))
       return false;
   return true;
 }
@@ -125,9 +116,6 @@ Status BoneInput::update(vtkPointSet* bone, unsigned long tissueGeneration, doub
   validated_ = true;
 
   // The contact: same tissue, distances, structure and undeformed points as when it was built.
-  // The undeformed points' scale, from the values just validated: the bone's own bounds would be
-  // computed afresh on every edit (its points are new each time), by VTK's slower generic pass.
-  tolerance_ = 1e-9 * BoundsDiagonal(undeformed_);
   tissue_ = tissueGeneration;
   contactDistance_ = contactDistance;
   releaseDistance_ = releaseDistance;

@@ -56,7 +56,6 @@ private:
   std::vector<unsigned char> signature_;
   bool haveSignature_ = false; // computed lazily: only when a stamp differs
   std::vector<double> undeformed_;
-  double tolerance_ = 0.0;
   unsigned long tissue_ = 0;
   double contactDistance_ = -1.0, releaseDistance_ = -1.0;
   bool structureChanged_ = true, contactChanged_ = true;
