@@ -83,17 +83,11 @@ EOF
   kill -0 "$xvfb_pid" 2>/dev/null || { echo "Xvfb did not start:"; cat "$out/xvfb.log"; return 1; }
   { nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; nproc; uname -r; } >"$out/machine.txt" 2>&1
   cat "$out/machine.txt"
-  local status=0 round variant variants dir
+  local status=0 round variant dir
   for round in $(seq 1 "$rounds"); do
-    variants=main
-    if [ -n "${BASELINE_PLUGIN_DIR:-}" ]; then
-      variants="main baseline"
-      [ $((round % 2)) = 0 ] && variants="baseline main"
-    fi
-    for variant in $variants; do
+    for variant in $(pack_variants "$round"); do
       local tag=r$round dir=$(dirname "$plugin")
       [ "$variant" = baseline ] && tag=r${round}_baseline dir=$BASELINE_PLUGIN_DIR
-      # Its own folder first: both builds name their library libFacePlanFilters.so.
       LD_LIBRARY_PATH=$dir:${LD_LIBRARY_PATH:-} DISPLAY=$display \
         __GLX_VENDOR_LIBRARY_NAME=${FACEPLAN_GLX_VENDOR:-nvidia} python3 Testing/GUI/run_gui_test.py \
         --script TestGUIDrag.py --paraview "$paraview" --paraview-arg=--no-mpi --plugin "$dir/FacePlan.so" \

@@ -60,18 +60,12 @@ run() {
     return 1
   fi
   { nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; nproc; } >"$out/machine.txt" 2>&1
-  local status=0 round backend variant variants dir tag
+  local status=0 round backend variant dir tag
   for round in $(seq 1 "$rounds"); do
-    variants=main
-    if [ -n "${BASELINE_PLUGIN_DIR:-}" ]; then
-      variants="main baseline"
-      [ $((round % 2)) = 0 ] && variants="baseline main"
-    fi
     for backend in CUDA CPU; do
-      for variant in $variants; do
+      for variant in $(pack_variants "$round"); do
         dir=$(dirname "$plugin") tag=${backend}_r$round
         [ "$variant" = baseline ] && dir=$BASELINE_PLUGIN_DIR tag=${backend}_r${round}_baseline
-        # Its own folder first: both builds name their library libFacePlanFilters.so.
         LD_LIBRARY_PATH=$dir:${LD_LIBRARY_PATH:-} "$pvpython" --no-mpi Benchmarks/pipeline_latency.py \
           --plugin "$dir/FacePlan.so" --data "$PWD/Data" --shell-scene "$scene" --shell-only \
           --edits "$edits" --backend "$backend" --json "$out/pipeline_latency_$tag.json" 2>&1 |

@@ -8,6 +8,7 @@
 
 [ -n "${PACK:-}" ] && PACK=$(realpath "$PACK")
 [ -n "${PLUGIN_DIR:-}" ] && PLUGIN_DIR=$(realpath "$PLUGIN_DIR")
+[ -n "${BASELINE_PLUGIN_DIR:-}" ] && BASELINE_PLUGIN_DIR=$(realpath "$BASELINE_PLUGIN_DIR")
 ROOT=/tmp/pvroot # where a pack is unpacked
 
 # pack_find_plugin HOW: prints the FacePlan plugin under $FACEPLAN_BUILD_DIR (default build), or
@@ -68,6 +69,20 @@ pack_unpack() {
     compgen -G "$pack.part-*" >/dev/null || { echo "no pack $pack nor its parts"; return 1; }
     cat "$pack".part-* | xz -dc | tar -xf - -C "$root"
   fi || { echo "the pack $pack is incomplete"; return 1; }
+}
+
+# pack_variants ROUND: the builds to run in round ROUND, in order: "main" alone, or with
+# BASELINE_PLUGIN_DIR set "main baseline" and "baseline main" by turns, so that neither build
+# always runs second. Each run puts its own plugin folder first on LD_LIBRARY_PATH: both builds
+# name their library libFacePlanFilters.so.
+pack_variants() {
+  if [ -z "${BASELINE_PLUGIN_DIR:-}" ]; then
+    echo main
+  elif [ $(($1 % 2)) = 0 ]; then
+    echo "baseline main"
+  else
+    echo "main baseline"
+  fi
 }
 
 # pack_environment ROOT PLUGIN_DIR: the environment that runs the pack's programs from ROOT: its
