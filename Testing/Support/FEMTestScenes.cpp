@@ -26,6 +26,15 @@ RowVectors3d SmoothRoiField(const PrecomputeRequest& request, double amplitude) 
   return u;
 }
 
+SolveInput PlateMove(const PrecomputeRequest& request, double press) {
+  SolveInput input;
+  input.movableDisplacement =
+      RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
+  input.movableDisplacement.col(2).setConstant(-press);
+  input.recoverInterior = true;
+  return input;
+}
+
 PrecomputeRequest PressedBlockRequest(double lx, double ly, double lz, double nu, double E) {
   PrecomputeRequest r;
   const int nx = 5, ny = 4, nz = 3;

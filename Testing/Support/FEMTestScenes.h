@@ -20,6 +20,9 @@ RowVectors3d SmoothRoiField(const PrecomputeRequest& request, double amplitude =
 PrecomputeRequest PressedBlockRequest(double lx, double ly, double lz, double nu,
                                       double E = 3000.0);
 
+// The plate of a PressedBlockRequest pressed down by `press` (mm), every node recovered.
+SolveInput PlateMove(const PrecomputeRequest& request, double press);
+
 // A thick spherical shell (radii 40 and 55): the bottom of its inner surface is tied, the rest of
 // it slides on the sphere (sliding nodes with the radial normal), and a cap on top is pushed
 // outwards along the normal by up to `push` (mm); the outer surface is free and kept. `moves` gets

@@ -21,15 +21,6 @@ namespace {
 
 constexpr double kLx = 20.0, kLy = 16.0, kLz = 12.0, kNu = 0.45, kE = 3000.0;
 
-SolveInput PlateMove(const PrecomputeRequest& request, double press) {
-  SolveInput input;
-  input.movableDisplacement =
-      RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
-  input.movableDisplacement.col(2).setConstant(-press);
-  input.recoverInterior = true;
-  return input;
-}
-
 // The input that moves the movable nodes by `moves` (one row each) and recovers every node.
 SolveInput MovesInput(const std::vector<Eigen::RowVector3d>& moves) {
   SolveInput input;

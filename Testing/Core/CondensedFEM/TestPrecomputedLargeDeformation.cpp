@@ -23,15 +23,6 @@ namespace {
 constexpr double kLx = 20.0, kLy = 16.0, kLz = 12.0, kNu = 0.45, kE = 3000.0;
 constexpr double kAgreement = 1e-8;
 
-SolveInput PlateMove(const PrecomputeRequest& request, double press) {
-  SolveInput input;
-  input.movableDisplacement =
-      RowVectors3d::Zero(static_cast<Eigen::Index>(request.sets.movable.size()), 3);
-  input.movableDisplacement.col(2).setConstant(-press);
-  input.recoverInterior = true;
-  return input;
-}
-
 // A block on a frictionless floor (z = 0, sliding) whose top face is held and moved by `top`.
 struct FloorBlock {
   PrecomputeRequest request;
