@@ -12,6 +12,9 @@ Per scene and solver (medians of repeats; the bone's filters are updated before 
   same steps back to back with no pause ("continuous"; the background refactorization may lag); the
   median of every paused step, and of the steady ones, from the third on (after two equal changes,
   which the solve extrapolates to second order; the first step after the move has no direction);
+- where the full move's time goes: each stage's median over the repeats, from the filter's stage
+  table (its second output), and the force evaluations, substitutions and refactorizations of the
+  repeat nearest the median time;
 - the precompute's time (the first update);
 - paired full moves (--paired rounds): a Precomputed full move then a Newton one, round after
   round, so that the ratio of their medians is measured within the same minutes of a machine whose
@@ -73,6 +76,14 @@ def fields(fem):
     return out
 
 
+def stage_times(fem):
+    """This update's rows of the filter's stage table (its second output), in ms."""
+    table = fem.GetClientSideObject().GetOutputDataObject(1)
+    names, times = table.GetColumnByName("Stage"), table.GetColumnByName("TimeMs")
+    return {names.GetValue(i): times.GetValue(i) for i in range(table.GetNumberOfRows())
+            if times.GetValue(i) > 0.0 and names.GetValue(i) != "PrecomputeTotal"}
+
+
 def timed_update(fem, bone_filters):
     for f in bone_filters:
         f.UpdatePipeline()
@@ -114,7 +125,7 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
     r = dict(solver=solver)
     move(0.0)
     r["first_update_ms"], f = timed_update(fem, bone)  # the precompute (Precomputed) and rest
-    full_ms, full_iter = [], []
+    full_ms, full_iter, full_stages, full_counts = [], [], [], []
     for k in range(repeats):
         move(0.0)
         timed_update(fem, bone)
@@ -123,6 +134,9 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
         ms, f = timed_update(fem, bone)
         full_ms.append(ms)
         full_iter.append(f.get("QuasiNewtonIterations", f.get("NewtonIterations", float("nan"))))
+        full_stages.append(stage_times(fem))
+        full_counts.append({c: f[c] for c in ("ForceEvaluations", "FactorSolves", "Refactorizations")
+                            if c in f})
         if k == 0:
             histories.append((name, solver, "full_move", f["history"]))
         r["ran"] = f.get("LargeDeformationSolver", "?")
@@ -130,6 +144,12 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
     r["full_move_ms"] = statistics.median(full_ms)
     r["full_move_ms_all"] = full_ms
     r["full_move_iterations"] = statistics.median(full_iter)
+    # Where the full move's time goes: each stage's median over the repeats, and the counts of the
+    # repeat nearest the median time.
+    r["full_move_stages_ms"] = {s: statistics.median(t.get(s, 0.0) for t in full_stages)
+                                for s in sorted(set().union(*full_stages))}
+    nearest = builtins.min(range(len(full_ms)), key=lambda i: abs(full_ms[i] - r["full_move_ms"]))
+    r["full_move_counts"] = full_counts[nearest]
     r["full_move_solve_ms"] = f.get("SolveTimeMs")
     r["largest_strain"] = f.get("LargestStrain")
     r["lifted_nodes"] = f.get("LiftedNodes", 0)
@@ -170,6 +190,16 @@ def measure(name, fem, bone, move, full, solver, repeats, rows, histories):
              if "steady_drag_step_ms" in r else "",
              ", continuous %.1f ms" % r["drag_step_continuous_ms"] if drag_cont else "",
              r["first_update_ms"], r["solver_note"]), flush=True)
+    print("  %-11s %-11s full move: %s ms (median of %d)"
+          % (name, solver, ", ".join("%.1f" % t for t in full_ms), len(full_ms)), flush=True)
+    print("  %-11s %-11s full move's stages (ms, medians): %s%s"
+          % (name, solver, ", ".join("%s %.1f" % kv for kv in r["full_move_stages_ms"].items()),
+             "".join("; %s %d" % kv for kv in r["full_move_counts"].items())), flush=True)
+    if solver == "Precomputed":
+        print("  %-11s %-11s paused drag steps (ms): %s (iterations %s); back to back: %s"
+              % (name, solver, ", ".join("%.1f" % t for t in drag_paused),
+                 ", ".join("%d" % i for i in drag_iter), ", ".join("%.0f" % t for t in drag_cont)),
+              flush=True)
     return r
 
 
@@ -204,9 +234,12 @@ def run_scenes():
             scene["paired_full_move_ms_all"] = paired
             scene["speedup_full_move_paired"] = (statistics.median(paired["Newton"])
                                                  / statistics.median(paired["Precomputed"]))
-            print("  %-11s paired full moves: Precomputed %.1f ms, Newton %.1f ms (medians of %d): %.1fx"
-                  % (name, statistics.median(paired["Precomputed"]), statistics.median(paired["Newton"]),
-                     args.paired, scene["speedup_full_move_paired"]), flush=True)
+            print("  %-11s paired full moves (Precomputed, then Newton, round after round): Precomputed %s ms, "
+                  "Newton %s ms: medians %.1fx (rounds %s)"
+                  % (name, ", ".join("%.1f" % t for t in paired["Precomputed"]),
+                     ", ".join("%.0f" % t for t in paired["Newton"]), scene["speedup_full_move_paired"],
+                     ", ".join("%.1fx" % (n / p) for p, n in zip(paired["Precomputed"], paired["Newton"]))),
+                  flush=True)
         results[name] = scene
         for proxy in list(simple.GetSources().values()):
             simple.Delete(proxy)
