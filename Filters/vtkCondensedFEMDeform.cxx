@@ -123,9 +123,10 @@ std::string NoteState(const std::string& note) {
   return state;
 }
 
-// Says each warning once per state: a warning whose state the last update also had is not
-// repeated (the Output Messages window would otherwise open at every edit of one plan). What this
-// update had becomes the next update's record, on every return path.
+// Says each warning or note once per state: one whose state the last update also had is not
+// repeated (the Output Messages window would otherwise open at every edit of one plan, and the log
+// would grow by a line per edit). What this update had becomes the next update's record, on every
+// return path.
 class NoteLog {
 public:
   explicit NoteLog(std::set<std::string>& said) : said_(said) {}
@@ -239,6 +240,10 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
     if (notes.sayNow(note))
       vtkWarningMacro(<< note);
   };
+  auto inform = [this, &notes](const std::string& note) {
+    if (notes.sayNow(note))
+      vtkLog(INFO, << this->GetObjectDescription() << ": " << note);
+  };
 
   // 1. validate and 2. convert: nothing below runs on malformed input. The tissue is validated and
   // converted again only when it or the material properties changed; the bone is taken in one
@@ -263,8 +268,7 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
     const std::string none = "LipSeal: no facing tissue surfaces within " +
                              std::to_string(settings.sealGap()) + " mesh units, so nothing is tied";
     if (settings.lipSeal == Settings::kLipSealAuto) {
-      vtkLog(INFO, << this->GetObjectDescription() << ": " << none
-                   << " (Auto: the lips stay open)");
+      inform(none + " (Auto: the lips stay open)");
     } else {
       warn(none);
     }
@@ -274,7 +278,8 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   // 3. contact, rebuilt when the tissue, the distance, the release distance or the undeformed
   // bone (its cells, ROIMask, SegmentId, Released and points minus Displacement) changed: a move of
   // a cut or an osteotomy keeps it.
-  if (cache.bone.contactChanged()) {
+  const bool contactBuilt = cache.bone.contactChanged();
+  if (contactBuilt) {
     status = cache.contact.build(tissue, boundary.nodes, bone, cache.bone.undeformed(),
                                  settings.contactDistance, settings.releaseDistance);
     if (!status) {
@@ -308,9 +313,10 @@ bool vtkCondensedFEMDeform::Deform(vtkUnstructuredGrid* tissue, vtkPointSet* bon
   if (!segments.usable && bone->GetPointData()->GetArray("SegmentId"))
     warn("rigid-segment path not used: " + segments.whyNot);
   // Released tissue is what the surgeon asked for: information (field data ReleasedNodes and the
-  // log at INFO), not a warning.
+  // log at INFO, when the contact is built: an edit that keeps it releases the same nodes), not a
+  // warning.
   const bool releasedArray = bone->GetPointData()->GetArray("Released") != nullptr;
-  if (settings.releaseDistance > 0.0 || releasedArray)
+  if (contactBuilt && (settings.releaseDistance > 0.0 || releasedArray))
     vtkLog(INFO, << this->GetObjectDescription() << ": " << ReleasedCount(contact)
                  << " tied nodes released "
                  << (settings.releaseDistance > 0.0

@@ -7,14 +7,15 @@ new merged bone with new arrays on every edit). Checks, by the filter's ContactB
 Osteotomy's Translation or Rotation re-uses the contact (and the precompute) and gives the same
 result as a fresh filter; a changed bone (the cut plane moved, the sides flipped) rebuilds it, and so
 does a bone moved as a whole (same cells and arrays, other undeformed points), unless the move is
-within round-off of the bone's size.
+within round-off of the bone's size. The released tissue is logged (INFO) once per contact build,
+not at every edit.
 """
 import os
 import sys
 
 import numpy as np
 from paraview.simple import *  # noqa: F401,F403
-from vtkmodules.vtkCommonCore import VTK_DOUBLE
+from vtkmodules.vtkCommonCore import VTK_DOUBLE, vtkLogger
 
 LoadPlugin(sys.argv[1], ns=globals())
 data_dir = sys.argv[2]
@@ -61,6 +62,8 @@ for label, bone in (("direct", [lefort]), ("two connections", [lefort, bsso])):
     lefort.Rotation = [0.0, 0.0, 0.0]
     lefort.CutPlane1.Origin = [80.0, 0.0, 113.0]
     lefort.InsideOut = 0
+    log = os.path.abspath("TestOsteotomyContactCache-%d.log" % len(bone))
+    vtkLogger.LogToFile(log, vtkLogger.TRUNCATE, vtkLogger.VERBOSITY_INFO)
     fem = CondensedFEMDeform(Model="LinearElastic", Input=tissue, Bone=bone, ContactDistance=1.0, OutputMode="Surface",
                              ReleaseDistance=3.0)
     errors = ErrorCatcher(fem)
@@ -94,6 +97,14 @@ for label, bone in (("direct", [lefort]), ("two connections", [lefort, bsso])):
     fem.UpdatePipeline()
     check(contact_builds(fem) == 3, "%s: flipped sides (new SegmentId, ROIMask) rebuild the contact"
           % label)
+    vtkLogger.EndLogToFile(log)
+    this = fem.GetClientSideObject().GetObjectDescription()  # not fresh_result's filters
+    with open(log) as f:
+        released = [line for line in f if this in line and "tied nodes released" in line]
+    os.remove(log)
+    check(len(released) == contact_builds(fem),
+          "%s: the released nodes are logged once per contact build (%d lines for %d builds in 5 updates)"
+          % (label, len(released), contact_builds(fem)))
     Delete(fem)
 
 # The same cells and arrays with the undeformed points moved (the whole bone translated, its
