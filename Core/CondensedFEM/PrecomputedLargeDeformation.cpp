@@ -11,7 +11,6 @@
 #include "CondensedFEM/LargeDeformationProblem.h"
 #include "CondensedFEM/LbfgsHistory.h"
 #include "Mesh/InputValidation.h"
-#include "SparseSolver/Blas.h"
 #include "SparseSolver/CholmodFactor.h"
 #include "SparseSolver/FillReducingOrdering.h"
 #include "SparseSolver/MultifrontalWorkspace.h"
@@ -112,121 +111,6 @@ Status SolveOnCpu(const TangentFactor& f, bool singlePrecision, const Eigen::Vec
   return solved;
 }
 
-// The Schur coupling (see QuasiNewton::prepareReleased) of every lift-off DOF pinned in the rest
-// factor, made once on the worker thread after the precompute, so that a solve from rest couples
-// whichever of them it releases exactly without substituting their columns.
-struct RestReleases {
-  std::vector<int> column; // per DOF: its column in w and schur, or -1
-  Eigen::MatrixXf w;       // n x |L|: G A_L
-  Eigen::MatrixXd schur;   // A_LL - A_L^T W
-};
-
-// The released DOFs' Schur coupling in the form an iteration reads: W in single precision (it is
-// read twice per iteration, like the single-precision factor, and needs be no more accurate), and
-// S^-1. W's buffer is kept from one contact change to the next and from solve to solve
-// (LargeDeformationSystem::releaseColumns): each change copies megabytes of columns into it, and
-// fresh memory for them cost the page faults of its mapping as well, several milliseconds a change.
-struct ReleaseCoupling {
-  std::vector<int> dofs;        // empty: no coupling
-  UninitializedVector<float> w; // n x |dofs|, column-major
-  Eigen::Index n = 0;
-  Eigen::MatrixXd schurInverse;
-
-  int columns() const { return static_cast<int>(dofs.size()); }
-  float* column(Eigen::Index j) { return w.data() + j * n; }
-  // Drops the coupling, keeping W's buffer.
-  void clear() {
-    dofs.clear();
-    n = 0;
-    schurInverse.resize(0, 0);
-  }
-
-  // t = W^T b.
-  Eigen::VectorXd transposeProduct(const Eigen::VectorXd& b) const {
-    const int k = columns();
-    const Eigen::VectorXf bf = b.cast<float>();
-    Eigen::MatrixXf parts = Eigen::MatrixXf::Zero(k, kParts);
-    byRows([&](int part, int first, int rows) {
-      const int lda = static_cast<int>(n), one = 1;
-      const float alpha = 1.0f, beta = 0.0f;
-      sgemv_("T", &rows, &k, &alpha, w.data() + first, &lda, bf.data() + first, &one, &beta,
-             parts.col(part).data(), &one);
-    });
-    return parts.rowwise().sum().cast<double>();
-  }
-  // x -= W v.
-  void subtractProduct(const Eigen::VectorXd& v, Eigen::VectorXd& x) const {
-    const int k = columns();
-    const Eigen::VectorXf vf = v.cast<float>();
-    Eigen::VectorXf product(n);
-    byRows([&](int, int first, int rows) {
-      const int lda = static_cast<int>(n), one = 1;
-      const float alpha = 1.0f, beta = 0.0f;
-      sgemv_("N", &rows, &k, &alpha, w.data() + first, &lda, vf.data(), &one, &beta,
-             product.data() + first, &one);
-    });
-    x -= product.cast<double>();
-  }
-
-private:
-  // W is read from memory each time (tens of megabytes with many DOFs released): its rows in two
-  // halves, one per core, each with single-threaded BLAS (OpenBLAS's own threads would wait for
-  // each other beside the solve's helpers).
-  static constexpr int kParts = 2;
-  template <class Work> void byRows(const Work& work) const {
-    ScopedBlasThreads serial(1, BlasScope::Pinned);
-    RunOnHelpers(kParts, [&](int part) {
-      const int first = static_cast<int>(std::int64_t(n) * part / kParts);
-      const int last = static_cast<int>(std::int64_t(n) * (part + 1) / kParts);
-      if (last > first)
-        work(part, first, last - first);
-    });
-  }
-};
-
-// The tangent as the factor sees it. The couplings of the nodes pinned in every solve (constrained
-// nodes with no lift-off DOF) are zero in every pinned tangent, so they are left out of the pattern
-// that is ordered and analysed: in the whole mesh's pattern the ordering makes fill for them. On
-// the face's scenes a twentieth of the nodes are such, and leaving them out saves a fifth to a
-// quarter of the factorization's flops and an eighth to a sixth of the factor's non-zeros, which
-// every substitution reads. Those nodes' DOFs keep their diagonal, as every pinned DOF does.
-struct FactorPattern {
-  SparseMatrix upper;      // the pattern (values unused)
-  std::vector<int> source; // per entry, its index in the whole mesh's tangent
-  CholmodFactor analysis;  // its ordering and symbolic analysis, made once
-  // The rest tangent's single-precision factorization, which later ones reuse in part
-  // (PrecomputedLargeDeformationOptions::reuseTolerance); made once, then only read.
-  MultifrontalReference rest;
-  double reuseTolerance = -1.0; // < 0: no reuse
-  // The rest tangent's cells (packed), which cells near rest keep in later factorizations.
-  std::vector<double> restPacked;
-  // The rest factor, whose tangent is the rest tangent assembled (the whole mesh's pattern), and
-  // per packed cell entry its entry there: a later factorization starts from the rest tangent and
-  // adds what the cells that left rest changed, instead of summing every cell's entries again (a
-  // gather over tens of megabytes).
-  std::shared_ptr<const TangentFactor> restFactor;
-  std::vector<int> packedEntry;
-};
-
-// What a factorization assembles into, kept from one to the next by each thread that factors: the
-// cells' packed tangents are tens of megabytes, which fresh each time cost their zero-fill and page
-// faults.
-struct TangentBuffers {
-  AssemblyPattern pattern;
-  std::vector<double> packed;
-  SparseMatrix factored;      // the pinned tangent on FactorPattern's entries
-  std::vector<char> restHeld; // per cell: `packed` holds its rest tangent (NearRestTangents)
-  // The entries of `factored` that the contact pinnedFor pins: off the diagonal, and on it.
-  std::vector<char> pinnedFor;
-  std::vector<int> pinnedEntries, pinnedDiagonal;
-  // Kept from one factorization on this thread to the next (the tangents share one pattern), and
-  // the factors' values, kept when a factor is gone for the next (shared by the solve's and the
-  // worker's buffers).
-  MultifrontalWorkspace workspace;
-  std::shared_ptr<FactorValueBin> values;
-  std::shared_ptr<TangentBin> tangents; // likewise shared
-};
-
 // A set of DOFs and where their columns lie in every tangent's values (all tangents share one
 // pattern): per DOF k of the set, entries[start[k] ...] as (value index, the other DOF), each
 // off-diagonal entry once for its column and once for its row. Found in one pass over the upper
@@ -317,13 +201,155 @@ struct DofColumns {
   }
 };
 
-// The factor state's tangent columns of `dofs` with the rows pinned in `prescribed` and the set's
+// out[0, rows) = sum over j < k of v[j] column[j][first, first + rows): four columns a pass, so
+// that the sum is read and written a quarter as often. Eight-wide AVX2 where the CPU has it (the
+// build's baseline is SSE2's four), chosen at load time; without FMA contraction, so that both
+// versions give the same bits.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void SumOfColumns(const float* const* column, const float* v, int k, int first, int rows,
+                  float* out) {
+  std::fill_n(out, rows, 0.0f);
+  int j = 0;
+  for (; j + 4 <= k; j += 4) {
+    const float *c0 = column[j] + first, *c1 = column[j + 1] + first, *c2 = column[j + 2] + first,
+                *c3 = column[j + 3] + first;
+    const float v0 = v[j], v1 = v[j + 1], v2 = v[j + 2], v3 = v[j + 3];
+    for (int i = 0; i < rows; ++i)
+      out[i] += v0 * c0[i] + v1 * c1[i] + v2 * c2[i] + v3 * c3[i];
+  }
+  for (; j < k; ++j) {
+    const float* c = column[j] + first;
+    for (int i = 0; i < rows; ++i)
+      out[i] += v[j] * c[i];
+  }
+}
+
+// The Schur coupling (see QuasiNewton::prepareReleased) of every lift-off DOF pinned in the rest
+// factor, made once on the worker thread after the precompute, so that a solve from rest couples
+// whichever of them it releases exactly without substituting their columns.
+struct RestReleases {
+  std::vector<int> column;   // per DOF: its column in w, schur and tangentColumns, or -1
+  Eigen::MatrixXf w;         // n x |L|: G A_L
+  Eigen::MatrixXd schur;     // A_LL - A_L^T W
+  DofColumns tangentColumns; // A_L: where the rest tangent holds their columns
+};
+
+// The released DOFs' Schur coupling in the form an iteration reads: W's columns in single
+// precision (read once per iteration, like the single-precision factor, and need be no more
+// accurate), read where they lie (the rest factor's RestReleases, or a few columns substituted for
+// another factor), A_R's entries, and S's Cholesky factor. W^T b is A_R^T G b (G is symmetric),
+// the few entries of A_R against the substitution's result, so W is read once, not twice.
+struct ReleaseCoupling {
+  std::vector<int> dofs;                    // empty: no coupling
+  std::vector<const float*> w;              // each DOF's column of W (n floats)
+  std::shared_ptr<const RestReleases> rest; // holds the columns read in place
+  UninitializedVector<float> own;           // the columns substituted for another factor
+  // A_R: DOF j's column is column setColumn[j] of `set` in the tangent's `values`.
+  std::shared_ptr<const DofColumns> set;
+  std::vector<int> setColumn;
+  const double* values = nullptr;
+  Eigen::LLT<Eigen::MatrixXd> schur;
+  Eigen::Index n = 0;
+
+  int columns() const { return static_cast<int>(dofs.size()); }
+  void clear() {
+    dofs.clear();
+    w.clear();
+    rest.reset();
+    set.reset();
+    setColumn.clear();
+    values = nullptr;
+    n = 0;
+  }
+
+  // A_R^T x.
+  Eigen::VectorXd tangentProduct(const Eigen::VectorXd& x) const {
+    Eigen::VectorXd t(columns());
+    for (int j = 0; j < columns(); ++j) {
+      const int c = setColumn[static_cast<size_t>(j)];
+      double sum = 0.0;
+      for (int e = set->start[c]; e < set->start[c + 1]; ++e)
+        sum += values[set->entries[e].first] * x[set->entries[e].second];
+      t[j] = sum;
+    }
+    return t;
+  }
+  // x -= W v.
+  void subtractProduct(const Eigen::VectorXd& v, Eigen::VectorXd& x) const {
+    const Eigen::VectorXf vf = v.cast<float>();
+    Eigen::VectorXf product(n);
+    byRows([&](int first, int rows) {
+      SumOfColumns(w.data(), vf.data(), columns(), first, rows, product.data() + first);
+    });
+    x -= product.cast<double>();
+  }
+
+private:
+  // W is read from memory each time (tens of megabytes with many DOFs released): its rows in two
+  // halves, one per core.
+  static constexpr int kParts = 2;
+  template <class Work> void byRows(const Work& work) const {
+    RunOnHelpers(kParts, [&](int part) {
+      const int first = static_cast<int>(std::int64_t(n) * part / kParts);
+      const int last = static_cast<int>(std::int64_t(n) * (part + 1) / kParts);
+      if (last > first)
+        work(first, last - first);
+    });
+  }
+};
+
+// The tangent as the factor sees it. The couplings of the nodes pinned in every solve (constrained
+// nodes with no lift-off DOF) are zero in every pinned tangent, so they are left out of the pattern
+// that is ordered and analysed: in the whole mesh's pattern the ordering makes fill for them. On
+// the face's scenes a twentieth of the nodes are such, and leaving them out saves a fifth to a
+// quarter of the factorization's flops and an eighth to a sixth of the factor's non-zeros, which
+// every substitution reads. Those nodes' DOFs keep their diagonal, as every pinned DOF does.
+struct FactorPattern {
+  SparseMatrix upper;      // the pattern (values unused)
+  std::vector<int> source; // per entry, its index in the whole mesh's tangent
+  CholmodFactor analysis;  // its ordering and symbolic analysis, made once
+  // The rest tangent's single-precision factorization, which later ones reuse in part
+  // (PrecomputedLargeDeformationOptions::reuseTolerance); made once, then only read.
+  MultifrontalReference rest;
+  double reuseTolerance = -1.0; // < 0: no reuse
+  // The rest tangent's cells (packed), which cells near rest keep in later factorizations.
+  std::vector<double> restPacked;
+  // The rest factor, whose tangent is the rest tangent assembled (the whole mesh's pattern), and
+  // per packed cell entry its entry there: a later factorization starts from the rest tangent and
+  // adds what the cells that left rest changed, instead of summing every cell's entries again (a
+  // gather over tens of megabytes).
+  std::shared_ptr<const TangentFactor> restFactor;
+  std::vector<int> packedEntry;
+};
+
+// What a factorization assembles into, kept from one to the next by each thread that factors: the
+// cells' packed tangents are tens of megabytes, which fresh each time cost their zero-fill and page
+// faults.
+struct TangentBuffers {
+  AssemblyPattern pattern;
+  std::vector<double> packed;
+  SparseMatrix factored;      // the pinned tangent on FactorPattern's entries
+  std::vector<char> restHeld; // per cell: `packed` holds its rest tangent (NearRestTangents)
+  // The entries of `factored` that the contact pinnedFor pins: off the diagonal, and on it.
+  std::vector<char> pinnedFor;
+  std::vector<int> pinnedEntries, pinnedDiagonal;
+  // Kept from one factorization on this thread to the next (the tangents share one pattern), and
+  // the factors' values, kept when a factor is gone for the next (shared by the solve's and the
+  // worker's buffers).
+  MultifrontalWorkspace workspace;
+  std::shared_ptr<FactorValueBin> values;
+  std::shared_ptr<TangentBin> tangents; // likewise shared
+};
+
+// The factor state's tangent columns of set.dofs with the rows pinned in `prescribed` and the set's
 // own zeroed (columns), and their rows of the set (block).
 void ReleasedColumns(const TangentFactor& factor, const std::vector<char>& prescribed,
-                     const std::vector<int>& dofs, Eigen::MatrixXd& columns,
-                     Eigen::MatrixXd& block) {
+                     const DofColumns& set, Eigen::MatrixXd& columns, Eigen::MatrixXd& block) {
+  const std::vector<int>& dofs = set.dofs;
   const Eigen::Index n = factor.tangent.cols(), k = static_cast<Eigen::Index>(dofs.size());
-  columns = DofColumns(factor.tangent, dofs).columns(factor.tangent.valuePtr(), n);
+  columns = set.columns(factor.tangent.valuePtr(), n);
   block.resize(k, k);
   for (Eigen::Index j = 0; j < k; ++j)
     for (Eigen::Index i = 0; i < k; ++i)
@@ -350,8 +376,9 @@ std::shared_ptr<const RestReleases> MakeRestReleases(const TangentFactor& factor
   if (dofs.empty() || dofs.size() > static_cast<size_t>(most) || bytes > kMostBytes ||
       factor.single.rows() != factor.tangent.cols())
     return nullptr;
+  DofColumns set(factor.tangent, dofs);
   Eigen::MatrixXd columns, block, w;
-  ReleasedColumns(factor, factor.prescribed, dofs, columns, block);
+  ReleasedColumns(factor, factor.prescribed, set, columns, block);
   if (!factor.single.solve(columns, w))
     return nullptr;
   for (Eigen::Index j = 0; j < w.cols(); ++j)
@@ -362,6 +389,7 @@ std::shared_ptr<const RestReleases> MakeRestReleases(const TangentFactor& factor
     made->column[dofs[j]] = static_cast<int>(j);
   made->schur = block - columns.transpose() * w;
   made->w = w.cast<float>();
+  made->tangentColumns = std::move(set);
   return made;
 }
 
@@ -623,8 +651,6 @@ public:
 
   // What a synchronous refactorization assembles into (the solve's thread only).
   TangentBuffers solveBuffers;
-  // The released lift-off DOFs' coupling W (ReleaseCoupling), kept between solves.
-  UninitializedVector<float> releaseColumns;
 
 private:
   // With mutex_ held.
@@ -901,10 +927,7 @@ public:
   QuasiNewton(LargeDeformationSystem& sys, Problem& pb, PrecomputedLargeDeformationReport& report,
               StageTimings& timings, std::shared_ptr<const TangentFactor> factor)
       : sys_(sys), st_(*sys.structure), pb_(pb), report_(report), timings_(timings),
-        factor_(std::move(factor)), history_(sys.options.historySize) {
-    released_.coupling.w.swap(sys_.releaseColumns);
-  }
-  ~QuasiNewton() { released_.coupling.w.swap(sys_.releaseColumns); }
+        factor_(std::move(factor)), history_(sys.options.historySize) {}
   QuasiNewton(const QuasiNewton&) = delete;
   QuasiNewton& operator=(const QuasiNewton&) = delete;
 
@@ -1010,8 +1033,10 @@ private:
     Eigen::VectorXd xr(static_cast<Eigen::Index>(c.dofs.size()));
     for (size_t k = 0; k < c.dofs.size(); ++k)
       xr[k] = r[c.dofs[k]];
-    xr -= c.transposeProduct(b);
-    xr = c.schurInverse * xr;
+    for (int d : c.dofs) // zero already: pinned in the factor, where b is zero
+      x[d] = 0.0;
+    xr -= c.tangentProduct(x);
+    xr = c.schur.solve(xr);
     c.subtractProduct(xr, x);
     for (size_t k = 0; k < c.dofs.size(); ++k)
       x[c.dofs[k]] = xr[k];
@@ -1023,8 +1048,8 @@ private:
   // iterations to learn it. The inverse of the tangent with them free is exact through their
   // Schur complement: with G = P F^-1 P and A_R the factor state's tangent columns of R (their
   // pinned and R rows zeroed), W = G A_R and S = A_RR - A_R^T W, H0 [b; b_R] = [G b - W x_R; x_R]
-  // with x_R = S^-1 (b_R - W^T b). For the rest factor W and S of every lift-off DOF are made once
-  // (RestReleases): while the contact differs from the rest's by releases only, R's are their
+  // with x_R = S^-1 (b_R - A_R^T G b). For the rest factor W and S of every lift-off DOF are made
+  // once (RestReleases): while the contact differs from the rest's by releases only, R's are their
   // columns and block, whatever R is (the rows zeroed are the rest factor's pinned ones either
   // way). With another factor R's columns are substituted (all at once) once per contact change,
   // for a few DOFs only.
@@ -1043,36 +1068,41 @@ private:
     Eigen::MatrixXd schur(k, k);
     ReleaseCoupling& c = released_.coupling;
     c.n = n;
+    c.values = factor_->tangent.valuePtr();
     if (const std::shared_ptr<const RestReleases> rest = restReleasesFor(dofs)) {
-      // Room for every lift-off DOF at once: a later change that releases more does not move it.
-      c.w.reserve(static_cast<size_t>(n * rest->w.cols()));
-      c.w.resize(static_cast<size_t>(n * k));
-      for (Eigen::Index j = 0; j < k; ++j)
-        std::copy_n(rest->w.col(rest->column[dofs[j]]).data(), n, c.column(j));
-      for (Eigen::Index j = 0; j < k; ++j)
+      c.rest = rest;
+      c.set = std::shared_ptr<const DofColumns>(rest, &rest->tangentColumns);
+      for (Eigen::Index j = 0; j < k; ++j) {
+        const int column = rest->column[dofs[j]];
+        c.w.push_back(rest->w.col(column).data());
+        c.setColumn.push_back(column);
         for (Eigen::Index i = 0; i < k; ++i)
-          schur(i, j) = rest->schur(rest->column[dofs[i]], rest->column[dofs[j]]);
+          schur(i, j) = rest->schur(rest->column[dofs[i]], column);
+      }
     } else {
       if (k > sys_.options.maxCoupledReleases)
         return;
+      auto set = std::make_shared<DofColumns>(factor_->tangent, dofs);
       Eigen::MatrixXd columns, w;
-      ReleasedColumns(*factor_, pb_.prescribed, dofs, columns, schur);
+      ReleasedColumns(*factor_, pb_.prescribed, *set, columns, schur);
       if (!substituteMany(columns, w))
         return;
       schur -= columns.transpose() * w;
-      c.w.resize(static_cast<size_t>(n * k));
-      for (Eigen::Index j = 0; j < k; ++j)
-        for (Eigen::Index i = 0; i < n; ++i)
-          c.column(j)[i] = static_cast<float>(w(i, j));
+      c.own.resize(static_cast<size_t>(n * k));
+      Eigen::Map<Eigen::MatrixXf>(c.own.data(), n, k) = w.cast<float>();
+      for (Eigen::Index j = 0; j < k; ++j) {
+        c.w.push_back(c.own.data() + j * n);
+        c.setColumn.push_back(static_cast<int>(j));
+      }
+      c.set = std::move(set);
     }
     schur = 0.5 * (schur + schur.transpose()).eval();
-    Eigen::LLT<Eigen::MatrixXd> llt(schur);
-    if (llt.info() != Eigen::Success) {
+    c.schur.compute(schur);
+    if (c.schur.info() != Eigen::Success) {
       c.clear(); // not positive definite (the factor's state is far): the diagonal
       return;
     }
     c.dofs = std::move(dofs);
-    c.schurInverse = llt.solve(Eigen::MatrixXd::Identity(k, k));
   }
 
   // The lift-off DOFs free in `prescribed` but pinned in the present factor.
