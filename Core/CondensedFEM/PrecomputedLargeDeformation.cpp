@@ -242,11 +242,12 @@ struct RestReleases {
 // another factor), A_R's entries, and S's Cholesky factor. W^T b is A_R^T G b (G is symmetric),
 // the few entries of A_R against the substitution's result, so W is read once, not twice.
 struct ReleaseCoupling {
-  std::vector<int> dofs;                    // empty: no coupling
-  std::vector<const float*> w;              // each DOF's column of W (n floats)
-  std::shared_ptr<const RestReleases> rest; // holds the columns read in place
-  UninitializedVector<float> own;           // the columns substituted for another factor
-  // A_R: DOF j's column is column setColumn[j] of `set` in the tangent's `values`.
+  std::vector<int> dofs;          // empty: no coupling
+  std::vector<const float*> w;    // each DOF's column of W (n floats)
+  UninitializedVector<float> own; // the columns substituted for another factor
+  // A_R: DOF j's column is column setColumn[j] of `set` in the tangent's `values`. For the rest
+  // factor `set` is its RestReleases' tangentColumns, and holds those RestReleases (whose columns
+  // `w` points into) alive.
   std::shared_ptr<const DofColumns> set;
   std::vector<int> setColumn;
   const double* values = nullptr;
@@ -257,7 +258,6 @@ struct ReleaseCoupling {
   void clear() {
     dofs.clear();
     w.clear();
-    rest.reset();
     set.reset();
     setColumn.clear();
     values = nullptr;
@@ -1070,7 +1070,6 @@ private:
     c.n = n;
     c.values = factor_->tangent.valuePtr();
     if (const std::shared_ptr<const RestReleases> rest = restReleasesFor(dofs)) {
-      c.rest = rest;
       c.set = std::shared_ptr<const DofColumns>(rest, &rest->tangentColumns);
       for (Eigen::Index j = 0; j < k; ++j) {
         const int column = rest->column[dofs[j]];
