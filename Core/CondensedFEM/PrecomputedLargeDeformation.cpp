@@ -1033,7 +1033,9 @@ private:
     Eigen::VectorXd xr(static_cast<Eigen::Index>(c.dofs.size()));
     for (size_t k = 0; k < c.dofs.size(); ++k)
       xr[k] = r[c.dofs[k]];
-    for (int d : c.dofs) // zero already: pinned in the factor, where b is zero
+    // A_R's rows of R are zero, and tangentProduct reads them as x's rows of R. The substitution
+    // leaves those rows zero (the factor pins them and b is zero there); this does not rely on it.
+    for (int d : c.dofs)
       x[d] = 0.0;
     xr -= c.tangentProduct(x);
     xr = c.schur.solve(xr);
