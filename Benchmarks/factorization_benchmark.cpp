@@ -9,6 +9,7 @@
 // (MultifrontalWorkspace, FactorValueBin), alternated, with their solutions compared.
 //   factorization_benchmark [--subdivisions 18] [--layers 5] [--repeats 7]
 // 18/5 is faceplan_benchmark's ~100k scene.
+#include "Common/HelperThreads.h"
 #include "CondensedFEM/PrecomputeStages.h"
 #include "SceneArguments.h"
 #include "SparseSolver/CholmodFactor.h"
@@ -18,6 +19,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -118,13 +120,32 @@ int main(int argc, char** argv) {
 
   // The substitution of one right-hand side with the single-precision factor: back to back, and
   // after 64 MB of other memory was read (as in a solve, where the force evaluation and the L-BFGS
-  // vectors pass between two substitutions), alternated.
+  // vectors pass between two substitutions), alternated. Beside them, after 64 MB read too, a plain
+  // read of as many bytes as the factor's non-zeros take in single precision, on one thread and
+  // split over two (as the substitution splits its two sides): the substitution reads each non-zero
+  // twice, once a sweep, so its read rate against the plain one says how near it comes to what the
+  // memory gives.
   {
     std::vector<double> flush(8u << 20, 1.0);
     double sink = 0.0;
-    std::vector<double> subMs[2];
+    const double bytes = 4.0 * factor.factorNonzeros();
+    const size_t words = static_cast<size_t>(factor.factorNonzeros());
+    std::vector<std::uint32_t> plain(words, 1u);
+    std::uint32_t plainSink = 0;
+    auto readPlain = [&](int threads) {
+      std::uint32_t part[2] = {0u, 0u};
+      RunOnHelpers(threads, [&](int q) {
+        const size_t begin = words * q / threads, end = words * (q + 1) / threads;
+        std::uint32_t sum = 0u; // integer: the compiler may vectorize the sum
+        for (size_t i = begin; i < end; ++i)
+          sum += plain[i];
+        part[q] = sum;
+      });
+      plainSink += part[0] + part[1];
+    };
+    std::vector<double> subMs[2], plainMs[2];
     Eigen::VectorXd z;
-    for (int r = 0; r < 5 * repeats + 1; ++r)
+    for (int r = 0; r < 5 * repeats + 1; ++r) {
       for (int m = 0; m < 2; ++m) {
         if (m == 1)
           for (size_t i = 0; i < flush.size(); i += 8)
@@ -138,9 +159,27 @@ int main(int argc, char** argv) {
         if (r > 0)
           subMs[m].push_back(ms);
       }
+      for (int m = 0; m < 2; ++m) {
+        for (size_t i = 0; i < flush.size(); i += 8)
+          sink += flush[i];
+        const auto t0 = std::chrono::steady_clock::now();
+        readPlain(m + 1);
+        const double ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count();
+        if (r > 0)
+          plainMs[m].push_back(ms);
+      }
+    }
     std::printf("single-precision substitution, one right-hand side: back to back median %.2f ms, "
                 "after reading 64 MB %.2f ms (%d runs each)%s\n",
                 Median(subMs[0]), Median(subMs[1]), 5 * repeats, sink == 0.5 ? " " : "");
+    std::printf("after reading 64 MB, its reads of the factor's %.1f MB of non-zeros, twice: %.1f "
+                "GB/s; a plain read of as many bytes, alternated with it: %.1f GB/s on one thread, "
+                "%.1f GB/s on two%s\n",
+                bytes * 1e-6, 2.0 * bytes / (Median(subMs[1]) * 1e6),
+                bytes / (Median(plainMs[0]) * 1e6), bytes / (Median(plainMs[1]) * 1e6),
+                plainSink == 1u ? " " : "");
   }
   return 0;
 }
