@@ -6,7 +6,9 @@
 // the precompute's own stages up to the analysis (ROI-coupled DOFs last). Then the single-precision
 // factorization as the large-deformation solve makes it, each time into a new factor while the one
 // before is still held: with fresh buffers each time, and with a workspace and a bin that keep them
-// (MultifrontalWorkspace, FactorValueBin), alternated, with their solutions compared.
+// (MultifrontalWorkspace, FactorValueBin), alternated, with their solutions compared. Last, the
+// substitution of one right-hand side with that factor, and its read rate of the factor beside a
+// plain read of as many bytes.
 //   factorization_benchmark [--subdivisions 18] [--layers 5] [--repeats 7]
 // 18/5 is faceplan_benchmark's ~100k scene.
 #include "Common/HelperThreads.h"
