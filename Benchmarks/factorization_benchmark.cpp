@@ -36,6 +36,11 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+double MillisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
 int Fail(const Status& s) {
   std::fprintf(stderr, "%s\n", s.message.c_str());
   return 1;
@@ -66,8 +71,7 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       if (Status s = factor.factorize(kff); !s)
         return Fail(s);
-      ms[m].push_back(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      ms[m].push_back(MillisecondsSince(t0));
       if (r == 0)
         if (Status s = factor.solve(b, x[m]); !s)
           return Fail(s);
@@ -96,8 +100,7 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       const Status s =
           m ? made->factorize(factor, kff, 2, &workspace, bin) : made->factorize(factor, kff);
-      const double ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      const double ms = MillisecondsSince(t0);
       if (!s)
         return Fail(s);
       if (r > 0)
@@ -130,8 +133,12 @@ int main(int argc, char** argv) {
   {
     std::vector<double> flush(8u << 20, 1.0);
     double sink = 0.0;
-    const double bytes = 4.0 * factor.factorNonzeros();
+    auto readFlush = [&] {
+      for (size_t i = 0; i < flush.size(); i += 8)
+        sink += flush[i];
+    };
     const size_t words = static_cast<size_t>(factor.factorNonzeros());
+    const double bytes = 4.0 * static_cast<double>(words);
     std::vector<std::uint32_t> plain(words, 1u);
     std::uint32_t plainSink = 0;
     auto readPlain = [&](int threads) {
@@ -150,25 +157,19 @@ int main(int argc, char** argv) {
     for (int r = 0; r < 5 * repeats + 1; ++r) {
       for (int m = 0; m < 2; ++m) {
         if (m == 1)
-          for (size_t i = 0; i < flush.size(); i += 8)
-            sink += flush[i];
+          readFlush();
         const auto t0 = std::chrono::steady_clock::now();
         if (Status s = held[1]->solve(b.col(0), z); !s)
           return Fail(s);
-        const double ms =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count();
+        const double ms = MillisecondsSince(t0);
         if (r > 0)
           subMs[m].push_back(ms);
       }
       for (int m = 0; m < 2; ++m) {
-        for (size_t i = 0; i < flush.size(); i += 8)
-          sink += flush[i];
+        readFlush();
         const auto t0 = std::chrono::steady_clock::now();
         readPlain(m + 1);
-        const double ms =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count();
+        const double ms = MillisecondsSince(t0);
         if (r > 0)
           plainMs[m].push_back(ms);
       }
